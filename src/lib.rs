@@ -1,0 +1,21 @@
+//! lampshade: render hand-written RON scene files with a tiled, deterministic CPU rasterizer.
+//!
+//! The crate is a one-way pipeline; each stage is one module entered through one function:
+//!
+//! ```text
+//! scene::load ──► render::render ──────────────────────────────────────► output::write_png
+//!  (RON, includes,   geometry ──► bin ──► raster (per tile) ──► shade (per tile) ──► resolve
+//!   meshes, checks)
+//! ```
+//!
+//! After `scene::load` succeeds, rendering cannot fail: every user-input problem is reported
+//! by the loader as a [`diag::Diagnostic`]. See `ARCHITECTURE.md` for the code map.
+#![deny(unsafe_code)]
+
+pub mod cli;
+pub mod diag;
+pub mod lighting;
+pub mod mesh;
+pub mod output;
+pub mod render;
+pub mod scene;

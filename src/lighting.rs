@@ -1,0 +1,309 @@
+//! The illumination equations of the seeds (000, 001, 002, 004), evaluated at one surface point.
+//!
+//! ```text
+//! I = k_e + k_a·I_a + Σ_lights att·spot·( k_d·I_l·max(N·L, 0) + k_s·I_l·spec )
+//!     spec = max(R·V, 0)^n            Phong,       R = 2(N·L)N − L
+//!     spec = max(N·H, 0)^n            Blinn-Phong, H = (L + V) / |L + V|
+//!     spec is 0 where N·L ≤ 0 (a surface facing away from a light has no highlight from it)
+//!     att  = 1 / (c + l·d + q·d²)      positional lights only
+//!     spot = max(−L·D, 0)^exponent     inside the cone (−L·D ≥ cos cutoff), 0 outside
+//! ```
+//!
+//! All vectors are in the same space (the renderer uses world space shifted so the eye is at the
+//! origin). The terms are returned separately so the debug views can show each one.
+//!
+//! Degenerate inputs have defined results and never produce NaN:
+//! - a zero normal gives `N·L = 0`: no diffuse or specular, only emission and ambient;
+//! - a light exactly at the shaded point has no direction and contributes nothing;
+//! - a zero half vector (`L = −V`) gives `N·H = 0`;
+//! - `x^0 = 1` for every `x ≥ 0`, `0^0` included, so shininess 0 is a uniform specular term over
+//!   the lit side;
+//! - the attenuation denominator is at least [`MIN_ATTENUATION_DENOMINATOR`].
+
+use glam::Vec3;
+
+use crate::scene::{Attenuation, LightingModel, Material};
+
+/// Keeps `1 / (c + l·d + q·d²)` finite when a light sits on the surface with `c = 0`.
+pub const MIN_ATTENUATION_DENOMINATOR: f32 = 1e-6;
+
+/// A light prepared for shading: positions in shading space, directions unit length, the spot
+/// cone as a cosine. Built once per frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadingLight {
+    pub color: Vec3,
+    pub kind: ShadingLightKind,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ShadingLightKind {
+    /// `to_light` is the unit vector from any surface point towards the light.
+    Directional { to_light: Vec3 },
+    Point {
+        position: Vec3,
+        attenuation: Attenuation,
+    },
+    Spot {
+        position: Vec3,
+        /// Unit direction the spot points in.
+        axis: Vec3,
+        cos_cutoff: f32,
+        exponent: f32,
+        attenuation: Attenuation,
+    },
+}
+
+/// The terms of the lighting equation at one point, each an RGB intensity.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LightingTerms {
+    pub emission: Vec3,
+    pub ambient: Vec3,
+    pub diffuse: Vec3,
+    pub specular: Vec3,
+}
+
+impl LightingTerms {
+    /// The colour: the sum of every term (not clamped: clamping is the output stage's job).
+    pub fn total(&self) -> Vec3 {
+        self.emission + self.ambient + self.diffuse + self.specular
+    }
+}
+
+/// Evaluates the lighting equation.
+///
+/// `position` is the surface point, `normal` its unit normal (or zero), `to_viewer` the unit
+/// vector from the point towards the viewer, all in the space the lights were prepared in.
+pub fn illuminate(
+    material: &Material,
+    lights: &[ShadingLight],
+    ambient_light: Vec3,
+    position: Vec3,
+    normal: Vec3,
+    to_viewer: Vec3,
+) -> LightingTerms {
+    let mut terms = LightingTerms {
+        emission: material.emission,
+        ..LightingTerms::default()
+    };
+    let specular_model = match material.model {
+        LightingModel::Unlit => {
+            terms.diffuse = material.diffuse;
+            return terms;
+        }
+        LightingModel::Lambert => None,
+        LightingModel::Phong | LightingModel::BlinnPhong if material.specular == Vec3::ZERO => None,
+        model => Some(model),
+    };
+    terms.ambient = material.ambient * ambient_light;
+    for light in lights {
+        let Some((to_light, strength)) = incidence(light, position) else {
+            continue;
+        };
+        let n_dot_l = normal.dot(to_light);
+        if n_dot_l <= 0.0 || strength <= 0.0 {
+            continue;
+        }
+        let intensity = light.color * strength;
+        terms.diffuse += material.diffuse * intensity * n_dot_l;
+        if let Some(model) = specular_model {
+            let cosine = match model {
+                LightingModel::BlinnPhong => {
+                    normal.dot((to_light + to_viewer).normalize_or_zero())
+                }
+                _ => reflect(to_light, normal).dot(to_viewer),
+            };
+            terms.specular += material.specular * intensity * specular_power(cosine, material.shininess);
+        }
+    }
+    terms
+}
+
+/// `R = 2(N·L)N − L`: the direction `to_light` mirrors into about `normal` (seed 000).
+pub fn reflect(to_light: Vec3, normal: Vec3) -> Vec3 {
+    2.0 * normal.dot(to_light) * normal - to_light
+}
+
+/// `max(cosine, 0)^shininess`, with `0^0 = 1`.
+pub fn specular_power(cosine: f32, shininess: f32) -> f32 {
+    cosine.max(0.0).powf(shininess)
+}
+
+/// The unit direction towards `light` from `position` and the light's strength there
+/// (attenuation × spot factor), or `None` when the light has no direction at that point.
+fn incidence(light: &ShadingLight, position: Vec3) -> Option<(Vec3, f32)> {
+    match light.kind {
+        ShadingLightKind::Directional { to_light } => Some((to_light, 1.0)),
+        ShadingLightKind::Point {
+            position: light_position,
+            attenuation,
+        } => {
+            let (to_light, distance) = direction_and_distance(light_position - position)?;
+            Some((to_light, attenuate(attenuation, distance)))
+        }
+        ShadingLightKind::Spot {
+            position: light_position,
+            axis,
+            cos_cutoff,
+            exponent,
+            attenuation,
+        } => {
+            let (to_light, distance) = direction_and_distance(light_position - position)?;
+            let cos_angle = -to_light.dot(axis);
+            if cos_angle < cos_cutoff {
+                return Some((to_light, 0.0));
+            }
+            let spot = specular_power(cos_angle, exponent);
+            Some((to_light, spot * attenuate(attenuation, distance)))
+        }
+    }
+}
+
+fn direction_and_distance(offset: Vec3) -> Option<(Vec3, f32)> {
+    let distance = offset.length();
+    (distance > 0.0 && distance.is_finite()).then(|| (offset / distance, distance))
+}
+
+/// `1 / (c + l·d + q·d²)`.
+pub fn attenuate(attenuation: Attenuation, distance: f32) -> f32 {
+    let Attenuation {
+        constant,
+        linear,
+        quadratic,
+    } = attenuation;
+    let denominator = constant + distance * (linear + distance * quadratic);
+    1.0 / denominator.max(MIN_ATTENUATION_DENOMINATOR)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const WHITE: Vec3 = Vec3::ONE;
+
+    fn material(model: LightingModel) -> Material {
+        Material {
+            ambient: Vec3::new(0.1, 0.0, 0.0),
+            diffuse: Vec3::new(0.0, 0.6, 0.0),
+            specular: Vec3::new(0.0, 0.0, 0.7),
+            shininess: 5.0,
+            emission: Vec3::ZERO,
+            model,
+        }
+    }
+
+    fn directional(to_light: Vec3) -> ShadingLight {
+        ShadingLight {
+            color: WHITE,
+            kind: ShadingLightKind::Directional {
+                to_light: to_light.normalize(),
+            },
+        }
+    }
+
+    fn check(got: Vec3, expected: Vec3) {
+        assert!(
+            (got - expected).abs().max_element() < 1e-5,
+            "got {got:?}, expected {expected:?}"
+        );
+    }
+
+    /// A surface facing +Z seen from straight above, lit from 45° in the XZ plane.
+    /// N·L = cos 45°; R = (−sin 45°, 0, cos 45°), so R·V = cos 45°; H is halfway between
+    /// L and V: N·H = cos 22.5°.
+    #[test]
+    fn phong_and_blinn_phong_by_hand() {
+        let n = Vec3::Z;
+        let v = Vec3::Z;
+        let light = directional(Vec3::new(1.0, 0.0, 1.0));
+        let c45 = std::f32::consts::FRAC_1_SQRT_2;
+        let phong = illuminate(&material(LightingModel::Phong), &[light], Vec3::splat(0.5), Vec3::ZERO, n, v);
+        check(phong.ambient, Vec3::new(0.05, 0.0, 0.0));
+        check(phong.diffuse, Vec3::new(0.0, 0.6 * c45, 0.0));
+        check(phong.specular, Vec3::new(0.0, 0.0, 0.7 * c45.powf(5.0)));
+        let blinn = illuminate(&material(LightingModel::BlinnPhong), &[light], Vec3::ZERO, Vec3::ZERO, n, v);
+        let c22 = (std::f32::consts::PI / 8.0).cos();
+        check(blinn.specular, Vec3::new(0.0, 0.0, 0.7 * c22.powf(5.0)));
+        check(blinn.total(), blinn.diffuse + blinn.specular);
+    }
+
+    #[test]
+    fn several_lights_add_up() {
+        let lights = [directional(Vec3::Z), directional(Vec3::new(0.0, 1.0, 1.0))];
+        let terms = illuminate(&material(LightingModel::Lambert), &lights, Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z);
+        check(terms.diffuse, Vec3::new(0.0, 0.6 * (1.0 + std::f32::consts::FRAC_1_SQRT_2), 0.0));
+        assert_eq!(terms.specular, Vec3::ZERO);
+    }
+
+    #[test]
+    fn no_specular_where_the_light_is_behind_the_surface() {
+        // The viewer sits on the reflection of a light below the horizon: R·V would be 1.
+        let light = directional(Vec3::new(0.0, 0.0, -1.0));
+        let terms = illuminate(&material(LightingModel::Phong), &[light], Vec3::ZERO, Vec3::ZERO, Vec3::Z, -Vec3::Z);
+        assert_eq!(terms.diffuse + terms.specular, Vec3::ZERO);
+    }
+
+    #[test]
+    fn point_light_attenuation_and_spot_cone() {
+        let attenuation = Attenuation { constant: 1.0, linear: 0.5, quadratic: 0.25 };
+        let point = ShadingLight {
+            color: WHITE,
+            kind: ShadingLightKind::Point { position: Vec3::new(0.0, 0.0, 2.0), attenuation },
+        };
+        let lambert = material(LightingModel::Lambert);
+        let terms = illuminate(&lambert, &[point], Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z);
+        // d = 2: 1 / (1 + 1 + 1) = 1/3.
+        check(terms.diffuse, Vec3::new(0.0, 0.6 / 3.0, 0.0));
+
+        let spot = |cutoff_degrees: f32, exponent: f32| ShadingLight {
+            color: WHITE,
+            kind: ShadingLightKind::Spot {
+                position: Vec3::new(0.0, 0.0, 1.0),
+                axis: Vec3::new(0.0, 0.0, -1.0),
+                cos_cutoff: cutoff_degrees.to_radians().cos(),
+                exponent,
+                attenuation: Attenuation::NONE,
+            },
+        };
+        // A point 1 unit off-axis, 1 unit below: 45° from the spot's axis, N·L = cos 45°.
+        let off_axis = Vec3::new(1.0, 0.0, 0.0);
+        let c45 = std::f32::consts::FRAC_1_SQRT_2;
+        let inside = illuminate(&lambert, &[spot(50.0, 2.0)], Vec3::ZERO, off_axis, Vec3::Z, Vec3::Z);
+        check(inside.diffuse, Vec3::new(0.0, 0.6 * c45 * c45 * c45, 0.0));
+        let outside = illuminate(&lambert, &[spot(40.0, 2.0)], Vec3::ZERO, off_axis, Vec3::Z, Vec3::Z);
+        assert_eq!(outside.diffuse, Vec3::ZERO);
+        let on_axis_zero_cutoff = illuminate(&lambert, &[spot(0.0, 1.0)], Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z);
+        check(on_axis_zero_cutoff.diffuse, Vec3::new(0.0, 0.6, 0.0));
+    }
+
+    #[test]
+    fn degenerate_inputs_are_finite() {
+        let light_here = ShadingLight {
+            color: WHITE,
+            kind: ShadingLightKind::Point {
+                position: Vec3::ZERO,
+                attenuation: Attenuation { constant: 0.0, linear: 0.0, quadratic: 1.0 },
+            },
+        };
+        let opposite = directional(-Vec3::Z);
+        let lights = [light_here, opposite, directional(Vec3::Z)];
+        for model in [LightingModel::Phong, LightingModel::BlinnPhong] {
+            for shininess in [0.0, 1.0, 1e4, 1e6] {
+                for normal in [Vec3::ZERO, Vec3::Z] {
+                    let m = Material { shininess, ..material(model) };
+                    // Viewer exactly opposite to the last light: L + V = 0 for the Blinn half vector.
+                    let terms = illuminate(&m, &lights, Vec3::ONE, Vec3::ZERO, normal, -Vec3::Z);
+                    assert!(terms.total().is_finite(), "{model:?} n={shininess} N={normal}: {terms:?}");
+                }
+            }
+        }
+        assert_eq!(specular_power(0.0, 0.0), 1.0);
+        assert!(attenuate(Attenuation { constant: 0.0, linear: 0.0, quadratic: 1.0 }, 0.0).is_finite());
+    }
+
+    #[test]
+    fn unlit_is_diffuse_plus_emission() {
+        let m = Material { emission: Vec3::splat(0.1), ..material(LightingModel::Unlit) };
+        let terms = illuminate(&m, &[directional(Vec3::Z)], Vec3::ONE, Vec3::ZERO, Vec3::Z, Vec3::Z);
+        check(terms.total(), Vec3::new(0.1, 0.7, 0.1));
+    }
+}

@@ -1,0 +1,1 @@
+pub const DEFAULT_CREASE_ANGLE_DEGREES: f32 = 60.0;

@@ -1,0 +1,365 @@
+//! The scene file format: serde types that mirror the RON text and nothing else.
+//!
+//! Every field has a default (see `docs/scene-format.md`, which documents each one), unknown
+//! fields and variants are errors, and enums are externally tagged (`Spot(...)`), because
+//! untagged and internally tagged enums give poor error messages in ron. Values are checked and
+//! turned into the internal [`crate::scene::Scene`] by [`crate::scene::load`]; nothing here
+//! validates.
+
+use std::fmt;
+use std::marker::PhantomData;
+
+use serde::Deserialize;
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+
+/// A position or direction, `(x, y, z)`.
+pub type Vec3File = [f64; 3];
+/// A linear RGB colour `(r, g, b)`.
+pub type RgbFile = [f32; 3];
+
+/// The top level of a scene file: `Scene(...)` or just `(...)`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(rename = "Scene", deny_unknown_fields)]
+pub struct SceneFile {
+    /// Material-library files whose `materials` tables this scene may use.
+    #[serde(default)]
+    pub include: Vec<String>,
+    #[serde(default)]
+    pub image: ImageFile,
+    /// When absent, a perspective camera frames every object.
+    #[serde(default)]
+    pub camera: Option<CameraFile>,
+    /// Global ambient light `I_a`.
+    #[serde(default)]
+    pub ambient: Option<RgbFile>,
+    #[serde(default)]
+    pub materials: OrderedMap<MaterialFile>,
+    /// When absent, one white directional light shines from the camera; `[]` means none.
+    #[serde(default)]
+    pub lights: Option<Vec<LightFile>>,
+    #[serde(default)]
+    pub objects: Vec<ObjectFile>,
+}
+
+/// A material library: `Materials(include: [...], materials: {...})`.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(rename = "Materials", deny_unknown_fields)]
+pub struct MaterialLibraryFile {
+    #[serde(default)]
+    pub include: Vec<String>,
+    #[serde(default)]
+    pub materials: OrderedMap<MaterialFile>,
+}
+
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(rename = "Image", deny_unknown_fields)]
+pub struct ImageFile {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub background: Option<RgbFile>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum CameraFile {
+    Perspective {
+        eye: Option<Vec3File>,
+        target: Option<Vec3File>,
+        up: Option<Vec3File>,
+        /// Vertical field of view, degrees.
+        fov: Option<f64>,
+        near: Option<f64>,
+        far: Option<f64>,
+    },
+    Orthographic {
+        eye: Option<Vec3File>,
+        target: Option<Vec3File>,
+        up: Option<Vec3File>,
+        /// Height of the view in world units.
+        height: Option<f64>,
+        near: Option<f64>,
+        far: Option<f64>,
+    },
+}
+
+/// The lighting model names of the file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum LightingModelFile {
+    Phong,
+    BlinnPhong,
+    Lambert,
+    Unlit,
+}
+
+/// A material, in either of two styles that may be mixed: OpenGL's explicit coefficients
+/// (`ambient`, `diffuse`, `specular`) or MATLAB's surface `color` with scalar strengths
+/// (`ka`, `kd`, `ks`, `specular_color_reflectance`). `base` starts from another material.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(rename = "Material", deny_unknown_fields)]
+pub struct MaterialFile {
+    pub base: Option<String>,
+    pub color: Option<RgbFile>,
+    pub ka: Option<f32>,
+    pub kd: Option<f32>,
+    pub ks: Option<f32>,
+    pub specular_color_reflectance: Option<f32>,
+    pub ambient: Option<RgbFile>,
+    pub diffuse: Option<RgbFile>,
+    pub specular: Option<RgbFile>,
+    pub shininess: Option<f32>,
+    pub emission: Option<RgbFile>,
+    pub model: Option<LightingModelFile>,
+}
+
+/// `(constant: 1, linear: 0, quadratic: 0)`.
+#[derive(Debug, Clone, Copy, Default, Deserialize)]
+#[serde(rename = "Attenuation", deny_unknown_fields)]
+pub struct AttenuationFile {
+    pub constant: Option<f32>,
+    pub linear: Option<f32>,
+    pub quadratic: Option<f32>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum LightFile {
+    Directional {
+        /// The direction the light travels in.
+        direction: Option<Vec3File>,
+        color: Option<RgbFile>,
+        intensity: Option<f32>,
+    },
+    Point {
+        position: Option<Vec3File>,
+        color: Option<RgbFile>,
+        intensity: Option<f32>,
+        attenuation: Option<AttenuationFile>,
+    },
+    Spot {
+        position: Option<Vec3File>,
+        /// Where the cone points.
+        direction: Option<Vec3File>,
+        color: Option<RgbFile>,
+        intensity: Option<f32>,
+        /// Half-angle of the cone, degrees.
+        cutoff: Option<f32>,
+        exponent: Option<f32>,
+        attenuation: Option<AttenuationFile>,
+    },
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum MeshFile {
+    /// MATLAB's `sphere(N)`: a unit sphere around the origin, poles on ±Z.
+    Sphere {
+        segments: Option<u32>,
+    },
+    /// The square [-1, 1]² in the XZ plane, facing +Y.
+    Plane,
+    /// The cube [-1, 1]³.
+    Cube,
+    /// A Wavefront OBJ file (path relative to the scene file).
+    Obj(String),
+    /// A glTF 2.0 file, `.gltf` or `.glb`.
+    Gltf(String),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ShadingFile {
+    Flat,
+    Gouraud,
+    Phong,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum BackFacesFile {
+    /// Lit as seen from behind: the normal is flipped (two-sided lighting).
+    Lit,
+    /// Not drawn.
+    Cull,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(rename = "Object", deny_unknown_fields)]
+pub struct ObjectFile {
+    pub name: Option<String>,
+    pub mesh: MeshFile,
+    pub translate: Option<Vec3File>,
+    /// Degrees about X, then Y, then Z.
+    pub rotate: Option<Vec3File>,
+    pub scale: Option<ScaleFile>,
+    pub material: Option<MaterialRefFile>,
+    pub shading: Option<ShadingFile>,
+    /// Degrees; used when normals are computed for a mesh file without them.
+    pub crease_angle: Option<f32>,
+    pub back_faces: Option<BackFacesFile>,
+}
+
+/// `scale: 2` or `scale: (1, 2, 1)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ScaleFile {
+    Uniform(f64),
+    PerAxis(Vec3File),
+}
+
+/// `material: "ruby"` (a name) or `material: (diffuse: ...)` (inline).
+#[derive(Debug, Clone)]
+pub enum MaterialRefFile {
+    Named(String),
+    Inline(Box<MaterialFile>),
+}
+
+/// A RON map `{ "key": value, ... }` read in file order, keeping duplicate keys so the loader
+/// can report them (a `BTreeMap` would silently keep the last one).
+#[derive(Debug, Clone)]
+pub struct OrderedMap<V>(pub Vec<(String, V)>);
+
+impl<V> Default for OrderedMap<V> {
+    fn default() -> Self {
+        OrderedMap(Vec::new())
+    }
+}
+
+impl<'de, V: Deserialize<'de>> Deserialize<'de> for OrderedMap<V> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct MapVisitor<V>(PhantomData<V>);
+        impl<'de, V: Deserialize<'de>> Visitor<'de> for MapVisitor<V> {
+            type Value = OrderedMap<V>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a map of names to materials, like { \"red\": (diffuse: (1, 0, 0)) }")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Self::Value, A::Error> {
+                let mut entries = Vec::new();
+                while let Some(entry) = map.next_entry::<String, V>()? {
+                    entries.push(entry);
+                }
+                Ok(OrderedMap(entries))
+            }
+        }
+        deserializer.deserialize_map(MapVisitor(PhantomData))
+    }
+}
+
+impl<'de> Deserialize<'de> for ScaleFile {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct ScaleVisitor;
+        impl<'de> Visitor<'de> for ScaleVisitor {
+            type Value = ScaleFile;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a uniform scale like `2` or a per-axis scale like `(1, 2, 1)`")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<ScaleFile, E> {
+                Ok(ScaleFile::Uniform(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<ScaleFile, E> {
+                Ok(ScaleFile::Uniform(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<ScaleFile, E> {
+                Ok(ScaleFile::Uniform(v as f64))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<ScaleFile, A::Error> {
+                Vec3File::deserialize(de::value::SeqAccessDeserializer::new(seq)).map(ScaleFile::PerAxis)
+            }
+        }
+        deserializer.deserialize_any(ScaleVisitor)
+    }
+}
+
+impl<'de> Deserialize<'de> for MaterialRefFile {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct MaterialRefVisitor;
+        impl<'de> Visitor<'de> for MaterialRefVisitor {
+            type Value = MaterialRefFile;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a material name like \"ruby\" or an inline material like (diffuse: (1, 0, 0))")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<MaterialRefFile, E> {
+                Ok(MaterialRefFile::Named(v.to_owned()))
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<MaterialRefFile, A::Error> {
+                MaterialFile::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(|m| MaterialRefFile::Inline(Box::new(m)))
+            }
+        }
+        deserializer.deserialize_any(MaterialRefVisitor)
+    }
+}
+
+/// The ron options every scene file is read with: `Some(...)` may be left out around
+/// optional values, so a hand-written file says `eye: (0, 0, 5)`, not `eye: Some((0, 0, 5))`.
+pub fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<SceneFile, ron::error::SpannedError> {
+        ron_options().from_str(text)
+    }
+
+    #[test]
+    fn minimal_scene_is_one_object() {
+        let scene = parse("(objects: [(mesh: Sphere())])").unwrap();
+        assert_eq!(scene.objects.len(), 1);
+        assert!(scene.camera.is_none() && scene.lights.is_none());
+        assert!(matches!(scene.objects[0].mesh, MeshFile::Sphere { segments: None }));
+    }
+
+    #[test]
+    fn material_reference_by_name_or_inline() {
+        let scene = parse(
+            r#"Scene(objects: [
+                (mesh: Cube, material: "ruby"),
+                (mesh: Cube, material: (diffuse: (1, 0, 0), shininess: 10)),
+            ])"#,
+        )
+        .unwrap();
+        assert!(matches!(&scene.objects[0].material, Some(MaterialRefFile::Named(n)) if n == "ruby"));
+        let Some(MaterialRefFile::Inline(m)) = &scene.objects[1].material else {
+            panic!("inline material expected")
+        };
+        assert_eq!(m.diffuse, Some([1.0, 0.0, 0.0]));
+        assert_eq!(m.shininess, Some(10.0));
+    }
+
+    #[test]
+    fn scale_is_uniform_or_per_axis() {
+        let scene = parse("(objects: [(mesh: Cube, scale: 2), (mesh: Cube, scale: (1, 2.5, 3))])").unwrap();
+        assert_eq!(scene.objects[0].scale, Some(ScaleFile::Uniform(2.0)));
+        assert_eq!(scene.objects[1].scale, Some(ScaleFile::PerAxis([1.0, 2.5, 3.0])));
+    }
+
+    #[test]
+    fn material_table_keeps_order_and_duplicates() {
+        let scene = parse(r#"(materials: {"b": (), "a": (kd: 0.5), "b": ()})"#).unwrap();
+        let names: Vec<&str> = scene.materials.0.iter().map(|(k, _)| k.as_str()).collect();
+        assert_eq!(names, ["b", "a", "b"]);
+    }
+
+    #[test]
+    fn unknown_fields_and_variants_are_errors() {
+        let error = parse("(objects: [(mesh: Cube, shadng: Flat)])").unwrap_err();
+        assert!(error.to_string().contains("shadng"), "{error}");
+        let error = parse("(objects: [(mesh: Cone)])").unwrap_err();
+        assert!(error.to_string().contains("Cone"), "{error}");
+    }
+
+    #[test]
+    fn lights_of_every_kind() {
+        let scene = parse(
+            "(lights: [
+                Directional(direction: (0, -1, 0)),
+                Point(position: (1, 2, 3), attenuation: (quadratic: 0.1)),
+                Spot(position: (0, 5, 0), direction: (0, -1, 0), cutoff: 20, exponent: 8),
+            ])",
+        )
+        .unwrap();
+        assert_eq!(scene.lights.unwrap().len(), 3);
+    }
+}

@@ -1,0 +1,185 @@
+//! The scene: the file format ([`format`]), built-in materials ([`presets`]), and the loader
+//! ([`load`]) that turns a RON file into the plain [`Scene`] the renderer draws.
+//!
+//! Architecture invariant: the types in this file carry no serde derives and no source
+//! locations. Everything in a `Scene` has been validated (finite numbers, sizes in range,
+//! materials resolved, meshes loaded), so rendering a `Scene` cannot fail.
+
+pub mod format;
+pub mod load;
+pub mod locate;
+pub mod presets;
+
+use std::sync::Arc;
+
+use glam::{DMat4, DVec3, Vec3};
+
+use crate::mesh::Mesh;
+
+// pub use load::{LoadError, LoadOptions, LoadedScene, load_scene};
+
+/// A scene ready to render.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub image: ImageSettings,
+    pub camera: Camera,
+    /// The global ambient light intensity `I_a` (seeds: `k_a·I_a`).
+    pub ambient_light: Vec3,
+    pub lights: Vec<Light>,
+    pub objects: Vec<Object>,
+}
+
+impl Scene {
+    pub fn triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| o.mesh.triangle_count()).sum()
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImageSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGB of pixels no geometry covers.
+    pub background: Vec3,
+}
+
+/// A camera in world space. Positions are `f64` so that scenes far from the origin keep
+/// their precision: the renderer works relative to `eye`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    pub eye: DVec3,
+    pub target: DVec3,
+    /// Unit vector, not parallel to `target - eye`.
+    pub up: DVec3,
+    pub projection: Projection,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Projection {
+    Perspective {
+        /// Vertical field of view.
+        fov_y_degrees: f64,
+        near: f64,
+        far: f64,
+    },
+    Orthographic {
+        /// Height of the view volume in world units; the width follows the aspect ratio.
+        height: f64,
+        near: f64,
+        far: f64,
+    },
+}
+
+impl Projection {
+    pub fn near_far(&self) -> (f64, f64) {
+        match *self {
+            Projection::Perspective { near, far, .. } | Projection::Orthographic { near, far, .. } => {
+                (near, far)
+            }
+        }
+    }
+}
+
+/// Distance attenuation of positional lights: `1 / (constant + linear·d + quadratic·d²)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Attenuation {
+    pub constant: f32,
+    pub linear: f32,
+    pub quadratic: f32,
+}
+
+impl Attenuation {
+    pub const NONE: Attenuation = Attenuation {
+        constant: 1.0,
+        linear: 0.0,
+        quadratic: 0.0,
+    };
+}
+
+/// A light in world space (OpenGL semantics, seed 001). `color` is the light's intensity
+/// `I_l`, used for both its diffuse and specular contributions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Light {
+    /// Infinitely far away; `direction` is the unit direction the light travels in.
+    Directional { direction: Vec3, color: Vec3 },
+    Point {
+        position: DVec3,
+        color: Vec3,
+        attenuation: Attenuation,
+    },
+    Spot {
+        position: DVec3,
+        /// Unit direction of the cone's axis (where the spot points).
+        direction: Vec3,
+        color: Vec3,
+        /// Half-angle of the cone, in [0, 90].
+        cutoff_degrees: f32,
+        /// Falloff `max(-L·D, 0)^exponent` inside the cone.
+        exponent: f32,
+        attenuation: Attenuation,
+    },
+}
+
+/// How a surface reflects light: the coefficients of the seeds' Phong equation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Material {
+    /// `k_a`, multiplies the global ambient light.
+    pub ambient: Vec3,
+    /// `k_d`.
+    pub diffuse: Vec3,
+    /// `k_s`.
+    pub specular: Vec3,
+    /// `n`, the specular exponent, `>= 0`.
+    pub shininess: f32,
+    /// `k_e`, added whatever the lights.
+    pub emission: Vec3,
+    pub model: LightingModel,
+}
+
+/// The specular term (and whether there is lighting at all).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LightingModel {
+    /// `k_s·I_l·max(R·V, 0)^n`, the seeds' Phong model.
+    Phong,
+    /// `k_s·I_l·max(N·H, 0)^n` with the half vector `H`.
+    BlinnPhong,
+    /// Ambient and diffuse only.
+    Lambert,
+    /// No lighting: the diffuse colour plus emission.
+    Unlit,
+}
+
+/// Where lighting is evaluated (seeds 000, 001, 002).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Shading {
+    /// Once per triangle, with the face normal at the centroid.
+    Flat,
+    /// Once per vertex with the vertex normals; colours interpolated.
+    Gouraud,
+    /// Normals interpolated and renormalised; lighting per pixel.
+    Phong,
+}
+
+/// One mesh placed in the world.
+#[derive(Debug, Clone)]
+pub struct Object {
+    pub name: String,
+    /// Shared so that a mesh cache (watch mode) can hand the same mesh to several renders.
+    pub mesh: Arc<Mesh>,
+    /// Model-to-world transform.
+    pub transform: DMat4,
+    pub shading: Shading,
+    /// When set, replaces every material of the mesh; otherwise the mesh's own materials
+    /// are used, and [`presets::default_material`] where the mesh has none.
+    pub material: Option<Material>,
+    pub back_faces: BackFaces,
+}
+
+/// What happens to triangles seen from behind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BackFaces {
+    /// Drawn and lit as seen from behind: the normal is flipped (two-sided lighting).
+    Lit,
+    /// Not drawn (back-face culling).
+    Cull,
+}
