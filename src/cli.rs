@@ -1,1 +1,234 @@
-//! (being written)
+//! The command line: arguments are parsed into a plan, the plan is run, and every outcome maps
+//! to a documented exit code.
+//!
+//! Exit codes:
+//! - `0`: everything asked for was done.
+//! - `1`: the inputs were fine but an output could not be written (disk full, no permission).
+//! - `2`: bad input: a scene (or a file it uses) has errors, or the arguments are wrong. The
+//!   diagnostics are printed to stderr; no output file is created or replaced for that scene.
+//! - `101`: an internal error (a bug in lampshade), reported by `main`.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use crate::diag::render_diagnostics;
+use crate::output::{self, PngCompression};
+use crate::render::{self, DebugView, RenderOptions};
+use crate::scene::{self, LoadOptions, Shading};
+
+pub const EXIT_OK: i32 = 0;
+pub const EXIT_OUTPUT_FAILED: i32 = 1;
+pub const EXIT_BAD_INPUT: i32 = 2;
+pub const EXIT_INTERNAL_ERROR: i32 = 101;
+
+#[derive(Debug, Parser)]
+#[command(name = "lampshade", version, about = "Render hand-written RON scene files with a tiled CPU rasterizer")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render scene files to PNG images.
+    Render(RenderArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct RenderArgs {
+    /// Scene files (.ron). Each is rendered in turn; a bad one is reported and the rest still render.
+    #[arg(required = true, value_name = "SCENE")]
+    pub scenes: Vec<PathBuf>,
+    /// Output image (only with a single scene). Default: the scene's path with `.png`.
+    #[arg(short, long, value_name = "OUT.png")]
+    pub output: Option<PathBuf>,
+    /// Image width in pixels, overriding the scene's.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels, overriding the scene's.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Worker threads (default: one per core). The image is identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+    /// Shade every object this way, overriding the scene.
+    #[arg(long, value_enum)]
+    pub shading: Option<ShadingArg>,
+    /// Render one ingredient of the lighting instead of the lit image.
+    #[arg(long, value_enum, value_name = "VIEW")]
+    pub debug: Option<DebugArg>,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ShadingArg {
+    Flat,
+    Gouraud,
+    Phong,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DebugArg {
+    /// Ambient term only (k_a·I_a).
+    Ambient,
+    /// Diffuse term only.
+    Diffuse,
+    /// Specular term only.
+    Specular,
+    /// Shading normals as colours.
+    Normals,
+    /// Depth, near white to far black.
+    Depth,
+}
+
+/// Parses `args` and runs the command; returns the exit code.
+pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(error) => {
+            let _ = error.print();
+            return if error.use_stderr() { EXIT_BAD_INPUT } else { EXIT_OK };
+        }
+    };
+    match cli.command {
+        Command::Render(args) => run_render(&args),
+    }
+}
+
+fn use_color() -> bool {
+    std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none()
+}
+
+fn run_render(args: &RenderArgs) -> i32 {
+    if args.output.is_some() && args.scenes.len() > 1 {
+        eprintln!("error: --output names one image, but {} scenes were given", args.scenes.len());
+        return EXIT_BAD_INPUT;
+    }
+    let load_options = LoadOptions {
+        width: args.width,
+        height: args.height,
+        shading: args.shading.map(|s| match s {
+            ShadingArg::Flat => Shading::Flat,
+            ShadingArg::Gouraud => Shading::Gouraud,
+            ShadingArg::Phong => Shading::Phong,
+        }),
+    };
+    let render_options = RenderOptions {
+        threads: args.threads.map(usize::from),
+        debug_view: args.debug.map(|d| match d {
+            DebugArg::Ambient => DebugView::Ambient,
+            DebugArg::Diffuse => DebugView::Diffuse,
+            DebugArg::Specular => DebugView::Specular,
+            DebugArg::Normals => DebugView::Normals,
+            DebugArg::Depth => DebugView::Depth,
+        }),
+    };
+    let mut bad_inputs = Vec::new();
+    let mut failed_outputs = 0;
+    for scene_path in &args.scenes {
+        let output = args.output.clone().unwrap_or_else(|| scene_path.with_extension("png"));
+        match render_one(scene_path, &output, &load_options, &render_options, args.quiet) {
+            Ok(()) => {}
+            Err(RenderFailure::BadInput) => bad_inputs.push(scene_path),
+            Err(RenderFailure::Output) => failed_outputs += 1,
+        }
+    }
+    if args.scenes.len() > 1 && !bad_inputs.is_empty() {
+        let names: Vec<String> = bad_inputs.iter().map(|p| p.display().to_string()).collect();
+        eprintln!("error: {} of {} scenes could not be rendered: {}", names.len(), args.scenes.len(), names.join(", "));
+    }
+    if !bad_inputs.is_empty() {
+        EXIT_BAD_INPUT
+    } else if failed_outputs > 0 {
+        EXIT_OUTPUT_FAILED
+    } else {
+        EXIT_OK
+    }
+}
+
+enum RenderFailure {
+    BadInput,
+    Output,
+}
+
+fn render_one(
+    scene_path: &Path,
+    output_path: &Path,
+    load_options: &LoadOptions,
+    render_options: &RenderOptions,
+    quiet: bool,
+) -> Result<(), RenderFailure> {
+    let started = Instant::now();
+    let loaded = match scene::load::load_scene(scene_path, load_options) {
+        Ok(loaded) => loaded,
+        Err(error) => {
+            eprint!("{}", render_diagnostics(&error.diagnostics, &error.sources, use_color()));
+            return Err(RenderFailure::BadInput);
+        }
+    };
+    if !loaded.warnings.is_empty() && !quiet {
+        eprint!("{}", render_diagnostics(&loaded.warnings, &loaded.sources, use_color()));
+    }
+    let load_time = started.elapsed();
+
+    let (framebuffer, stats) = render::render(&loaded.scene, render_options);
+
+    let started = Instant::now();
+    let image = output::to_rgb8(&framebuffer);
+    if let Err(error) = output::write_png(output_path, &image, PngCompression::Fast) {
+        eprintln!("error: {error}");
+        return Err(RenderFailure::Output);
+    }
+    let encode_time = started.elapsed();
+    if !quiet {
+        println!(
+            "{} → {}: {} triangles, {}×{} px | load {}, geometry {}, raster+shade {}, encode {} ({} threads)",
+            scene_path.display(),
+            output_path.display(),
+            thousands(stats.triangles),
+            framebuffer.width,
+            framebuffer.height,
+            milliseconds(load_time),
+            milliseconds(stats.geometry),
+            milliseconds(stats.raster_shade),
+            milliseconds(encode_time),
+            stats.threads,
+        );
+    }
+    Ok(())
+}
+
+fn milliseconds(duration: Duration) -> String {
+    format!("{:.1} ms", duration.as_secs_f64() * 1000.0)
+}
+
+/// `129600` → `129,600`.
+pub fn thousands(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i) % 3 == 0 {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thousands_separators() {
+        assert_eq!(thousands(0), "0");
+        assert_eq!(thousands(999), "999");
+        assert_eq!(thousands(1000), "1,000");
+        assert_eq!(thousands(1_002_528), "1,002,528");
+    }
+}

@@ -1,1 +1,22 @@
-fn main() {}
+//! The `lampshade` binary: the command line of the library, and the last line of defence.
+//!
+//! A panic anywhere is a bug in lampshade, never the user's fault: it is caught here and reported
+//! as an internal error with exit code 101, after the panic message itself.
+
+use std::panic;
+
+use lampshade::cli::{self, EXIT_INTERNAL_ERROR};
+
+fn main() {
+    let default_hook = panic::take_hook();
+    panic::set_hook(Box::new(move |info| {
+        default_hook(info);
+        eprintln!(
+            "error: internal error in lampshade {} (a bug, not a problem with your files).\n\
+             Please report it with the scene that triggered it and the message above.",
+            env!("CARGO_PKG_VERSION")
+        );
+    }));
+    let code = panic::catch_unwind(|| cli::run(std::env::args_os())).unwrap_or(EXIT_INTERNAL_ERROR);
+    std::process::exit(code);
+}

@@ -1,1 +1,155 @@
-//! (being written)
+//! The output stage: a linear [`FrameBuffer`] quantised to 8 bits and written as PNG.
+//!
+//! Quantisation: each channel is clamped to [0, 1] (values above 1, from bright lights, saturate
+//! instead of wrapping; NaN, which the renderer never produces, would become 0) and rounded to the
+//! nearest of 256 levels, `⌊255·c + ½⌋`. Values are written as they are (linear), as OpenGL writes a
+//! framebuffer without sRGB conversion, which is what the reference images assume.
+//!
+//! Architecture invariant: an image is written to a temporary file in the destination folder and
+//! renamed over the destination only once complete, so a failed or interrupted write never leaves
+//! a truncated PNG or clobbers the previous one, and a viewer never reads half a file.
+
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+use image::{ImageEncoder, RgbImage};
+
+use crate::render::FrameBuffer;
+
+/// A problem writing an output file (not the user's scene: the file system's).
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot write `{}`: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("cannot encode `{}`: {source}", path.display())]
+    Encode {
+        path: PathBuf,
+        #[source]
+        source: image::ImageError,
+    },
+}
+
+/// One channel of linear light to an 8-bit level.
+pub fn quantize_channel(value: f32) -> u8 {
+    if value.is_nan() {
+        return 0;
+    }
+    (value.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+}
+
+pub fn to_rgb8(framebuffer: &FrameBuffer) -> RgbImage {
+    let mut bytes = Vec::with_capacity(framebuffer.color.len() * 3);
+    for color in &framebuffer.color {
+        bytes.extend(color.to_array().map(quantize_channel));
+    }
+    RgbImage::from_raw(framebuffer.width, framebuffer.height, bytes)
+        .expect("a frame buffer holds width × height pixels")
+}
+
+/// PNG compression effort: `Fast` favours the edit-to-image loop, `Best` smaller files.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum PngCompression {
+    #[default]
+    Fast,
+    Best,
+}
+
+/// Encodes `image` as PNG and puts it at `path` atomically.
+pub fn write_png(path: &Path, image: &RgbImage, compression: PngCompression) -> Result<(), OutputError> {
+    let compression = match compression {
+        PngCompression::Fast => CompressionType::Fast,
+        PngCompression::Best => CompressionType::Best,
+    };
+    write_atomically(path, |writer| {
+        PngEncoder::new_with_quality(writer, compression, FilterType::Adaptive)
+            .write_image(image.as_raw(), image.width(), image.height(), image::ExtendedColorType::Rgb8)
+            .map_err(|source| OutputError::Encode {
+                path: path.to_path_buf(),
+                source,
+            })
+    })
+}
+
+/// Writes through `write` into a temporary file beside `path`, then renames it into place.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> Result<(), OutputError>,
+) -> Result<(), OutputError> {
+    let io_error = |source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let folder = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    let mut temporary = tempfile::Builder::new()
+        .prefix(".lampshade-")
+        .suffix(".tmp")
+        .tempfile_in(folder)
+        .map_err(io_error)?;
+    {
+        let mut writer = BufWriter::new(temporary.as_file_mut());
+        write(&mut writer)?;
+        writer.flush().map_err(io_error)?;
+    }
+    temporary.as_file().sync_data().map_err(io_error)?;
+    temporary.persist(path).map_err(|e| io_error(e.error))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn quantisation_rounds_and_clamps() {
+        assert_eq!(quantize_channel(0.0), 0);
+        assert_eq!(quantize_channel(1.0), 255);
+        assert_eq!(quantize_channel(0.5), 128); // 127.5 rounds up
+        assert_eq!(quantize_channel(0.499 / 255.0), 0);
+        assert_eq!(quantize_channel(0.501 / 255.0), 1);
+        assert_eq!(quantize_channel(1e9), 255);
+        assert_eq!(quantize_channel(f32::INFINITY), 255);
+        assert_eq!(quantize_channel(-3.0), 0);
+        assert_eq!(quantize_channel(f32::NAN), 0);
+    }
+
+    #[test]
+    fn a_failed_write_leaves_the_previous_file_alone() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join("out.png");
+        std::fs::write(&path, b"previous").unwrap();
+        let result = write_atomically(&path, |_| {
+            Err(OutputError::Io {
+                path: path.clone(),
+                source: std::io::Error::other("simulated failure"),
+            })
+        });
+        assert!(result.is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), b"previous");
+        let leftovers = std::fs::read_dir(folder.path()).unwrap().count();
+        assert_eq!(leftovers, 1, "the temporary file must be removed");
+    }
+
+    #[test]
+    fn png_round_trip() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join("out.png");
+        let framebuffer = FrameBuffer {
+            width: 2,
+            height: 1,
+            color: vec![Vec3::new(1.0, 0.5, 0.0), Vec3::new(2.0, -1.0, 0.25)],
+            covered: vec![true, true],
+        };
+        write_png(&path, &to_rgb8(&framebuffer), PngCompression::Fast).unwrap();
+        let read = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(read.as_raw(), &[255, 128, 0, 255, 0, 64]);
+    }
+}

@@ -1,1 +1,1026 @@
-//! (being written)
+//! Wavefront OBJ meshes and their MTL materials, parsed by `tobj`.
+//!
+//! # Design
+//!
+//! 1. **Pre-scan.** The OBJ text is read here and scanned line by line before `tobj` sees it.
+//!    `tobj` reports errors without line numbers, accepts some malformed files silently, and
+//!    panics on others (an index like `-99999999999` overflows its arithmetic), so the scan
+//!    rejects, with the line number: face indices that are 0, malformed, or out of range
+//!    (OBJ indices are 1-based, negative ones count back from the last element defined so
+//!    far, and an index may only refer to an element defined above it); vertex lines
+//!    without three numbers or with a non-finite one; `w = 0`. It also blanks polyline
+//!    (`l`) lines, which `tobj` would otherwise turn into triangles, and warns about them and
+//!    about faces with fewer than three vertices (dropped).
+//! 2. **Parse.** `tobj::load_obj_buf` with `triangulate` (fans, so convex polygons only),
+//!    `single_index` (one vertex per distinct position/texture/normal triple) and
+//!    `ignore_points`/`ignore_lines`. The call runs under `catch_unwind` as a last line of
+//!    defence, reported as "malformed OBJ". All models and groups are merged into one mesh.
+//! 3. **Materials.** MTL files are read by this module's own loader, which records each file
+//!    read (so a watcher follows it) and pre-checks it: colours with a single number are
+//!    expanded to grey as the MTL spec allows (`tobj` would panic on them), and other
+//!    malformed numbers are reported with their line. A missing or malformed MTL file is a
+//!    warning, never an error: its materials are absent, and when no library loads the mesh
+//!    has no materials at all (the scene then supplies its default).
+//! 4. **Normals.** When every vertex has a file normal they are used, renormalised, and any
+//!    zero or non-finite one is recomputed ([`normals::repair_normals`]). When none or only
+//!    some have one, all normals are computed with the crease angle
+//!    ([`normals::compute_vertex_normals`]); mixing file and computed normals across one
+//!    surface would show a seam, and "only some" usually means a broken export (a warning
+//!    says so).
+//!
+//! # MTL to [`Material`]
+//!
+//! `Ka`→ambient, `Kd`→diffuse, `Ks`→specular, `Ns`→shininess, `Ke`→emission (`tobj` 4.0.5
+//! parses `Ke` itself). `illum 0`→[`LightingModel::Unlit`], `1`→[`LightingModel::Lambert`],
+//! `2` and above→[`LightingModel::BlinnPhong`] (the MTL spec's illum 2 specular uses the half
+//! vector). Missing values, as many OBJ viewers treat them: `Kd` 0.8 grey ([`DEFAULT_DIFFUSE`],
+//! also OpenGL's default), `Ka` equal to the diffuse colour (so unlit sides keep the object's
+//! colour rather than going black), `Ks` and `Ke` black, `Ns` [`DEFAULT_SHININESS`], no
+//! `illum` → Blinn-Phong (with black `Ks` that is plain Lambert). Non-finite numbers are
+//! replaced by these defaults with a warning, and a negative `Ns` becomes 0. Faces with no
+//! material, or naming one no library defines, use [`default_material`], appended after the
+//! file's materials only when some face needs it; when no face names a material the mesh
+//! carries none.
+
+use std::borrow::Cow;
+use std::cell::RefCell;
+use std::io::Cursor;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+use super::{LoadedMesh, Mesh, MeshError, MeshOptions, io_error_text, normals};
+use crate::scene::{LightingModel, Material};
+
+/// Diffuse colour of an MTL material without `Kd`.
+pub const DEFAULT_DIFFUSE: Vec3 = Vec3::splat(0.8);
+
+/// Specular exponent of an MTL material without `Ns`: a moderate highlight, visible only
+/// when the material has a `Ks`.
+pub const DEFAULT_SHININESS: f32 = 32.0;
+
+/// The material of OBJ faces that name none (or an undefined one) in a file that has
+/// materials; also the source of every value an MTL material leaves out.
+pub fn default_material() -> Material {
+    Material {
+        ambient: DEFAULT_DIFFUSE,
+        diffuse: DEFAULT_DIFFUSE,
+        specular: Vec3::ZERO,
+        shininess: DEFAULT_SHININESS,
+        emission: Vec3::ZERO,
+        model: LightingModel::BlinnPhong,
+    }
+}
+
+/// Loads an OBJ file and the MTL files it names into one [`Mesh`]; see the module
+/// documentation for what is checked, computed and defaulted.
+pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
+    let bytes = std::fs::read(path).map_err(|error| MeshError::cannot_read(path, &error))?;
+    // OBJ is ASCII in practice; a stray Latin-1 byte in a comment or name should not
+    // reject the file.
+    let text = String::from_utf8_lossy(&bytes);
+    let scan =
+        scan_obj(&text).map_err(|(line, message)| MeshError::at_line(path, line, message))?;
+
+    let libraries = MaterialLibraries {
+        directory: path.parent().unwrap_or(Path::new("")).to_path_buf(),
+        files_read: RefCell::new(Vec::new()),
+        warnings: RefCell::new(Vec::new()),
+    };
+    // `..Default::default()` covers tobj's other options, which exist only under cargo
+    // features some other crate could enable (they are absent in this build, hence the
+    // allow).
+    #[allow(clippy::needless_update)]
+    let load_options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let parsed = catch_unwind(AssertUnwindSafe(|| {
+        tobj::load_obj_buf(
+            &mut Cursor::new(scan.text.as_bytes()),
+            &load_options,
+            |library| libraries.load(library),
+        )
+    }));
+    let (models, library_materials) = match parsed {
+        Ok(Ok(parsed)) => parsed,
+        Ok(Err(error)) => return Err(MeshError::new(path, format!("malformed OBJ: {error}"))),
+        Err(_) => {
+            return Err(MeshError::new(
+                path,
+                "malformed OBJ: the OBJ parser gave up on this file",
+            ));
+        }
+    };
+    // A library that failed has already left a warning; tobj only reports an error here
+    // when no library loaded at all.
+    let library_materials = library_materials.unwrap_or_default();
+
+    let mut files_read = vec![path.to_path_buf()];
+    files_read.extend(libraries.files_read.into_inner());
+    let mut warnings = scan.warnings;
+    warnings.extend(libraries.warnings.into_inner());
+
+    let geometry = merge_models(&models).map_err(|message| MeshError::new(path, message))?;
+    if geometry.triangles.is_empty() {
+        return Err(MeshError::new(path, "contains no triangles"));
+    }
+
+    let crease = options.crease_angle_degrees;
+    let mut mesh = match &geometry.normals {
+        FileNormals::All(file_normals) => {
+            let repaired = normals::repair_normals(
+                &geometry.positions,
+                file_normals,
+                &geometry.triangles,
+                crease,
+            );
+            if repaired.replaced_count > 0 {
+                warnings.push(format!(
+                    "{} vertex normals in the file were zero or not finite and were recomputed",
+                    repaired.replaced_count
+                ));
+            }
+            repaired.mesh
+        }
+        FileNormals::Some => {
+            warnings.push(format!(
+                "only some face vertices have normals; all normals were computed (crease angle {crease}°)"
+            ));
+            normals::compute_vertex_normals(&geometry.positions, &geometry.triangles, crease)
+        }
+        FileNormals::None => {
+            normals::compute_vertex_normals(&geometry.positions, &geometry.triangles, crease)
+        }
+    };
+
+    assign_materials(
+        &mut mesh,
+        &geometry.triangle_material_ids,
+        &library_materials,
+        &mut warnings,
+    );
+    if !library_materials.is_empty() {
+        let mut reported: Vec<&str> = Vec::new();
+        for (name, line) in &scan.material_uses {
+            let defined = library_materials
+                .iter()
+                .any(|material| &material.name == name);
+            if !defined && !reported.contains(&name.as_str()) {
+                reported.push(name);
+                warnings.push(format!(
+                    "line {line}: material '{name}' is not defined in the material libraries; its faces use the default material"
+                ));
+            }
+        }
+    }
+
+    Ok(LoadedMesh {
+        mesh,
+        files_read,
+        warnings,
+    })
+}
+
+/// What the pre-scan learned about an OBJ text.
+struct ObjScan<'a> {
+    /// The text handed to `tobj`: the file's, with polyline lines blanked.
+    text: Cow<'a, str>,
+    warnings: Vec<String>,
+    /// Every `usemtl` name with its line, to report names no library defines.
+    material_uses: Vec<(String, usize)>,
+}
+
+/// The pre-scan of the module documentation. Errors are a 1-based line and a message.
+fn scan_obj(text: &str) -> Result<ObjScan<'_>, (usize, String)> {
+    // Elements defined so far: positions, texture coordinates, normals.
+    let mut defined = [0usize; 3];
+    let mut polyline_lines = Vec::new();
+    let mut short_face_lines = Vec::new();
+    let mut material_uses = Vec::new();
+
+    for (index, line) in text.lines().enumerate() {
+        let line_number = index + 1;
+        let mut words = line.split_whitespace();
+        let fail = |message: String| (line_number, message);
+        match words.next() {
+            Some("v") => {
+                check_vertex_line(&words.collect::<Vec<_>>()).map_err(fail)?;
+                defined[0] += 1;
+            }
+            Some("vt") => {
+                check_numbers(words, 2, "texture coordinate").map_err(fail)?;
+                defined[1] += 1;
+            }
+            Some("vn") => {
+                check_numbers(words, 3, "normal").map_err(fail)?;
+                defined[2] += 1;
+            }
+            Some("f") => {
+                let mut corner_count = 0;
+                for word in words {
+                    check_face_vertex(word, defined).map_err(fail)?;
+                    corner_count += 1;
+                }
+                if corner_count < 3 {
+                    short_face_lines.push(line_number);
+                }
+            }
+            Some("l") => polyline_lines.push(index),
+            Some("usemtl") => {
+                let name = line.trim_start()["usemtl".len()..].trim();
+                if name.is_empty() {
+                    return Err(fail("usemtl needs a material name".to_string()));
+                }
+                material_uses.push((name.to_string(), line_number));
+            }
+            _ => {}
+        }
+    }
+
+    let mut warnings = Vec::new();
+    if let Some(&first) = short_face_lines.first() {
+        warnings.push(format!(
+            "ignored {} faces with fewer than 3 vertices (first at line {first})",
+            short_face_lines.len()
+        ));
+    }
+    let text = match polyline_lines.first() {
+        None => Cow::Borrowed(text),
+        Some(&first) => {
+            warnings.push(format!(
+                "ignored {} polyline ('l') elements (first at line {}): lines are not drawn",
+                polyline_lines.len(),
+                first + 1
+            ));
+            // Blank lines keep the numbering of everything else.
+            let mut blanked = polyline_lines.iter().peekable();
+            let kept: Vec<&str> = text
+                .lines()
+                .enumerate()
+                .map(|(index, line)| {
+                    if blanked.peek() == Some(&&index) {
+                        blanked.next();
+                        ""
+                    } else {
+                        line
+                    }
+                })
+                .collect();
+            Cow::Owned(kept.join("\n"))
+        }
+    };
+    Ok(ObjScan {
+        text,
+        warnings,
+        material_uses,
+    })
+}
+
+/// A `v` line after the keyword: `x y z`, then nothing, `w`, or an `r g b` colour (what
+/// `tobj` accepts), with finite coordinates and a non-zero `w`.
+fn check_vertex_line(words: &[&str]) -> Result<(), String> {
+    let number = |word: &str| word.parse::<f32>().ok();
+    let coordinates: Option<Vec<f32>> = words.iter().take(3).map(|w| number(w)).collect();
+    let coordinates = match coordinates {
+        Some(c) if c.len() == 3 => c,
+        _ => return Err("a vertex position needs three numbers".to_string()),
+    };
+    if !coordinates.iter().all(|c| c.is_finite()) {
+        return Err("vertex position is not finite (NaN or infinity)".to_string());
+    }
+    match words.len() {
+        3 | 6 => Ok(()),
+        4 => match number(words[3]) {
+            Some(w) if w != 0.0 && coordinates.iter().all(|c| (c / w).is_finite()) => Ok(()),
+            Some(_) => {
+                Err("vertex weight w must be non-zero and keep the position finite".to_string())
+            }
+            None => Err(format!("vertex weight w '{}' is not a number", words[3])),
+        },
+        _ => Err("a vertex is x y z, optionally followed by w or by an r g b colour".to_string()),
+    }
+}
+
+/// The first `count` words must be numbers (more are allowed and ignored, as `tobj` does).
+fn check_numbers<'a>(
+    words: impl Iterator<Item = &'a str>,
+    count: usize,
+    what: &str,
+) -> Result<(), String> {
+    let parsed = words
+        .take(count)
+        .filter(|w| w.parse::<f32>().is_ok())
+        .count();
+    if parsed == count {
+        Ok(())
+    } else {
+        Err(format!("a {what} needs {count} numbers"))
+    }
+}
+
+/// One `v`, `v/vt`, `v//vn` or `v/vt/vn` word of a face, against the element counts defined
+/// so far (positions, texture coordinates, normals).
+fn check_face_vertex(word: &str, defined: [usize; 3]) -> Result<(), String> {
+    const KINDS: [(&str, &str); 3] = [
+        ("vertex", "vertices"),
+        ("texture coordinate", "texture coordinates"),
+        ("normal", "normals"),
+    ];
+    let parts: Vec<&str> = word.split('/').collect();
+    if parts.len() > 3 || parts[0].is_empty() {
+        return Err(format!("malformed face vertex '{word}'"));
+    }
+    for ((part, (kind, kinds)), count) in parts.iter().zip(KINDS).zip(defined) {
+        if part.is_empty() {
+            continue;
+        }
+        let index: i64 = part
+            .parse()
+            .map_err(|_| format!("malformed face vertex '{word}'"))?;
+        if index == 0 {
+            return Err(format!(
+                "face index 0 in '{word}' is invalid: OBJ indices start at 1"
+            ));
+        }
+        // Positive indices count from the first element, negative ones back from the last
+        // defined so far: either way |index| may not exceed the count.
+        if index.unsigned_abs() > count as u64 {
+            return Err(format!(
+                "face refers to {kind} {index}, but only {count} {kinds} are defined above this line"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Reads the MTL files `tobj` asks for, relative to the OBJ's directory, recording what
+/// was read and what went wrong (the loader callback cannot return anything else).
+struct MaterialLibraries {
+    directory: PathBuf,
+    files_read: RefCell<Vec<PathBuf>>,
+    warnings: RefCell<Vec<String>>,
+}
+
+impl MaterialLibraries {
+    fn load(&self, library: &Path) -> tobj::MTLLoadResult {
+        let path = self.directory.join(library);
+        let warn = |problem: String| {
+            self.warnings.borrow_mut().push(format!(
+                "material library {}: {problem}; its materials are not used",
+                path.display()
+            ));
+        };
+        let bytes = match std::fs::read(&path) {
+            Ok(bytes) => bytes,
+            Err(error) => {
+                warn(format!("cannot read it: {}", io_error_text(&error)));
+                return Err(tobj::LoadError::OpenFileFailed);
+            }
+        };
+        {
+            let mut files_read = self.files_read.borrow_mut();
+            if !files_read.contains(&path) {
+                files_read.push(path.clone());
+            }
+        }
+        let text = String::from_utf8_lossy(&bytes);
+        let text = match prepare_mtl(&text) {
+            Ok(text) => text,
+            Err((line, message)) => {
+                warn(format!("line {line}: {message}"));
+                return Err(tobj::LoadError::MaterialParseError);
+            }
+        };
+        tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes()))
+            .inspect_err(|error| warn(error.to_string()))
+    }
+}
+
+/// Checks the numeric MTL statements `tobj` parses, reporting the line of a bad one, and
+/// expands single-number colours (`Kd 0.5` means `Kd 0.5 0.5 0.5` in the MTL spec; `tobj`
+/// would panic on it).
+fn prepare_mtl(text: &str) -> Result<Cow<'_, str>, (usize, String)> {
+    let mut expanded: Vec<(usize, String)> = Vec::new();
+    for (index, line) in text.lines().enumerate() {
+        let mut words = line
+            .split_whitespace()
+            .take_while(|word| !word.starts_with('#'));
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        let arguments: Vec<&str> = words.collect();
+        let fail = |message: String| (index + 1, message);
+        match keyword {
+            "Ka" | "Kd" | "Ks" | "Ke" => {
+                let numbers = arguments
+                    .iter()
+                    .take(3)
+                    .filter(|w| w.parse::<f32>().is_ok())
+                    .count();
+                match (arguments.len(), numbers) {
+                    (1, 1) => {
+                        expanded.push((index, format!("{keyword} {0} {0} {0}", arguments[0])))
+                    }
+                    (3.., 3) => {}
+                    _ if matches!(arguments.first(), Some(&"spectral") | Some(&"xyz")) => {
+                        return Err(fail(format!(
+                            "{keyword}: spectral and xyz colours are not supported"
+                        )));
+                    }
+                    _ => return Err(fail(format!("{keyword} needs one number or three (r g b)"))),
+                }
+            }
+            "Ns" | "Ni" | "d" if arguments.first().is_none_or(|w| w.parse::<f32>().is_err()) => {
+                return Err(fail(format!("{keyword} needs a number")));
+            }
+            "illum" if arguments.first().is_none_or(|w| w.parse::<u8>().is_err()) => {
+                return Err(fail("illum needs a whole number from 0 to 10".to_string()));
+            }
+            "newmtl" if arguments.is_empty() => {
+                return Err(fail("newmtl needs a name".to_string()));
+            }
+            _ => {}
+        }
+    }
+    if expanded.is_empty() {
+        return Ok(Cow::Borrowed(text));
+    }
+    let mut replacements = expanded.into_iter().peekable();
+    let lines: Vec<Cow<str>> = text
+        .lines()
+        .enumerate()
+        .map(
+            |(index, line)| match replacements.next_if(|(at, _)| *at == index) {
+                Some((_, replacement)) => Cow::Owned(replacement),
+                None => Cow::Borrowed(line),
+            },
+        )
+        .collect();
+    Ok(Cow::Owned(lines.join("\n")))
+}
+
+/// Which vertices of the merged models came with a normal.
+enum FileNormals {
+    /// Every vertex, in vertex order.
+    All(Vec<Vec3>),
+    /// Some but not all.
+    Some,
+    None,
+}
+
+/// All `tobj` models merged into one indexed triangle list.
+struct MergedGeometry {
+    positions: Vec<Vec3>,
+    normals: FileNormals,
+    triangles: Vec<[u32; 3]>,
+    /// Per triangle, the index of its material among the libraries' materials.
+    triangle_material_ids: Vec<Option<usize>>,
+}
+
+fn merge_models(models: &[tobj::Model]) -> Result<MergedGeometry, String> {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut triangles = Vec::new();
+    let mut triangle_material_ids = Vec::new();
+    let (mut with_normals, mut without_normals) = (0usize, 0usize);
+
+    for model in models {
+        let mesh = &model.mesh;
+        let offset = positions.len();
+        let vertex_count = mesh.positions.len() / 3;
+        positions.extend(mesh.positions.chunks_exact(3).map(Vec3::from_slice));
+        if mesh.normals.len() == mesh.positions.len() {
+            normals.extend(mesh.normals.chunks_exact(3).map(Vec3::from_slice));
+            with_normals += vertex_count;
+        } else {
+            with_normals += mesh.normals.len() / 3;
+            without_normals += vertex_count - (mesh.normals.len() / 3).min(vertex_count);
+        }
+        for corners in mesh.indices.chunks_exact(3) {
+            let mut triangle = [0u32; 3];
+            for (slot, &vertex) in triangle.iter_mut().zip(corners) {
+                if vertex as usize >= vertex_count {
+                    return Err(format!("malformed OBJ: vertex index {vertex} out of range"));
+                }
+                *slot = u32::try_from(offset + vertex as usize)
+                    .map_err(|_| "too many vertices (more than 2³² after splitting)".to_string())?;
+            }
+            triangles.push(triangle);
+            triangle_material_ids.push(mesh.material_id);
+        }
+    }
+    if !positions.iter().all(|p| p.is_finite()) {
+        return Err("a vertex position is not finite (NaN or infinity)".to_string());
+    }
+    let normals = match (with_normals, without_normals) {
+        (0, _) => FileNormals::None,
+        (_, 0) => FileNormals::All(normals),
+        _ => FileNormals::Some,
+    };
+    Ok(MergedGeometry {
+        positions,
+        normals,
+        triangles,
+        triangle_material_ids,
+    })
+}
+
+/// Sets the mesh's materials and per-triangle material indices from the libraries' materials
+/// (module documentation: "MTL to Material").
+fn assign_materials(
+    mesh: &mut Mesh,
+    triangle_material_ids: &[Option<usize>],
+    library_materials: &[tobj::Material],
+    warnings: &mut Vec<String>,
+) {
+    let known = |id: &Option<usize>| id.filter(|&id| id < library_materials.len());
+    if library_materials.is_empty() || triangle_material_ids.iter().all(|id| known(id).is_none()) {
+        return;
+    }
+    mesh.materials = library_materials
+        .iter()
+        .map(|material| material_from_mtl(material, warnings))
+        .collect();
+    let default_index = mesh.materials.len() as u32;
+    mesh.triangle_materials = triangle_material_ids
+        .iter()
+        .map(|id| known(id).map_or(default_index, |id| id as u32))
+        .collect();
+    if mesh.triangle_materials.contains(&default_index) {
+        mesh.materials.push(default_material());
+    }
+}
+
+/// One MTL material as a [`Material`] (module documentation: "MTL to Material").
+fn material_from_mtl(mtl: &tobj::Material, warnings: &mut Vec<String>) -> Material {
+    let defaults = default_material();
+    let mut warn_not_finite = |statement: &str| {
+        warnings.push(format!(
+            "material '{}': {statement} is not finite; the default is used",
+            mtl.name
+        ));
+    };
+    let mut colour =
+        |value: Option<[f32; 3]>, statement: &str, default: Vec3| match value.map(Vec3::from) {
+            None => default,
+            Some(colour) if colour.is_finite() => colour,
+            Some(_) => {
+                warn_not_finite(statement);
+                default
+            }
+        };
+    let diffuse = colour(mtl.diffuse, "Kd", defaults.diffuse);
+    let ambient = colour(mtl.ambient, "Ka", diffuse);
+    let specular = colour(mtl.specular, "Ks", defaults.specular);
+    let emission = colour(mtl.emissive, "Ke", defaults.emission);
+    let shininess = match mtl.shininess {
+        None => defaults.shininess,
+        Some(ns) if ns.is_finite() => ns.max(0.0),
+        Some(_) => {
+            warnings.push(format!(
+                "material '{}': Ns is not finite; the default is used",
+                mtl.name
+            ));
+            defaults.shininess
+        }
+    };
+    let model = match mtl.illumination_model {
+        Some(0) => LightingModel::Unlit,
+        Some(1) => LightingModel::Lambert,
+        _ => LightingModel::BlinnPhong,
+    };
+    Material {
+        ambient,
+        diffuse,
+        specular,
+        shininess,
+        emission,
+        model,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn asset(relative: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets/obj")
+            .join(relative)
+    }
+
+    fn load(path: &Path) -> Result<LoadedMesh, MeshError> {
+        load_obj(path, &MeshOptions::default())
+    }
+
+    /// Loads a copied asset and checks its triangle count (from `assets/LICENSES.md`) and
+    /// the module invariant: finite positions, unit normals, indices in range, one
+    /// material index per triangle when there are materials.
+    fn check_asset(relative: &str, triangles: usize) -> LoadedMesh {
+        let loaded = load(&asset(relative)).unwrap_or_else(|e| panic!("{relative}: {e:?}"));
+        check_invariant(&loaded.mesh);
+        assert_eq!(loaded.mesh.triangle_count(), triangles, "{relative}");
+        loaded
+    }
+
+    fn check_invariant(mesh: &Mesh) {
+        assert_eq!(mesh.positions.len(), mesh.normals.len());
+        assert!(mesh.positions.iter().all(|p| p.is_finite()));
+        assert!(
+            mesh.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-5),
+            "unit normals"
+        );
+        let vertex_count = mesh.positions.len() as u32;
+        assert!(mesh.triangles.iter().flatten().all(|&v| v < vertex_count));
+        if mesh.materials.is_empty() {
+            assert!(mesh.triangle_materials.is_empty());
+        } else {
+            assert_eq!(mesh.triangle_materials.len(), mesh.triangles.len());
+            assert!(
+                mesh.triangle_materials
+                    .iter()
+                    .all(|&m| (m as usize) < mesh.materials.len())
+            );
+        }
+    }
+
+    /// A directory of its own under the system temporary directory, removed on drop.
+    fn scratch_dir() -> tempfile::TempDir {
+        tempfile::Builder::new()
+            .prefix("lampshade-obj-test")
+            .tempdir()
+            .unwrap_or_else(|e| panic!("cannot create a temporary directory: {e}"))
+    }
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let path = dir.join(name);
+        std::fs::write(&path, text)
+            .unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
+        path
+    }
+
+    /// Loads `obj` (written to a scratch directory with the given MTL files) and returns
+    /// the result.
+    fn load_text(obj: &str, mtl_files: &[(&str, &str)]) -> Result<LoadedMesh, MeshError> {
+        let dir = scratch_dir();
+        for (name, text) in mtl_files {
+            write(dir.path(), name, text);
+        }
+        load(&write(dir.path(), "test.obj", obj))
+    }
+
+    /// Expects `obj` to be rejected with `message` (a substring) at `line`.
+    fn check_error(obj: &str, line: Option<usize>, message: &str) {
+        match load_text(obj, &[]) {
+            Ok(loaded) => panic!(
+                "expected an error, loaded {} triangles",
+                loaded.mesh.triangle_count()
+            ),
+            Err(error) => {
+                assert_eq!(error.line, line, "{error:?}");
+                assert!(
+                    error.message.contains(message),
+                    "{error:?} should contain {message:?}"
+                );
+            }
+        }
+    }
+
+    const TRIANGLE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+
+    #[test]
+    fn triangle_counts_match_the_asset_list() {
+        check_asset("cornell-box/CornellBox-Original.obj", 36);
+        check_asset("teapot/teapot.obj", 6320);
+        check_asset("spot/spot_triangulated.obj", 5856);
+        check_asset("spot/spot_quadrangulated.obj", 5856);
+        check_asset("spot/spot_control_mesh.obj", 372);
+        check_asset("tobj-fixtures/cornell_box.obj", 36);
+        check_asset("tobj-fixtures/quad.obj", 5);
+        check_asset("tobj-fixtures/triangle.obj", 1);
+    }
+
+    #[test]
+    fn cornell_box_materials_come_from_its_mtl() {
+        let loaded = check_asset("cornell-box/CornellBox-Original.obj", 36);
+        let mesh = &loaded.mesh;
+        assert_eq!(
+            mesh.materials.len(),
+            8,
+            "every face has a material: no default appended"
+        );
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        assert_eq!(
+            loaded.files_read,
+            vec![
+                asset("cornell-box/CornellBox-Original.obj"),
+                asset("cornell-box/CornellBox-Original.mtl")
+            ]
+        );
+        let light = mesh
+            .materials
+            .iter()
+            .find(|m| m.emission != Vec3::ZERO)
+            .unwrap_or_else(|| panic!("no emissive material"));
+        assert_eq!(light.emission, Vec3::new(17.0, 12.0, 4.0));
+        assert_eq!(light.diffuse, Vec3::splat(0.78));
+        assert_eq!(light.model, LightingModel::BlinnPhong);
+        let left_wall = mesh.materials[0];
+        assert_eq!(left_wall.ambient, Vec3::new(0.63, 0.065, 0.05));
+        assert_eq!(left_wall.specular, Vec3::ZERO);
+        assert_eq!(left_wall.shininess, 10.0);
+        // The box's faces are flat and meet at right angles: each face vertex keeps its
+        // face's normal, so every corner normal is the triangle's own.
+        for triangle in &mesh.triangles {
+            let [a, b, c] = triangle.map(|v| mesh.positions[v as usize]);
+            let face = normals::face_normal(a, b, c);
+            for &v in triangle {
+                assert!(mesh.normals[v as usize].dot(face) > 0.999);
+            }
+        }
+    }
+
+    #[test]
+    fn negative_indices_count_back_from_the_last_vertex() {
+        let loaded = check_asset("tobj-fixtures/triangle.obj", 1);
+        let [a, b, c] = loaded.mesh.triangles[0].map(|v| loaded.mesh.positions[v as usize]);
+        assert_eq!([a, b, c], [Vec3::ZERO, Vec3::X, Vec3::Y]);
+        // Relative indices after more vertices: -3 -2 -1 are the last three defined.
+        let obj = format!("v 9 9 9\n{TRIANGLE}f -3 -2 -1\nv 5 5 5\nf 1 2 -1\n");
+        let mesh = load_text(&obj, &[])
+            .map(|l| l.mesh)
+            .unwrap_or_else(|e| panic!("{e:?}"));
+        let corners = |t: usize| mesh.triangles[t].map(|v| mesh.positions[v as usize]);
+        assert_eq!(corners(0), [Vec3::ZERO, Vec3::X, Vec3::Y]);
+        assert_eq!(corners(1), [Vec3::splat(9.0), Vec3::ZERO, Vec3::splat(5.0)]);
+    }
+
+    #[test]
+    fn tobj_fixture_materials_and_both_libraries_are_read() {
+        let loaded = check_asset("tobj-fixtures/cornell_box.obj", 36);
+        assert_eq!(loaded.files_read.len(), 3, "{:?}", loaded.files_read);
+        let white = loaded
+            .mesh
+            .materials
+            .iter()
+            .find(|m| m.diffuse == Vec3::ONE && m.emission == Vec3::ONE);
+        assert!(
+            white.is_some(),
+            "white has Ke 1 1 1: {:?}",
+            loaded.mesh.materials
+        );
+    }
+
+    #[test]
+    fn teapot_without_normals_gets_unit_normals() {
+        let loaded = check_asset("teapot/teapot.obj", 6320);
+        assert!(loaded.mesh.materials.is_empty());
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        // At the point of a smooth closed surface farthest along a direction, the normal
+        // is that direction. The teapot is closed except for the spout's opening and
+        // perhaps the base, so check the top (lid knob), the handle's back (-X) and the
+        // body's sides (±Z).
+        let mesh = &loaded.mesh;
+        for direction in [Vec3::Y, -Vec3::X, Vec3::Z, -Vec3::Z] {
+            let farthest = (0..mesh.positions.len())
+                .max_by(|&a, &b| {
+                    mesh.positions[a]
+                        .dot(direction)
+                        .total_cmp(&mesh.positions[b].dot(direction))
+                })
+                .unwrap_or_default();
+            let normal = mesh.normals[farthest];
+            assert!(
+                normal.dot(direction) > 0.9,
+                "normal {normal} at the point farthest along {direction}"
+            );
+        }
+    }
+
+    #[test]
+    fn partial_normals_are_all_computed_with_a_warning() {
+        let loaded = check_asset("tobj-fixtures/quad.obj", 5);
+        assert!(
+            loaded.warnings.iter().any(|w| w.contains("only some")),
+            "{:?}",
+            loaded.warnings
+        );
+        // Everything lies in z = 0 and faces +Z, whether the file said so or not.
+        assert!(loaded.mesh.normals.iter().all(|&n| n == Vec3::Z));
+    }
+
+    #[test]
+    fn file_normals_are_used_and_repaired() {
+        let obj = format!("{TRIANGLE}vn 0 0 2\nvn 0 0 0\nf 1//1 2//1 3//2\n");
+        let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+        check_invariant(&loaded.mesh);
+        assert!(loaded.mesh.normals.iter().all(|&n| n == Vec3::Z));
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("1 vertex normals")),
+            "{:?}",
+            loaded.warnings
+        );
+        // A tilted file normal is kept as given (renormalised), not recomputed.
+        let obj = format!("{TRIANGLE}vn 0 3 4\nf 1//1 2//1 3//1\n");
+        let mesh = load_text(&obj, &[])
+            .map(|l| l.mesh)
+            .unwrap_or_else(|e| panic!("{e:?}"));
+        assert!(
+            mesh.normals
+                .iter()
+                .all(|n| n.distance(Vec3::new(0.0, 0.6, 0.8)) < 1e-6)
+        );
+    }
+
+    #[test]
+    fn missing_mtl_is_a_warning_and_leaves_no_materials() {
+        let obj = format!("mtllib nowhere.mtl\nusemtl red\n{TRIANGLE}f 1 2 3\n");
+        let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+        assert!(loaded.mesh.materials.is_empty() && loaded.mesh.triangle_materials.is_empty());
+        assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+        assert!(
+            loaded.warnings[0].contains("nowhere.mtl")
+                && loaded.warnings[0].contains("cannot read")
+        );
+        assert_eq!(loaded.files_read.len(), 1, "the missing file was not read");
+    }
+
+    #[test]
+    fn malformed_mtl_is_a_warning_with_its_line() {
+        let mtl = "newmtl red\nKd 1 0\n";
+        let obj = format!("mtllib bad.mtl\nusemtl red\n{TRIANGLE}f 1 2 3\n");
+        let loaded = load_text(&obj, &[("bad.mtl", mtl)]).unwrap_or_else(|e| panic!("{e:?}"));
+        assert!(loaded.mesh.materials.is_empty());
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("bad.mtl") && w.contains("line 2")),
+            "{:?}",
+            loaded.warnings
+        );
+        assert_eq!(
+            loaded.files_read.len(),
+            2,
+            "a malformed library was still read"
+        );
+    }
+
+    #[test]
+    fn mtl_defaults_and_illumination_models() {
+        let mtl = "newmtl flat\nKd 0.5\nillum 0\n\
+                   newmtl matte\nKa 0.1 0.1 0.1\nillum 1\n\
+                   newmtl shiny\nKs 1 1 1\nNs 200\nillum 2\n";
+        let obj = format!(
+            "mtllib m.mtl\n{TRIANGLE}usemtl flat\nf 1 2 3\nusemtl matte\nf 1 2 3\nusemtl shiny\nf 1 2 3\nusemtl nothing\nf 1 2 3\n"
+        );
+        let loaded = load_text(&obj, &[("m.mtl", mtl)]).unwrap_or_else(|e| panic!("{e:?}"));
+        let mesh = &loaded.mesh;
+        check_invariant(mesh);
+        assert_eq!(
+            mesh.triangle_materials,
+            vec![0, 1, 2, 3],
+            "undefined 'nothing' uses the appended default"
+        );
+        let [flat, matte, shiny, fallback] = [0, 1, 2, 3].map(|i| mesh.materials[i]);
+        assert_eq!(
+            (flat.diffuse, flat.ambient, flat.model),
+            (Vec3::splat(0.5), Vec3::splat(0.5), LightingModel::Unlit)
+        );
+        assert_eq!(
+            (matte.diffuse, matte.ambient, matte.model),
+            (DEFAULT_DIFFUSE, Vec3::splat(0.1), LightingModel::Lambert)
+        );
+        assert_eq!(
+            (shiny.specular, shiny.shininess, shiny.model),
+            (Vec3::ONE, 200.0, LightingModel::BlinnPhong)
+        );
+        assert_eq!(fallback, default_material());
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("'nothing'") && w.contains("line 11")),
+            "{:?}",
+            loaded.warnings
+        );
+    }
+
+    #[test]
+    fn faces_without_material_get_the_default_only_when_needed() {
+        let mtl = "newmtl red\nKd 1 0 0\n";
+        let obj = format!("mtllib m.mtl\n{TRIANGLE}f 1 2 3\nusemtl red\nf 1 3 2\n");
+        let mesh = load_text(&obj, &[("m.mtl", mtl)])
+            .map(|l| l.mesh)
+            .unwrap_or_else(|e| panic!("{e:?}"));
+        assert_eq!(mesh.materials.len(), 2);
+        assert_eq!(mesh.triangle_materials, vec![1, 0]);
+        // No face names a material: the library is irrelevant and the mesh carries none.
+        let obj = format!("mtllib m.mtl\n{TRIANGLE}f 1 2 3\n");
+        let mesh = load_text(&obj, &[("m.mtl", mtl)])
+            .map(|l| l.mesh)
+            .unwrap_or_else(|e| panic!("{e:?}"));
+        assert!(mesh.materials.is_empty() && mesh.triangle_materials.is_empty());
+    }
+
+    #[test]
+    fn out_of_range_and_zero_indices_are_errors_with_lines() {
+        check_error(
+            &format!("{TRIANGLE}f 1 2 4\n"),
+            Some(4),
+            "vertex 4, but only 3",
+        );
+        check_error(&format!("{TRIANGLE}f 1 2 -4\n"), Some(4), "vertex -4");
+        check_error(&format!("{TRIANGLE}f 0 1 2\n"), Some(4), "index 0");
+        check_error(
+            &format!("{TRIANGLE}f 1/1 2/1 3/1\n"),
+            Some(4),
+            "texture coordinate 1, but only 0",
+        );
+        check_error(
+            &format!("{TRIANGLE}vn 0 0 1\nf 1//1 2//2 3//1\n"),
+            Some(5),
+            "normal 2",
+        );
+        check_error(
+            &format!("{TRIANGLE}f 1 2 -99999999999999\n"),
+            Some(4),
+            "vertex -99999999999999",
+        );
+        check_error(
+            &format!("{TRIANGLE}f 1 2 99999999999999999999\n"),
+            Some(4),
+            "malformed face vertex",
+        );
+        check_error(
+            &format!("{TRIANGLE}f 1/2/3/4 2 3\n"),
+            Some(4),
+            "malformed face vertex",
+        );
+        // Forward references are not OBJ: the vertex must be defined above the face.
+        check_error(
+            "v 0 0 0\nv 1 0 0\nf 1 2 3\nv 0 1 0\n",
+            Some(3),
+            "vertex 3, but only 2",
+        );
+    }
+
+    #[test]
+    fn bad_positions_are_errors_with_lines() {
+        check_error(
+            "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n",
+            Some(2),
+            "not finite",
+        );
+        check_error("v 0 0 0\nv 1 1e39 0\n", Some(2), "not finite");
+        check_error("v 0 0\n", Some(1), "three numbers");
+        check_error("v 0 0 1 0\n", Some(1), "w must be non-zero");
+    }
+
+    #[test]
+    fn files_that_cannot_be_meshes_are_errors() {
+        check_error("# nothing\nv 0 0 0\n", None, "contains no triangles");
+        check_error(
+            &format!("{TRIANGLE}l 1 2 3\n"),
+            None,
+            "contains no triangles",
+        );
+        let missing = scratch_dir().path().join("missing.obj");
+        let error = load(&missing).err();
+        assert_eq!(
+            error.map(|e| e.message),
+            Some("cannot read mesh file: No such file or directory".to_string())
+        );
+    }
+
+    #[test]
+    fn polylines_and_short_faces_are_dropped_with_warnings() {
+        let obj = format!("{TRIANGLE}l 1 2 3\nf 1 2\nf 1 2 3\n");
+        let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+        assert_eq!(
+            loaded.mesh.triangle_count(),
+            1,
+            "the polyline is not a triangle"
+        );
+        assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
+        assert!(loaded.warnings[0].contains("line 5") && loaded.warnings[1].contains("line 4"));
+    }
+
+    #[test]
+    fn degenerate_faces_are_kept_without_nan() {
+        let obj = "v 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\n";
+        let mesh = load_text(obj, &[])
+            .map(|l| l.mesh)
+            .unwrap_or_else(|e| panic!("{e:?}"));
+        check_invariant(&mesh);
+        assert_eq!(mesh.normals, vec![normals::FALLBACK_NORMAL]);
+    }
+}

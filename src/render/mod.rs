@@ -1,1 +1,175 @@
-//! (being written)
+//! The renderer: a pure function from a validated [`Scene`] to a linear-light [`FrameBuffer`].
+//!
+//! ```text
+//! geometry (per object, parallel over vertices and triangle chunks)
+//!   transform · per-vertex lighting (Gouraud) · facing · clip · project · snap · setup
+//!     └─► RasterTriangle list, in submission order
+//! bin      every RasterTriangle into the screen tiles its bounds touch (order kept)
+//! tiles    in parallel, each tile on its own:
+//!   raster   fixed-point edge functions, top-left rule, depth test → visibility buffer
+//!   shade    each visible pixel once: flat / Gouraud / Phong
+//! resolve  tiles copied into the frame in a fixed order
+//! ```
+//!
+//! Architecture invariants:
+//! - `render` does no I/O and cannot fail: the loader has validated the scene.
+//! - The result is bit-identical for any thread count: work is split into chunks and tiles whose
+//!   boundaries depend only on the scene and image size, every tile owns its buffers, and results
+//!   are stitched in a fixed order. No floating-point reduction crosses a thread boundary.
+//! - Each visible pixel is shaded once (a visibility buffer per tile), so overdraw costs depth
+//!   tests, not lighting.
+
+pub mod bin;
+pub mod clip;
+pub mod geometry;
+pub mod raster;
+pub mod shade;
+
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use crate::scene::Scene;
+
+/// Tiles are square; 64×64 pixels keep a tile's depth, id and colour buffers (80 KiB) in L2.
+pub const TILE_SIZE: u32 = 64;
+
+/// The largest width or height accepted. The fixed-point rasterizer itself allows a guard band of
+/// ±2^20 pixels (see [`raster`]); this smaller limit keeps the guard band at least 64 images wide,
+/// so triangles are clipped against x/y only when they reach far off screen, and keeps the frame
+/// buffer (16 bytes a pixel) within a few GiB.
+pub const MAX_IMAGE_DIMENSION: u32 = 16384;
+
+/// Instead of the lit colour, show one ingredient of it (the seeds' shader "modes").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DebugView {
+    /// `k_a·I_a` only.
+    Ambient,
+    /// The diffuse sum only.
+    Diffuse,
+    /// The specular sum only.
+    Specular,
+    /// The shading normal, mapped from [-1, 1] to [0, 1] per axis (world space).
+    Normals,
+    /// Distance along the view axis, nearest visible point white, farthest black.
+    Depth,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RenderOptions {
+    /// Worker threads; `None` uses rayon's global pool (one per core).
+    pub threads: Option<usize>,
+    pub debug_view: Option<DebugView>,
+}
+
+/// The rendered image in linear RGB, not clamped, row-major from the top-left pixel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameBuffer {
+    pub width: u32,
+    pub height: u32,
+    pub color: Vec<Vec3>,
+    /// Whether any geometry covers the pixel (used by error metrics and the depth view).
+    pub covered: Vec<bool>,
+}
+
+/// What a render did and where its time went.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RenderStats {
+    /// Triangles in the scene's meshes.
+    pub triangles: usize,
+    /// Triangles that reached the rasterizer (after culling, clipping and dropping zero-area ones;
+    /// a clipped triangle may count more than once).
+    pub raster_triangles: usize,
+    /// Transform, lighting per vertex, clipping, setup and binning.
+    pub geometry: Duration,
+    /// Rasterizing and shading every tile, and stitching them.
+    pub raster_shade: Duration,
+    pub threads: usize,
+}
+
+/// Renders `scene`. Never fails; see the module documentation for the invariants.
+pub fn render(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderStats) {
+    if let Some(threads) = options.threads
+        && let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build()
+    {
+        return pool.install(|| render_in_current_pool(scene, options));
+    }
+    render_in_current_pool(scene, options)
+}
+
+fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderStats) {
+    let started = Instant::now();
+    let frame = geometry::build_frame(scene, options.debug_view);
+    let tiles = bin::TileGrid::new(scene.image.width, scene.image.height);
+    let bins = bin::bin_triangles(&tiles, &frame.raster);
+    let geometry_time = started.elapsed();
+
+    let started = Instant::now();
+    let tile_images: Vec<shade::TileImage> = (0..tiles.count())
+        .into_par_iter()
+        .map(|index| {
+            let rect = tiles.rect(index);
+            let visibility = raster::rasterize_tile(rect, &frame.raster, &bins[index]);
+            shade::shade_tile(&frame, &visibility, scene.image.background)
+        })
+        .collect();
+    let mut framebuffer = resolve(&tiles, tile_images);
+    if options.debug_view == Some(DebugView::Depth) {
+        normalize_depth(&mut framebuffer);
+    }
+    let stats = RenderStats {
+        triangles: scene.triangle_count(),
+        raster_triangles: frame.raster.len(),
+        geometry: geometry_time,
+        raster_shade: started.elapsed(),
+        threads: rayon::current_num_threads(),
+    };
+    (framebuffer, stats)
+}
+
+/// Copies every tile into the frame, in tile order.
+fn resolve(tiles: &bin::TileGrid, tile_images: Vec<shade::TileImage>) -> FrameBuffer {
+    let (width, height) = (tiles.width, tiles.height);
+    let pixel_count = width as usize * height as usize;
+    let mut framebuffer = FrameBuffer {
+        width,
+        height,
+        color: vec![Vec3::ZERO; pixel_count],
+        covered: vec![false; pixel_count],
+    };
+    for (index, tile) in tile_images.into_iter().enumerate() {
+        let rect = tiles.rect(index);
+        let tile_width = rect.width() as usize;
+        for row in 0..rect.height() as usize {
+            let frame_start = (rect.y0 as usize + row) * width as usize + rect.x0 as usize;
+            let tile_start = row * tile_width;
+            framebuffer.color[frame_start..frame_start + tile_width]
+                .copy_from_slice(&tile.color[tile_start..tile_start + tile_width]);
+            framebuffer.covered[frame_start..frame_start + tile_width]
+                .copy_from_slice(&tile.covered[tile_start..tile_start + tile_width]);
+        }
+    }
+    framebuffer
+}
+
+/// The depth view's shader wrote view distances; map them so the nearest covered pixel is white
+/// and the farthest black (a fixed range would show most scenes as one flat grey).
+fn normalize_depth(framebuffer: &mut FrameBuffer) {
+    let distances = framebuffer
+        .color
+        .iter()
+        .zip(&framebuffer.covered)
+        .filter(|&(_, &covered)| covered)
+        .map(|(color, _)| color.x);
+    let (nearest, farthest) = distances.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| {
+        (lo.min(d), hi.max(d))
+    });
+    let range = farthest - nearest;
+    for (color, &covered) in framebuffer.color.iter_mut().zip(&framebuffer.covered) {
+        if covered {
+            let shade = if range > 0.0 { 1.0 - (color.x - nearest) / range } else { 1.0 };
+            *color = Vec3::splat(shade);
+        }
+    }
+}

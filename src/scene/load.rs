@@ -1,1 +1,1019 @@
-//! (being written)
+//! The loader: a scene file and everything it names, read, checked and lowered into a [`Scene`].
+//!
+//! Stages, in order: read and parse the scene file (ron gives positions for syntax and type
+//! errors); read included material libraries; resolve every material; load meshes; then the
+//! camera and lights, whose defaults depend on where the objects are. Problems found after
+//! parsing are located in the source text by the path of the offending value
+//! ([`super::locate`]), so an unknown material or a NaN points at its line and column like a
+//! syntax error does. All problems are collected; loading stops only where continuing could not
+//! find more (a syntax error ends the file's checks).
+//!
+//! Every file read is recorded in [`LoadedScene::files_read`], the set a watcher follows.
+
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::SystemTime;
+
+use glam::{DMat4, DQuat, DVec3, EulerRot, Vec3};
+
+use crate::diag::{Diagnostic, SourceId, Sources, from_ron_error};
+use crate::mesh::{LoadedMesh, Mesh, MeshError, MeshOptions, gltf::load_gltf, obj::load_obj, primitives};
+use crate::ron_path;
+use crate::scene::format::{
+    self, AttenuationFile, BackFacesFile, CameraFile, LightFile, LightingModelFile, MaterialFile,
+    MaterialLibraryFile, MaterialRefFile, MeshFile, OrderedMap, ScaleFile, SceneFile, ShadingFile,
+};
+use crate::scene::locate::{PathSegment, locate, locate_keys};
+use crate::scene::presets::{self, DEFAULT_RECIPE, MaterialRecipe};
+use crate::scene::{
+    Attenuation, BackFaces, Camera, ImageSettings, Light, LightingModel, Object, Projection, Scene,
+    Shading,
+};
+
+/// Image size when the scene gives none.
+pub const DEFAULT_WIDTH: u32 = 800;
+pub const DEFAULT_HEIGHT: u32 = 600;
+/// OpenGL's default global ambient light (`GL_LIGHT_MODEL_AMBIENT`).
+pub const DEFAULT_AMBIENT: Vec3 = Vec3::splat(0.2);
+pub const DEFAULT_SPHERE_SEGMENTS: u32 = 32;
+/// `sphere(N)` has 2N² triangles: 4096 gives 33.5 million, beyond which a scene is almost
+/// certainly a typo and would exhaust memory.
+pub const MAX_SPHERE_SEGMENTS: u32 = 4096;
+pub const DEFAULT_FOV_DEGREES: f64 = 45.0;
+pub const DEFAULT_SPOT_CUTOFF_DEGREES: f32 = 30.0;
+/// Included material libraries may include others, this deep at most.
+pub const MAX_INCLUDE_DEPTH: usize = 16;
+
+/// Settings from the command line that override the scene file.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LoadOptions {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    /// Replaces every object's shading mode.
+    pub shading: Option<Shading>,
+}
+
+/// A scene that loaded, with what it read and the warnings it produced.
+#[derive(Debug, Clone)]
+pub struct LoadedScene {
+    pub scene: Scene,
+    /// Every file read: scene, includes, meshes and the files they reference.
+    pub files_read: Vec<PathBuf>,
+    pub warnings: Vec<Diagnostic>,
+    pub sources: Sources,
+}
+
+/// A scene that did not load: every problem found, and the texts they point into.
+#[derive(Debug, Clone)]
+pub struct LoadError {
+    pub diagnostics: Vec<Diagnostic>,
+    pub sources: Sources,
+    /// Files read before the problems were found (a watcher follows them too).
+    pub files_read: Vec<PathBuf>,
+}
+
+/// Meshes loaded by earlier loads, reused while none of their files has changed (watch mode
+/// re-renders a scene with a million-triangle mesh without reading the mesh again).
+#[derive(Debug, Default)]
+pub struct MeshCache {
+    entries: HashMap<MeshKey, CachedMesh>,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct MeshKey {
+    path: PathBuf,
+    crease_angle_bits: u32,
+}
+
+#[derive(Debug)]
+struct CachedMesh {
+    /// Modification times of every file the mesh read, at load time.
+    stamps: Vec<(PathBuf, Option<SystemTime>)>,
+    mesh: Arc<Mesh>,
+    files_read: Vec<PathBuf>,
+    warnings: Vec<String>,
+}
+
+fn modified(path: &Path) -> Option<SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+/// Loads the scene at `path`.
+pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
+    load_scene_cached(path, options, &mut MeshCache::default())
+}
+
+/// Loads the scene at `path`, reusing unchanged meshes from `cache`.
+pub fn load_scene_cached(
+    path: &Path,
+    options: &LoadOptions,
+    cache: &mut MeshCache,
+) -> Result<LoadedScene, LoadError> {
+    let mut loader = Loader {
+        scene_path: path.to_path_buf(),
+        sources: Sources::new(),
+        diagnostics: Vec::new(),
+        files_read: Vec::new(),
+        cache,
+    };
+    let scene = loader.load(options);
+    let (errors, warnings): (Vec<_>, Vec<_>) = loader.diagnostics.into_iter().partition(|d| d.is_error());
+    match scene {
+        Some(scene) if errors.is_empty() => Ok(LoadedScene {
+            scene,
+            files_read: loader.files_read,
+            warnings,
+            sources: loader.sources,
+        }),
+        _ => Err(LoadError {
+            diagnostics: errors.into_iter().chain(warnings).collect(),
+            sources: loader.sources,
+            files_read: loader.files_read,
+        }),
+    }
+}
+
+struct Loader<'c> {
+    scene_path: PathBuf,
+    sources: Sources,
+    diagnostics: Vec<Diagnostic>,
+    files_read: Vec<PathBuf>,
+    cache: &'c mut MeshCache,
+}
+
+/// A material defined in a table: where, so errors can point at it.
+#[derive(Debug, Clone)]
+struct MaterialDefinition {
+    material: MaterialFile,
+    source: SourceId,
+    /// Path of the definition's value in its file.
+    path: Vec<PathSegment>,
+}
+
+/// Where in which file a value sits.
+#[derive(Debug, Clone, Copy)]
+struct At<'p> {
+    source: SourceId,
+    path: &'p [PathSegment],
+}
+
+impl<'p> At<'p> {
+    fn new(source: SourceId, path: &'p [PathSegment]) -> Self {
+        At { source, path }
+    }
+}
+
+impl Loader<'_> {
+    fn load(&mut self, options: &LoadOptions) -> Option<Scene> {
+        let scene_path = self.scene_path.clone();
+        let source = self.read_source(&scene_path, None)?;
+        let file: SceneFile = self.parse(source)?;
+
+        // Materials: included libraries first, then the scene's own table, later overriding earlier.
+        let mut table: HashMap<String, MaterialDefinition> = HashMap::new();
+        let mut include_stack = vec![canonical(&scene_path)];
+        self.read_includes(&file.include, source, &[], &mut include_stack, &mut table);
+        self.add_materials(&file.materials, source, &[], &mut table);
+        let materials = self.resolve_table(&table);
+
+        let image = self.image(&file, source, options);
+        let mut objects = Vec::new();
+        for (index, object) in file.objects.iter().enumerate() {
+            if let Some(object) = self.object(object, index, source, &table, &materials, options) {
+                objects.push(object);
+            }
+        }
+        let bounds = scene_bounds(&objects);
+        let camera = self.camera(file.camera.as_ref(), source, bounds, image);
+        let ambient = match file.ambient {
+            Some(ambient) => self.color(ambient, At { source, path: &ron_path!["ambient"] }),
+            None => Some(DEFAULT_AMBIENT),
+        };
+        let lights = match (&file.lights, camera) {
+            (Some(lights), Some(camera)) => lights
+                .iter()
+                .enumerate()
+                .filter_map(|(i, light)| self.light(light, i, source, &camera))
+                .collect(),
+            (None, Some(camera)) => vec![Light::Directional {
+                direction: (camera.target - camera.eye).normalize().as_vec3(),
+                color: Vec3::ONE,
+            }],
+            (_, None) => Vec::new(),
+        };
+        if file.objects.is_empty() {
+            self.diagnostics.push(
+                Diagnostic::warning(&scene_path, "the scene has no objects: the image will be empty")
+                    .with_hint("add `objects: [(mesh: Sphere())]`"),
+            );
+        }
+        Some(Scene {
+            image: image?,
+            camera: camera?,
+            ambient_light: ambient?,
+            lights,
+            objects,
+        })
+    }
+
+    // ----- reading and parsing -----
+
+    /// Reads a text file into `sources`. `referenced_at` is where another file named it.
+    fn read_source(&mut self, path: &Path, referenced_at: Option<At>) -> Option<SourceId> {
+        self.files_read.push(path.to_path_buf());
+        let problem = match std::fs::read(path) {
+            Ok(bytes) => match String::from_utf8(bytes) {
+                Ok(text) => return Some(self.sources.add(path.to_path_buf(), text)),
+                Err(error) => {
+                    let valid = &error.as_bytes()[..error.utf8_error().valid_up_to()];
+                    let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+                    Diagnostic::error(path, "the file is not UTF-8 text")
+                        .with_line(line)
+                        .with_hint("scene files are UTF-8 text; was a binary file given by mistake?")
+                }
+            },
+            Err(error) if path.is_dir() => {
+                let _ = error;
+                Diagnostic::error(path, "this is a directory, not a file")
+            }
+            Err(error) => Diagnostic::error(path, format!("cannot read the file: {}", io_reason(&error))),
+        };
+        let problem = match referenced_at {
+            Some(at) => self.locate(problem, at),
+            None => problem,
+        };
+        self.diagnostics.push(problem);
+        None
+    }
+
+    fn parse<T: serde::de::DeserializeOwned>(&mut self, source: SourceId) -> Option<T> {
+        match format::ron_options().from_str::<T>(self.sources.text(source)) {
+            Ok(value) => Some(value),
+            Err(error) => {
+                let diagnostic = from_ron_error(source, &self.sources, &error);
+                self.diagnostics.push(diagnostic);
+                None
+            }
+        }
+    }
+
+    /// Points `diagnostic` at the value `at` when it can be found in the text.
+    fn locate(&self, diagnostic: Diagnostic, at: At) -> Diagnostic {
+        match locate(self.sources.text(at.source), at.path) {
+            Some(span) => diagnostic.at(at.source, span),
+            None => diagnostic,
+        }
+    }
+
+    fn error(&mut self, at: At, message: impl Into<String>, label: Option<&str>, hint: Option<String>) {
+        let path = self.sources.path(at.source).to_path_buf();
+        let mut diagnostic = self.locate(Diagnostic::error(path, message), at);
+        if let Some(label) = label {
+            diagnostic = diagnostic.with_label(label);
+        }
+        if let Some(hint) = hint {
+            diagnostic = diagnostic.with_hint(hint);
+        }
+        self.diagnostics.push(diagnostic);
+    }
+
+    // ----- numbers -----
+
+    fn finite(&mut self, value: f64, at: At) -> Option<f64> {
+        if value.is_finite() {
+            Some(value)
+        } else {
+            self.error(
+                at,
+                format!("`{value}` is not a finite number"),
+                Some("must be finite"),
+                Some("NaN and infinities have no meaning here (note: ron reads numbers like 1e400 as infinity)".into()),
+            );
+            None
+        }
+    }
+
+    fn vector(&mut self, value: [f64; 3], at: At) -> Option<DVec3> {
+        let mut ok = true;
+        for (i, &component) in value.iter().enumerate() {
+            let path = [at.path, &[PathSegment::Index(i)]].concat();
+            ok &= self.finite(component, At { source: at.source, path: &path }).is_some();
+        }
+        ok.then(|| DVec3::from(value))
+    }
+
+    fn direction(&mut self, value: [f64; 3], at: At) -> Option<DVec3> {
+        let vector = self.vector(value, at)?;
+        let length = vector.length();
+        if !(length > 1e-12) || !length.is_finite() {
+            self.error(at, "a direction cannot be the zero vector", Some("zero length"), None);
+            return None;
+        }
+        Some(vector / length)
+    }
+
+    /// A non-negative RGB triple.
+    fn color(&mut self, value: [f32; 3], at: At) -> Option<Vec3> {
+        let vector = self.vector(value.map(f64::from), at)?;
+        if vector.min_element() < 0.0 {
+            self.error(at, "colour components cannot be negative", Some("negative component"), None);
+            return None;
+        }
+        Some(vector.as_vec3())
+    }
+
+    /// A number in `[min, max]`.
+    fn ranged(&mut self, value: f64, min: f64, max: f64, at: At, what: &str) -> Option<f64> {
+        let value = self.finite(value, at)?;
+        if value < min || value > max {
+            let range = if max == f64::INFINITY {
+                format!("at least {min}")
+            } else {
+                format!("between {min} and {max}")
+            };
+            self.error(at, format!("{what} must be {range}, not {value}"), Some("out of range"), None);
+            return None;
+        }
+        Some(value)
+    }
+
+    // ----- materials -----
+
+    fn read_includes(
+        &mut self,
+        includes: &[String],
+        source: SourceId,
+        path_prefix: &[PathSegment],
+        stack: &mut Vec<PathBuf>,
+        table: &mut HashMap<String, MaterialDefinition>,
+    ) {
+        let base = self.sources.path(source).parent().map(Path::to_path_buf).unwrap_or_default();
+        for (index, include) in includes.iter().enumerate() {
+            let at_path = [path_prefix, &ron_path!["include", index]].concat();
+            let at = At { source, path: &at_path };
+            let path = base.join(include);
+            let key = canonical(&path);
+            if stack.contains(&key) {
+                self.error(
+                    at,
+                    format!("include cycle: `{include}` is already being included"),
+                    Some("includes itself, directly or through other files"),
+                    None,
+                );
+                continue;
+            }
+            if stack.len() > MAX_INCLUDE_DEPTH {
+                self.error(at, format!("includes nest deeper than {MAX_INCLUDE_DEPTH} files"), None, None);
+                continue;
+            }
+            let Some(library_source) = self.read_source(&path, Some(at)) else {
+                continue;
+            };
+            let Some(library) = self.parse::<MaterialLibraryFile>(library_source) else {
+                continue;
+            };
+            stack.push(key);
+            self.read_includes(&library.include, library_source, &[], stack, table);
+            stack.pop();
+            self.add_materials(&library.materials, library_source, &[], table);
+        }
+    }
+
+    fn add_materials(
+        &mut self,
+        materials: &OrderedMap<MaterialFile>,
+        source: SourceId,
+        path_prefix: &[PathSegment],
+        table: &mut HashMap<String, MaterialDefinition>,
+    ) {
+        let mut seen = HashSet::new();
+        let map_path = [path_prefix, &ron_path!["materials"]].concat();
+        for (name, material) in &materials.0 {
+            if !seen.insert(name.clone()) {
+                let keys = locate_keys(self.sources.text(source), &map_path, name);
+                let mut diagnostic =
+                    Diagnostic::error(self.sources.path(source), format!("material `{name}` is defined twice"))
+                        .with_hint("rename one of them or remove the duplicate");
+                if let Some(span) = keys.get(1).cloned() {
+                    diagnostic = diagnostic.at(source, span).with_label("second definition");
+                }
+                self.diagnostics.push(diagnostic);
+                continue;
+            }
+            let path = [map_path.as_slice(), &[PathSegment::key(name.clone())]].concat();
+            table.insert(
+                presets::normalize_name(name),
+                MaterialDefinition {
+                    material: material.clone(),
+                    source,
+                    path,
+                },
+            );
+        }
+    }
+
+    /// Resolves every table material (following `base` chains) to a recipe.
+    fn resolve_table(&mut self, table: &HashMap<String, MaterialDefinition>) -> HashMap<String, MaterialRecipe> {
+        let mut resolved = HashMap::new();
+        let mut names: Vec<&String> = table.keys().collect();
+        names.sort(); // a stable order for the diagnostics
+        for name in names {
+            let mut chain = Vec::new();
+            self.resolve_named(name, table, &mut resolved, &mut chain);
+        }
+        resolved
+    }
+
+    fn resolve_named(
+        &mut self,
+        name: &str,
+        table: &HashMap<String, MaterialDefinition>,
+        resolved: &mut HashMap<String, MaterialRecipe>,
+        chain: &mut Vec<String>,
+    ) -> Option<MaterialRecipe> {
+        let key = presets::normalize_name(name);
+        if let Some(recipe) = resolved.get(&key) {
+            return Some(*recipe);
+        }
+        let Some(definition) = table.get(&key) else {
+            return presets::preset(&key);
+        };
+        if chain.contains(&key) {
+            let at = At { source: definition.source, path: &definition.path };
+            self.error(at, format!("material `{name}` is its own base"), Some("`base` chain loops"), None);
+            return None;
+        }
+        chain.push(key.clone());
+        let definition = definition.clone();
+        let recipe = self.recipe(&definition.material, definition.source, &definition.path, table, resolved, chain);
+        chain.pop();
+        if let Some(recipe) = recipe {
+            resolved.insert(key, recipe);
+        }
+        recipe
+    }
+
+    /// Builds a recipe from a material written in a file: its base (or the default), then
+    /// each field it sets.
+    fn recipe(
+        &mut self,
+        material: &MaterialFile,
+        source: SourceId,
+        path: &[PathSegment],
+        table: &HashMap<String, MaterialDefinition>,
+        resolved: &mut HashMap<String, MaterialRecipe>,
+        chain: &mut Vec<String>,
+    ) -> Option<MaterialRecipe> {
+        let field = |name: &str| [path, &[PathSegment::Field(name.to_owned())]].concat();
+        let mut recipe = match &material.base {
+            None => DEFAULT_RECIPE,
+            Some(base) => match self.resolve_named(base, table, resolved, chain) {
+                Some(recipe) => recipe,
+                None => {
+                    if table.contains_key(&presets::normalize_name(base)) {
+                        return None; // the base itself failed and said why
+                    }
+                    let at_path = field("base");
+                    self.unknown_material(base, At { source, path: &at_path }, table);
+                    return None;
+                }
+            },
+        };
+        let mut ok = true;
+        let mut strength = |loader: &mut Self, value: Option<f32>, name: &str, max: f64| -> Option<f32> {
+            let value = value?;
+            let at_path = field(name);
+            let checked = loader.ranged(f64::from(value), 0.0, max, At { source, path: &at_path }, &format!("`{name}`"));
+            ok &= checked.is_some();
+            checked.map(|v| v as f32)
+        };
+        let ka = strength(self, material.ka, "ka", f64::INFINITY);
+        let kd = strength(self, material.kd, "kd", f64::INFINITY);
+        let ks = strength(self, material.ks, "ks", f64::INFINITY);
+        let scr = strength(self, material.specular_color_reflectance, "specular_color_reflectance", 1.0);
+        let shininess = strength(self, material.shininess, "shininess", f64::INFINITY);
+        let mut color_field = |loader: &mut Self, value: Option<[f32; 3]>, name: &str| -> Option<Vec3> {
+            let value = value?;
+            let at_path = field(name);
+            let checked = loader.color(value, At { source, path: &at_path });
+            ok &= checked.is_some();
+            checked
+        };
+        let color = color_field(self, material.color, "color");
+        let ambient = color_field(self, material.ambient, "ambient");
+        let diffuse = color_field(self, material.diffuse, "diffuse");
+        let specular = color_field(self, material.specular, "specular");
+        let emission = color_field(self, material.emission, "emission");
+        if !ok {
+            return None;
+        }
+
+        let matlab_style = [
+            ("color", color.is_some()),
+            ("ka", ka.is_some()),
+            ("kd", kd.is_some()),
+            ("ks", ks.is_some()),
+            ("specular_color_reflectance", scr.is_some()),
+        ];
+        if recipe.is_fully_explicit() && ambient.is_none() && diffuse.is_none() && specular.is_none() {
+            if let Some((name, _)) = matlab_style.iter().find(|(_, set)| *set) {
+                let at_path = field(name);
+                self.error(
+                    At { source, path: &at_path },
+                    format!("`{name}` has no effect: the base material sets `ambient`, `diffuse` and `specular` directly"),
+                    Some("ignored"),
+                    Some("set `ambient`, `diffuse` or `specular` instead, or use a MATLAB-style base such as \"shiny\"".into()),
+                );
+                return None;
+            }
+        }
+        recipe.color = color.unwrap_or(recipe.color);
+        recipe.ka = ka.unwrap_or(recipe.ka);
+        recipe.kd = kd.unwrap_or(recipe.kd);
+        recipe.ks = ks.unwrap_or(recipe.ks);
+        recipe.specular_color_reflectance = scr.unwrap_or(recipe.specular_color_reflectance);
+        recipe.ambient = ambient.or(recipe.ambient);
+        recipe.diffuse = diffuse.or(recipe.diffuse);
+        recipe.specular = specular.or(recipe.specular);
+        recipe.shininess = shininess.unwrap_or(recipe.shininess);
+        recipe.emission = emission.unwrap_or(recipe.emission);
+        if let Some(model) = material.model {
+            recipe.model = match model {
+                LightingModelFile::Phong => LightingModel::Phong,
+                LightingModelFile::BlinnPhong => LightingModel::BlinnPhong,
+                LightingModelFile::Lambert => LightingModel::Lambert,
+                LightingModelFile::Unlit => LightingModel::Unlit,
+            };
+        }
+        Some(recipe)
+    }
+
+    fn unknown_material(&mut self, name: &str, at: At, table: &HashMap<String, MaterialDefinition>) {
+        let mut candidates: Vec<String> = table.keys().cloned().collect();
+        candidates.extend(presets::preset_names().map(String::from));
+        let normalized = presets::normalize_name(name);
+        let closest = candidates
+            .iter()
+            .map(|c| (edit_distance(&normalized, c), c))
+            .filter(|(d, c)| *d <= 2.max(c.len() / 3))
+            .min();
+        let hint = match closest {
+            Some((_, candidate)) => format!("did you mean \"{candidate}\"?"),
+            None => format!(
+                "define it under `materials: {{ \"{name}\": (...) }}` or use a built-in material: {}",
+                presets::preset_names().collect::<Vec<_>>().join(", ")
+            ),
+        };
+        self.error(at, format!("unknown material `{name}`"), Some("not defined in this scene, its includes, or the presets"), Some(hint));
+    }
+
+    // ----- image, objects -----
+
+    fn image(&mut self, file: &SceneFile, source: SourceId, options: &LoadOptions) -> Option<ImageSettings> {
+        let max = f64::from(crate::render::MAX_IMAGE_DIMENSION);
+        let size = |loader: &mut Self, value: Option<u32>, overridden: Option<u32>, default: u32, name: &str| {
+            if let Some(value) = overridden {
+                if value == 0 || f64::from(value) > max {
+                    loader.diagnostics.push(Diagnostic::error(
+                        &loader.scene_path,
+                        format!("--{name} must be between 1 and {max}, not {value}"),
+                    ));
+                    return None;
+                }
+                return Some(value);
+            }
+            let at_path = ron_path!["image", name];
+            let value = value.unwrap_or(default);
+            loader
+                .ranged(f64::from(value), 1.0, max, At { source, path: &at_path }, &format!("image {name}"))
+                .map(|v| v as u32)
+        };
+        let width = size(self, file.image.width, options.width, DEFAULT_WIDTH, "width");
+        let height = size(self, file.image.height, options.height, DEFAULT_HEIGHT, "height");
+        let background = match file.image.background {
+            Some(color) => self.color(color, At { source, path: &ron_path!["image", "background"] }),
+            None => Some(Vec3::ZERO),
+        };
+        Some(ImageSettings {
+            width: width?,
+            height: height?,
+            background: background?,
+        })
+    }
+
+    fn object(
+        &mut self,
+        object: &format::ObjectFile,
+        index: usize,
+        source: SourceId,
+        table: &HashMap<String, MaterialDefinition>,
+        materials: &HashMap<String, MaterialRecipe>,
+        options: &LoadOptions,
+    ) -> Option<Object> {
+        let field = |name: &str| ron_path!["objects", index, name];
+        let crease_angle = match object.crease_angle {
+            Some(angle) => self
+                .ranged(f64::from(angle), 0.0, 180.0, At { source, path: &field("crease_angle") }, "`crease_angle`")
+                .map(|a| a as f32),
+            None => Some(crate::mesh::normals::DEFAULT_CREASE_ANGLE_DEGREES),
+        };
+        let mesh = self.mesh(&object.mesh, index, source, crease_angle?);
+        let transform = self.transform(object, index, source);
+        let material = match &object.material {
+            None => Some(None),
+            Some(MaterialRefFile::Named(name)) => {
+                let key = presets::normalize_name(name);
+                match materials.get(&key).copied().or_else(|| {
+                    (!table.contains_key(&key)).then(|| presets::preset(&key)).flatten()
+                }) {
+                    Some(recipe) => Some(Some(recipe.resolve())),
+                    None if table.contains_key(&key) => None, // its definition failed and said why
+                    None => {
+                        self.unknown_material(name, At { source, path: &field("material") }, table);
+                        None
+                    }
+                }
+            }
+            Some(MaterialRefFile::Inline(material)) => {
+                let mut resolved = materials.clone();
+                let mut chain = Vec::new();
+                self.recipe(material, source, &field("material"), table, &mut resolved, &mut chain)
+                    .map(|recipe| Some(recipe.resolve()))
+            }
+        };
+        let shading = options.shading.unwrap_or(match object.shading {
+            None | Some(ShadingFile::Phong) => Shading::Phong,
+            Some(ShadingFile::Gouraud) => Shading::Gouraud,
+            Some(ShadingFile::Flat) => Shading::Flat,
+        });
+        let back_faces = match object.back_faces {
+            None | Some(BackFacesFile::Lit) => BackFaces::Lit,
+            Some(BackFacesFile::Cull) => BackFaces::Cull,
+        };
+        let name = object.name.clone().unwrap_or_else(|| format!("object {index}"));
+        Some(Object {
+            name,
+            mesh: mesh?,
+            transform: transform?,
+            shading,
+            material: material?,
+            back_faces,
+        })
+    }
+
+    fn transform(&mut self, object: &format::ObjectFile, index: usize, source: SourceId) -> Option<DMat4> {
+        let field = |name: &str| ron_path!["objects", index, name];
+        let translate = match object.translate {
+            Some(v) => self.vector(v, At { source, path: &field("translate") }),
+            None => Some(DVec3::ZERO),
+        };
+        let rotate = match object.rotate {
+            Some(v) => self.vector(v, At { source, path: &field("rotate") }),
+            None => Some(DVec3::ZERO),
+        };
+        let scale_path = field("scale");
+        let scale_at = At { source, path: &scale_path };
+        let scale = match object.scale {
+            None => Some(DVec3::ONE),
+            Some(ScaleFile::Uniform(s)) => self.finite(s, scale_at).map(DVec3::splat),
+            Some(ScaleFile::PerAxis(v)) => self.vector(v, scale_at),
+        };
+        let scale = scale?;
+        if scale.abs().min_element() < 1e-12 {
+            self.error(scale_at, "scale cannot be zero", Some("flattens the object to nothing"), None);
+            return None;
+        }
+        let rotate = rotate?;
+        let rotation = DQuat::from_euler(
+            EulerRot::ZYX,
+            rotate.z.to_radians(),
+            rotate.y.to_radians(),
+            rotate.x.to_radians(),
+        );
+        Some(DMat4::from_scale_rotation_translation(scale, rotation, translate?))
+    }
+
+    fn mesh(&mut self, mesh: &MeshFile, index: usize, source: SourceId, crease_angle: f32) -> Option<Arc<Mesh>> {
+        let mesh_path = ron_path!["objects", index, "mesh"];
+        match mesh {
+            MeshFile::Sphere { segments } => {
+                let segments = segments.unwrap_or(DEFAULT_SPHERE_SEGMENTS);
+                let at_path = [mesh_path.as_slice(), &ron_path!["segments"]].concat();
+                let at = At { source, path: &at_path };
+                self.ranged(f64::from(segments), 3.0, f64::from(MAX_SPHERE_SEGMENTS), at, "sphere `segments`")?;
+                Some(Arc::new(primitives::sphere(segments)))
+            }
+            MeshFile::Plane => Some(Arc::new(primitives::plane())),
+            MeshFile::Cube => Some(Arc::new(primitives::cube())),
+            MeshFile::Obj(file) | MeshFile::Gltf(file) => {
+                let at_path = [mesh_path.as_slice(), &ron_path![0]].concat();
+                let at = At { source, path: &at_path };
+                let base = self.sources.path(source).parent().map(Path::to_path_buf).unwrap_or_default();
+                let path = base.join(file);
+                if !path.is_file() {
+                    let why = if path.is_dir() { "is a directory" } else { "does not exist" };
+                    self.error(
+                        at,
+                        format!("mesh file `{}` {why}", path.display()),
+                        Some("not found"),
+                        Some("paths are relative to the scene file's folder".into()),
+                    );
+                    self.files_read.push(path);
+                    return None;
+                }
+                let is_obj = matches!(mesh, MeshFile::Obj(_));
+                self.load_mesh_file(&path, is_obj, crease_angle, at)
+            }
+        }
+    }
+
+    fn load_mesh_file(&mut self, path: &Path, is_obj: bool, crease_angle: f32, at: At) -> Option<Arc<Mesh>> {
+        let key = MeshKey {
+            path: path.to_path_buf(),
+            crease_angle_bits: crease_angle.to_bits(),
+        };
+        let fresh = self.cache.entries.get(&key).filter(|cached| {
+            cached.stamps.iter().all(|(file, stamp)| modified(file) == *stamp && stamp.is_some())
+        });
+        let (mesh, files_read, warnings) = match fresh {
+            Some(cached) => (cached.mesh.clone(), cached.files_read.clone(), cached.warnings.clone()),
+            None => {
+                let options = MeshOptions {
+                    crease_angle_degrees: crease_angle,
+                };
+                let loaded = if is_obj { load_obj(path, &options) } else { load_gltf(path, &options) };
+                match loaded {
+                    Ok(LoadedMesh { mesh, files_read, warnings }) => {
+                        let mesh = Arc::new(mesh);
+                        let mut stamped: Vec<PathBuf> = files_read.clone();
+                        if !stamped.iter().any(|f| f == path) {
+                            stamped.push(path.to_path_buf());
+                        }
+                        self.cache.entries.insert(
+                            key,
+                            CachedMesh {
+                                stamps: stamped.iter().map(|f| (f.clone(), modified(f))).collect(),
+                                mesh: mesh.clone(),
+                                files_read: files_read.clone(),
+                                warnings: warnings.clone(),
+                            },
+                        );
+                        (mesh, files_read, warnings)
+                    }
+                    Err(error) => {
+                        self.files_read.push(path.to_path_buf());
+                        self.mesh_error(error, at);
+                        return None;
+                    }
+                }
+            }
+        };
+        self.files_read.push(path.to_path_buf());
+        self.files_read.extend(files_read);
+        for warning in warnings {
+            self.diagnostics.push(Diagnostic::warning(path, warning));
+        }
+        Some(mesh)
+    }
+
+    fn mesh_error(&mut self, error: MeshError, at: At) {
+        let mut diagnostic = Diagnostic::error(&error.path, error.message);
+        if let Some(line) = error.line {
+            diagnostic = diagnostic.with_line(line);
+        }
+        self.diagnostics.push(diagnostic);
+        // Also say which object asked for it, so the user knows where the mesh is used.
+        let used_here = self.locate(
+            Diagnostic::error(self.sources.path(at.source), format!("mesh `{}` could not be loaded", error.path.display()))
+                .with_label("used here"),
+            at,
+        );
+        self.diagnostics.push(used_here);
+    }
+
+    // ----- camera and lights -----
+
+    fn camera(&mut self, camera: Option<&CameraFile>, source: SourceId, bounds: Bounds, image: Option<ImageSettings>) -> Option<Camera> {
+        let field = |name: &str| ron_path!["camera", name];
+        let (eye, target, up, near, far) = match camera {
+            None => (None, None, None, None, None),
+            Some(CameraFile::Perspective { eye, target, up, near, far, .. })
+            | Some(CameraFile::Orthographic { eye, target, up, near, far, .. }) => (*eye, *target, *up, *near, *far),
+        };
+        let up = match up {
+            Some(up) => self.direction(up, At::new(source, &field("up")))?,
+            None => DVec3::Y,
+        };
+        let target = match target {
+            Some(target) => self.vector(target, At::new(source, &field("target")))?,
+            None => bounds.center,
+        };
+        let fov = match camera {
+            Some(CameraFile::Perspective { fov: Some(fov), .. }) => {
+                self.ranged(*fov, 1e-3, 179.0, At::new(source, &field("fov")), "`fov`")?
+            }
+            _ => DEFAULT_FOV_DEGREES,
+        };
+        let aspect = image.map_or(1.0, |i| f64::from(i.width) / f64::from(i.height));
+        let eye = match eye {
+            Some(eye) => self.vector(eye, At::new(source, &field("eye")))?,
+            None => auto_eye(bounds, target, up, fov, aspect),
+        };
+        let offset = target - eye;
+        if offset.length() < 1e-12 {
+            self.error(At::new(source, &field("target")), "the camera's `target` is the same point as its `eye`", Some("nothing to look at"), None);
+            return None;
+        }
+        if offset.normalize().cross(up).length() < 1e-9 {
+            self.error(
+                At::new(source, &field("up")),
+                "the camera's `up` is parallel to its view direction",
+                Some("parallel to `target - eye`"),
+                Some("pick an `up` that is not along the line of sight, e.g. (0, 0, 1) when looking along Y".into()),
+            );
+            return None;
+        }
+        // Defaults reach from just in front of the eye past the far side of every object.
+        let reach = (bounds.center - eye).length() + bounds.radius;
+        let far = match far {
+            Some(far) => self.ranged(far, 1e-12, f64::INFINITY, At::new(source, &field("far")), "`far`")?,
+            None => (2.0 * reach).max(1e-3),
+        };
+        let near = match near {
+            Some(near) => self.ranged(near, 1e-12, f64::INFINITY, At::new(source, &field("near")), "`near`")?,
+            None => far / 10_000.0,
+        };
+        if near >= far {
+            self.error(At::new(source, &field("near")), format!("`near` ({near}) must be less than `far` ({far})"), Some("not in front of `far`"), None);
+            return None;
+        }
+        let projection = match camera {
+            Some(CameraFile::Orthographic { height, .. }) => Projection::Orthographic {
+                height: match height {
+                    Some(h) => self.ranged(*h, 1e-12, f64::INFINITY, At::new(source, &field("height")), "`height`")?,
+                    None => 2.2 * bounds.radius.max(1e-6),
+                },
+                near,
+                far,
+            },
+            _ => Projection::Perspective { fov_y_degrees: fov, near, far },
+        };
+        Some(Camera { eye, target, up, projection })
+    }
+
+    fn light(&mut self, light: &LightFile, index: usize, source: SourceId, camera: &Camera) -> Option<Light> {
+        let field = |name: &str| ron_path!["lights", index, name];
+        let toward_target = (camera.target - camera.eye).normalize();
+        let (color, intensity) = match light {
+            LightFile::Directional { color, intensity, .. }
+            | LightFile::Point { color, intensity, .. }
+            | LightFile::Spot { color, intensity, .. } => (*color, *intensity),
+        };
+        let color = match color {
+            Some(color) => self.color(color, At::new(source, &field("color"))),
+            None => Some(Vec3::ONE),
+        };
+        let intensity = match intensity {
+            Some(i) => self.ranged(f64::from(i), 0.0, f64::INFINITY, At::new(source, &field("intensity")), "`intensity`"),
+            None => Some(1.0),
+        };
+        let color = color? * intensity? as f32;
+        match light {
+            LightFile::Directional { direction, .. } => {
+                let direction = match direction {
+                    Some(d) => self.direction(*d, At::new(source, &field("direction")))?,
+                    None => toward_target,
+                };
+                Some(Light::Directional { direction: direction.as_vec3(), color })
+            }
+            LightFile::Point { position, attenuation, .. } => {
+                let position = match position {
+                    Some(p) => self.vector(*p, At::new(source, &field("position")))?,
+                    None => camera.eye,
+                };
+                let attenuation = self.attenuation(attenuation.as_ref(), index, source)?;
+                Some(Light::Point { position, color, attenuation })
+            }
+            LightFile::Spot { position, direction, cutoff, exponent, attenuation, .. } => {
+                let position = match position {
+                    Some(p) => self.vector(*p, At::new(source, &field("position"))),
+                    None => Some(camera.eye),
+                };
+                let direction = match direction {
+                    Some(d) => self.direction(*d, At::new(source, &field("direction"))),
+                    None => Some(toward_target),
+                };
+                let cutoff = match cutoff {
+                    Some(c) => self.ranged(f64::from(*c), 0.0, 90.0, At::new(source, &field("cutoff")), "spot `cutoff`"),
+                    None => Some(f64::from(DEFAULT_SPOT_CUTOFF_DEGREES)),
+                };
+                let exponent = match exponent {
+                    Some(e) => self.ranged(f64::from(*e), 0.0, f64::INFINITY, At::new(source, &field("exponent")), "spot `exponent`"),
+                    None => Some(0.0),
+                };
+                let attenuation = self.attenuation(attenuation.as_ref(), index, source);
+                Some(Light::Spot {
+                    position: position?,
+                    direction: direction?.as_vec3(),
+                    color,
+                    cutoff_degrees: cutoff? as f32,
+                    exponent: exponent? as f32,
+                    attenuation: attenuation?,
+                })
+            }
+        }
+    }
+
+    fn attenuation(&mut self, attenuation: Option<&AttenuationFile>, index: usize, source: SourceId) -> Option<Attenuation> {
+        let Some(file) = attenuation else {
+            return Some(Attenuation::NONE);
+        };
+        let coefficient = |loader: &mut Self, value: Option<f32>, name: &str, default: f32| -> Option<f32> {
+            let Some(value) = value else {
+                return Some(default);
+            };
+            let path = ron_path!["lights", index, "attenuation", name];
+            loader
+                .ranged(f64::from(value), 0.0, f64::INFINITY, At { source, path: &path }, &format!("attenuation `{name}`"))
+                .map(|v| v as f32)
+        };
+        let constant = coefficient(self, file.constant, "constant", 1.0);
+        let linear = coefficient(self, file.linear, "linear", 0.0);
+        let quadratic = coefficient(self, file.quadratic, "quadratic", 0.0);
+        let attenuation = Attenuation { constant: constant?, linear: linear?, quadratic: quadratic? };
+        if attenuation.constant + attenuation.linear + attenuation.quadratic <= 0.0 {
+            let path = ron_path!["lights", index, "attenuation"];
+            self.error(At { source, path: &path }, "attenuation coefficients cannot all be zero", Some("1 / 0 everywhere"), None);
+            return None;
+        }
+        Some(attenuation)
+    }
+}
+
+/// A bounding sphere of the scene's objects in world space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Bounds {
+    center: DVec3,
+    radius: f64,
+}
+
+fn scene_bounds(objects: &[Object]) -> Bounds {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for object in objects {
+        let Some((min, max)) = object.mesh.bounds() else { continue };
+        for corner in 0..8 {
+            let pick = |bit: u32, a: f32, b: f32| f64::from(if corner & bit == 0 { a } else { b });
+            let local = DVec3::new(pick(1, min.x, max.x), pick(2, min.y, max.y), pick(4, min.z, max.z));
+            let world = object.transform.transform_point3(local);
+            lo = lo.min(world);
+            hi = hi.max(world);
+        }
+    }
+    if lo.x > hi.x {
+        return Bounds { center: DVec3::ZERO, radius: 1.0 };
+    }
+    Bounds {
+        center: (lo + hi) / 2.0,
+        radius: ((hi - lo).length() / 2.0).max(1e-6),
+    }
+}
+
+/// Where the default camera stands: a three-quarter view from the front-right and above, far
+/// enough back that the bounding sphere fits the narrower field of view with a margin.
+fn auto_eye(bounds: Bounds, target: DVec3, up: DVec3, fov_y_degrees: f64, aspect: f64) -> DVec3 {
+    // In a +Y-up frame: right (+X), above (+Y), in front (+Z).
+    let y_up_direction = DVec3::new(0.6, 0.45, 1.0).normalize();
+    let direction = DQuat::from_rotation_arc(DVec3::Y, up) * y_up_direction;
+    let half_fov_y = fov_y_degrees.to_radians() / 2.0;
+    let half_fov_x = (half_fov_y.tan() * aspect).atan();
+    let distance = 1.1 * bounds.radius / half_fov_y.min(half_fov_x).sin();
+    target + direction * distance
+}
+
+fn canonical(path: &Path) -> PathBuf {
+    std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+fn io_reason(error: &std::io::Error) -> String {
+    match error.kind() {
+        std::io::ErrorKind::NotFound => "no such file".into(),
+        std::io::ErrorKind::PermissionDenied => "permission denied".into(),
+        _ => error.to_string(),
+    }
+}
+
+/// Levenshtein distance, for "did you mean" hints.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut previous: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut current = vec![i + 1; b.len() + 1];
+        for (j, &cb) in b.iter().enumerate() {
+            current[j + 1] = (previous[j] + usize::from(ca != cb)).min(previous[j + 1] + 1).min(current[j] + 1);
+        }
+        previous = current;
+    }
+    previous[b.len()]
+}

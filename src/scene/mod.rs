@@ -16,7 +16,7 @@ use glam::{DMat4, DVec3, Vec3};
 
 use crate::mesh::Mesh;
 
-// pub use load::{LoadError, LoadOptions, LoadedScene, load_scene};
+pub use load::{LoadError, LoadOptions, LoadedScene, load_scene};
 
 /// A scene ready to render.
 #[derive(Debug, Clone)]

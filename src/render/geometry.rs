@@ -1,0 +1,486 @@
+//! The geometry stage: everything done per vertex and per triangle before rasterization.
+//!
+//! Per object: vertices are transformed once (to eye-relative world space for lighting and to
+//! clip space for rasterization) and, for Gouraud objects, lit once. Per triangle: facing is
+//! decided in homogeneous coordinates (valid even across w = 0), back faces are culled when the
+//! object asks, flat-shaded triangles are lit once at their centroid, and the triangle is
+//! clipped, projected, snapped and set up for the rasterizer.
+//!
+//! World positions are made relative to the eye in `f64` before anything is rounded to `f32`, so
+//! a scene far from the origin (camera included) keeps its precision.
+//!
+//! Vertices are processed in parallel and triangles in fixed-size chunks; the outputs are
+//! concatenated in chunk order, so the result does not depend on the thread count.
+
+use glam::{DMat3, DMat4, DVec3, Mat3, Mat4, Vec3, Vec4, Vec4Swizzles};
+use rayon::prelude::*;
+
+use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate};
+use crate::render::DebugView;
+use crate::render::clip::{Clipped, clip_triangle};
+use crate::render::raster::{GUARD_BAND_PIXELS, RasterTriangle, ScreenVertex, setup_triangle};
+use crate::scene::presets::default_material;
+use crate::scene::{BackFaces, Camera, Light, Material, Object, Projection, Scene, Shading};
+
+/// Triangles per parallel work item: large enough to amortise scheduling, small enough to
+/// balance two to a few dozen cores. Fixed, so that output order never depends on threads.
+const TRIANGLE_CHUNK: usize = 4096;
+
+/// Everything the tiles need to rasterize and shade one frame.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    pub vertices: Vec<FrameVertex>,
+    /// One per scene triangle, in scene order; `RasterTriangle::source` indexes this.
+    pub triangles: Vec<FrameTriangle>,
+    pub raster: Vec<RasterTriangle>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<ShadingLight>,
+    pub ambient_light: Vec3,
+    pub viewer: Viewer,
+    /// Unit view direction, for the depth view.
+    pub forward: Vec3,
+    pub debug_view: Option<DebugView>,
+}
+
+/// A vertex in eye-relative world space (the eye at the origin, world axes).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameVertex {
+    pub position: Vec3,
+    /// Unit normal, or zero when the mesh gives none usable.
+    pub normal: Vec3,
+    /// Gouraud objects: the vertex's lit colour (front side) for the frame's view.
+    pub color: Vec3,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameTriangle {
+    /// Indices into `Frame::vertices`, counter-clockwise from the front.
+    pub vertices: [u32; 3],
+    pub material: u32,
+    pub shading: Shading,
+    /// Unit geometric normal of the front side, zero for a degenerate triangle.
+    pub face_normal: Vec3,
+    /// Flat objects: the colour of the side that faces the camera.
+    pub flat_color: Vec3,
+}
+
+/// Where the viewer is, for the view vector `V`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Viewer {
+    /// Perspective: the eye is at the origin, `V = normalize(−P)`.
+    Local,
+    /// Orthographic: the viewer is at infinity, `V` is the same everywhere.
+    Infinite { to_viewer: Vec3 },
+}
+
+impl Viewer {
+    pub fn to_viewer(&self, position: Vec3) -> Vec3 {
+        match *self {
+            Viewer::Local => (-position).normalize_or_zero(),
+            Viewer::Infinite { to_viewer } => to_viewer,
+        }
+    }
+}
+
+impl Frame {
+    /// Lights the surface point and returns the colour the frame's view asks for.
+    pub fn light(&self, material: u32, position: Vec3, normal: Vec3) -> Vec3 {
+        let terms = illuminate(
+            &self.materials[material as usize],
+            &self.lights,
+            self.ambient_light,
+            position,
+            normal,
+            self.viewer.to_viewer(position),
+        );
+        select_view(self.debug_view, &terms)
+    }
+}
+
+/// The part of the lighting a view shows (the whole colour unless a component view is asked).
+pub fn select_view(view: Option<DebugView>, terms: &LightingTerms) -> Vec3 {
+    match view {
+        Some(DebugView::Ambient) => terms.ambient,
+        Some(DebugView::Diffuse) => terms.diffuse,
+        Some(DebugView::Specular) => terms.specular,
+        None | Some(DebugView::Normals) | Some(DebugView::Depth) => terms.total(),
+    }
+}
+
+/// Runs the geometry stage for the whole scene.
+pub fn build_frame(scene: &Scene, debug_view: Option<DebugView>) -> Frame {
+    let (width, height) = (scene.image.width, scene.image.height);
+    let camera = CameraSetup::new(&scene.camera, width as f64 / height as f64);
+    let mut frame = Frame {
+        vertices: Vec::with_capacity(scene.objects.iter().map(|o| o.mesh.positions.len()).sum()),
+        triangles: Vec::with_capacity(scene.triangle_count()),
+        raster: Vec::new(),
+        materials: Vec::new(),
+        lights: scene.lights.iter().map(|l| shading_light(l, scene.camera.eye)).collect(),
+        ambient_light: scene.ambient_light,
+        viewer: camera.viewer,
+        forward: camera.forward.as_vec3(),
+        debug_view,
+    };
+    let viewport = Viewport {
+        width,
+        height,
+        guard_x: GUARD_BAND_PIXELS / width as f32,
+        guard_y: GUARD_BAND_PIXELS / height as f32,
+    };
+    for object in &scene.objects {
+        add_object(&mut frame, object, &camera, &viewport);
+    }
+    frame
+}
+
+struct Viewport {
+    width: u32,
+    height: u32,
+    guard_x: f32,
+    guard_y: f32,
+}
+
+/// The camera's matrices with the eye moved to the origin.
+struct CameraSetup {
+    eye: DVec3,
+    /// From eye-relative world space to clip space.
+    clip_from_world: DMat4,
+    forward: DVec3,
+    viewer: Viewer,
+}
+
+impl CameraSetup {
+    fn new(camera: &Camera, aspect: f64) -> Self {
+        let forward = (camera.target - camera.eye).normalize();
+        let view = DMat4::look_to_rh(DVec3::ZERO, forward, camera.up);
+        let (projection, viewer) = match camera.projection {
+            Projection::Perspective {
+                fov_y_degrees,
+                near,
+                far,
+            } => (
+                reversed_z_perspective(fov_y_degrees.to_radians(), aspect, near, far),
+                Viewer::Local,
+            ),
+            Projection::Orthographic { height, near, far } => (
+                reversed_z_orthographic(height * aspect, height, near, far),
+                Viewer::Infinite {
+                    to_viewer: (-forward).as_vec3(),
+                },
+            ),
+        };
+        CameraSetup {
+            eye: camera.eye,
+            clip_from_world: projection * view,
+            forward,
+            viewer,
+        }
+    }
+}
+
+/// OpenGL's `gluPerspective` with depth mapped to [1, 0] (near → 1): `z_clip = (n·z + n·f)/(f − n)`,
+/// `w_clip = −z`.
+fn reversed_z_perspective(fov_y: f64, aspect: f64, near: f64, far: f64) -> DMat4 {
+    let focal = 1.0 / (fov_y / 2.0).tan();
+    let depth_scale = near / (far - near);
+    DMat4::from_cols_array(&[
+        focal / aspect, 0.0, 0.0, 0.0,
+        0.0, focal, 0.0, 0.0,
+        0.0, 0.0, depth_scale, -1.0,
+        0.0, 0.0, far * depth_scale, 0.0,
+    ])
+}
+
+/// An orthographic projection with depth mapped to [1, 0]: `z_clip = (z + f)/(f − n)`.
+fn reversed_z_orthographic(width: f64, height: f64, near: f64, far: f64) -> DMat4 {
+    let depth_scale = 1.0 / (far - near);
+    DMat4::from_cols_array(&[
+        2.0 / width, 0.0, 0.0, 0.0,
+        0.0, 2.0 / height, 0.0, 0.0,
+        0.0, 0.0, depth_scale, 0.0,
+        0.0, 0.0, far * depth_scale, 1.0,
+    ])
+}
+
+/// A scene light in eye-relative world space.
+fn shading_light(light: &Light, eye: DVec3) -> ShadingLight {
+    let relative = |p: DVec3| (p - eye).as_vec3();
+    match *light {
+        Light::Directional { direction, color } => ShadingLight {
+            color,
+            kind: ShadingLightKind::Directional {
+                to_light: -direction.normalize_or_zero(),
+            },
+        },
+        Light::Point {
+            position,
+            color,
+            attenuation,
+        } => ShadingLight {
+            color,
+            kind: ShadingLightKind::Point {
+                position: relative(position),
+                attenuation,
+            },
+        },
+        Light::Spot {
+            position,
+            direction,
+            color,
+            cutoff_degrees,
+            exponent,
+            attenuation,
+        } => ShadingLight {
+            color,
+            kind: ShadingLightKind::Spot {
+                position: relative(position),
+                axis: direction.normalize_or_zero(),
+                cos_cutoff: cutoff_degrees.to_radians().cos(),
+                exponent,
+                attenuation,
+            },
+        },
+    }
+}
+
+/// The matrices of one object.
+struct ObjectTransforms {
+    world_from_model: Mat4,
+    clip_from_model: Mat4,
+    normal_matrix: Mat3,
+    /// A mirroring transform turns counter-clockwise triangles clockwise.
+    mirrored: bool,
+}
+
+impl ObjectTransforms {
+    fn new(object: &Object, camera: &CameraSetup) -> Self {
+        let world_from_model = DMat4::from_translation(-camera.eye) * object.transform;
+        let linear = DMat3::from_mat4(object.transform);
+        ObjectTransforms {
+            world_from_model: world_from_model.as_mat4(),
+            clip_from_model: (camera.clip_from_world * world_from_model).as_mat4(),
+            normal_matrix: linear.inverse().transpose().as_mat3(),
+            mirrored: linear.determinant() < 0.0,
+        }
+    }
+}
+
+fn add_object(frame: &mut Frame, object: &Object, camera: &CameraSetup, viewport: &Viewport) {
+    let mesh = &*object.mesh;
+    let transforms = ObjectTransforms::new(object, camera);
+
+    // Materials: the object's own, else the mesh's, else the default.
+    let material_base = frame.materials.len() as u32;
+    match (&object.material, mesh.materials.is_empty()) {
+        (Some(material), _) => frame.materials.push(*material),
+        (None, true) => frame.materials.push(default_material()),
+        (None, false) => frame.materials.extend_from_slice(&mesh.materials),
+    }
+    let uses_mesh_materials = object.material.is_none() && !mesh.materials.is_empty();
+    let triangle_material = |t: usize| -> u32 {
+        if uses_mesh_materials {
+            material_base + mesh.triangle_materials.get(t).copied().unwrap_or(0)
+        } else {
+            material_base
+        }
+    };
+
+    // Vertices: transformed once each, lit once each for Gouraud.
+    let vertex_base = frame.vertices.len() as u32;
+    let vertex_materials: Vec<u32> = if object.shading == Shading::Gouraud {
+        let mut materials = vec![material_base; mesh.positions.len()];
+        for (t, triangle) in mesh.triangles.iter().enumerate().rev() {
+            for &v in triangle {
+                materials[v as usize] = triangle_material(t);
+            }
+        }
+        materials
+    } else {
+        Vec::new()
+    };
+    let clip_positions: Vec<Vec4> = mesh
+        .positions
+        .par_iter()
+        .map(|&p| transforms.clip_from_model * p.extend(1.0))
+        .collect();
+    let shading = object.shading;
+    let new_vertices: Vec<FrameVertex> = mesh
+        .positions
+        .par_iter()
+        .zip(&mesh.normals)
+        .enumerate()
+        .map(|(v, (&p, &n))| {
+            let position = transforms.world_from_model.transform_point3(p);
+            let normal = (transforms.normal_matrix * n).normalize_or_zero();
+            let color = if shading == Shading::Gouraud {
+                frame.light(vertex_materials[v], position, normal)
+            } else {
+                Vec3::ZERO
+            };
+            FrameVertex {
+                position,
+                normal,
+                color,
+            }
+        })
+        .collect();
+    frame.vertices.extend(new_vertices);
+
+    // Triangles, in fixed-size chunks.
+    let triangle_base = frame.triangles.len();
+    let frame_ref = &*frame;
+    let chunks: Vec<(Vec<FrameTriangle>, Vec<RasterTriangle>)> = mesh
+        .triangles
+        .par_chunks(TRIANGLE_CHUNK)
+        .enumerate()
+        .map(|(chunk, triangles)| {
+            let mut frame_triangles = Vec::with_capacity(triangles.len());
+            let mut raster = Vec::new();
+            for (offset, &corners) in triangles.iter().enumerate() {
+                let t = chunk * TRIANGLE_CHUNK + offset;
+                let corners = if transforms.mirrored {
+                    [corners[0], corners[2], corners[1]]
+                } else {
+                    corners
+                };
+                let source = (triangle_base + t) as u32;
+                let triangle = FrameTriangleInput {
+                    corners,
+                    vertex_base,
+                    material: triangle_material(t),
+                    shading,
+                    back_faces: object.back_faces,
+                    source,
+                };
+                frame_triangles.push(process_triangle(
+                    frame_ref,
+                    &triangle,
+                    &clip_positions,
+                    viewport,
+                    &mut raster,
+                ));
+            }
+            (frame_triangles, raster)
+        })
+        .collect();
+    for (triangles, raster) in chunks {
+        frame.triangles.extend(triangles);
+        frame.raster.extend(raster);
+    }
+}
+
+struct FrameTriangleInput {
+    /// Mesh-local vertex indices, counter-clockwise from the front in world space.
+    corners: [u32; 3],
+    vertex_base: u32,
+    material: u32,
+    shading: Shading,
+    back_faces: BackFaces,
+    source: u32,
+}
+
+/// Builds the frame triangle and appends its raster triangles (none if culled or invisible).
+fn process_triangle(
+    frame: &Frame,
+    input: &FrameTriangleInput,
+    clip_positions: &[Vec4],
+    viewport: &Viewport,
+    raster: &mut Vec<RasterTriangle>,
+) -> FrameTriangle {
+    let vertices = input.corners.map(|v| v + input.vertex_base);
+    let [p0, p1, p2] = vertices.map(|v| frame.vertices[v as usize].position);
+    let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
+    let clip = input.corners.map(|v| clip_positions[v as usize]);
+    let mut triangle = FrameTriangle {
+        vertices,
+        material: input.material,
+        shading: input.shading,
+        face_normal,
+        flat_color: Vec3::ZERO,
+    };
+
+    let facing = homogeneous_facing(clip);
+    let back_facing = facing < 0.0;
+    if !(facing != 0.0) || (back_facing && input.back_faces == BackFaces::Cull) {
+        return triangle; // edge-on, degenerate, non-finite, or culled
+    }
+    if input.shading == Shading::Flat {
+        let centroid = (p0 + p1 + p2) / 3.0;
+        let normal = if back_facing { -face_normal } else { face_normal };
+        triangle.flat_color = frame.light(input.material, centroid, normal);
+    }
+
+    let (width, height) = (viewport.width, viewport.height);
+    let project = |position: Vec4, weights: Vec3| {
+        let inv_w = 1.0 / position.w;
+        let ndc = position.xyz() * inv_w;
+        ScreenVertex {
+            x: (ndc.x + 1.0) * 0.5 * width as f32,
+            y: (1.0 - ndc.y) * 0.5 * height as f32,
+            depth: ndc.z,
+            inv_w,
+            weights,
+        }
+    };
+    let setup = |corners: [ScreenVertex; 3]| setup_triangle(corners, width, height, input.source, back_facing);
+    match clip_triangle(clip, viewport.guard_x, viewport.guard_y) {
+        Clipped::Outside => {}
+        Clipped::Inside => {
+            let corners = [0, 1, 2].map(|i| project(clip[i], Vec3::AXES[i]));
+            raster.extend(setup(corners));
+        }
+        Clipped::Polygon(polygon) => {
+            let projected: Vec<ScreenVertex> =
+                polygon.vertices().iter().map(|v| project(v.position, v.weights)).collect();
+            for i in 1..projected.len().saturating_sub(1) {
+                raster.extend(setup([projected[0], projected[i], projected[i + 1]]));
+            }
+        }
+    }
+    triangle
+}
+
+/// The sign of `det[x y w]` of the clip-space corners: positive when the triangle is seen from
+/// its front (counter-clockwise), negative from behind, zero edge-on. Unlike a screen-space
+/// area it is right even when corners lie behind the eye (Olano & Greer, homogeneous
+/// rasterization). Computed in `f64` so that nearly edge-on triangles get a reliable sign.
+fn homogeneous_facing(clip: [Vec4; 3]) -> f64 {
+    let [a, b, c] = clip.map(|p| DVec3::new(p.x as f64, p.y as f64, p.w as f64));
+    a.dot(b.cross(c))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn perspective_maps_near_to_one_and_far_to_zero() {
+        let m = reversed_z_perspective(60f64.to_radians(), 1.5, 0.1, 100.0);
+        let depth = |z: f64| {
+            let clip = m * glam::DVec4::new(0.0, 0.0, z, 1.0);
+            clip.z / clip.w
+        };
+        assert!((depth(-0.1) - 1.0).abs() < 1e-12);
+        assert!(depth(-100.0).abs() < 1e-12);
+        assert!(depth(-1.0) > depth(-2.0));
+    }
+
+    #[test]
+    fn orthographic_maps_near_to_one_and_far_to_zero() {
+        let m = reversed_z_orthographic(4.0, 2.0, 1.0, 11.0);
+        let clip = |z: f64| m * glam::DVec4::new(1.0, 1.0, z, 1.0);
+        assert!((clip(-1.0).z - 1.0).abs() < 1e-12 && clip(-11.0).z.abs() < 1e-12);
+        assert!((clip(-1.0).x - 0.5).abs() < 1e-12 && (clip(-1.0).y - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn facing_sign_survives_a_vertex_behind_the_eye() {
+        // Counter-clockwise seen from the eye, one vertex behind it (w < 0).
+        let front = [Vec4::new(-1.0, -1.0, 0.5, 1.0), Vec4::new(1.0, -1.0, 0.5, 1.0), Vec4::new(0.0, 5.0, 0.0, -1.0)];
+        let a = homogeneous_facing([front[0], front[1], Vec4::new(0.0, 1.0, 0.5, 1.0)]);
+        assert!(a > 0.0);
+        let back = [front[0], front[2], front[1]];
+        assert!(homogeneous_facing(back) * homogeneous_facing(front) < 0.0);
+    }
+}

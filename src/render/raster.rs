@@ -1,0 +1,354 @@
+//! Triangle setup and the per-tile rasterizer: the hot loop.
+//!
+//! # Coordinates
+//! Screen space has its origin at the image's top-left corner, x right, y down, one unit per
+//! pixel; pixel (px, py) is sampled at its centre (px + ½, py + ½), as in OpenGL. Vertices are
+//! snapped to fixed point with [`SUBPIXEL_BITS`] = 8 fractional bits (1/256 pixel) and stored
+//! as `i32`.
+//!
+//! # Edge functions
+//! For an edge from `a` to `b`, `E(p) = (b.x − a.x)(p.y − a.y) − (b.y − a.y)(p.x − a.x)`.
+//! With the corners ordered so the doubled area `A = E₀₁(v₂) > 0`, a point is inside when all
+//! three edge functions are ≥ 0, and `λᵢ = Eᵢ / A` (Eᵢ the edge opposite vertex i) are its
+//! screen-space barycentric coordinates. Stepping one pixel right adds `−(b.y − a.y)·256`, one
+//! pixel down adds `(b.x − a.x)·256`: the loop walks rows with additions only.
+//!
+//! # Precision
+//! The clipper's guard band keeps |x|, |y| ≤ [`GUARD_BAND_PIXELS`] = 2^20 px, so fixed-point
+//! coordinates are below 2^28 in magnitude, their differences below 2^29, each product below
+//! 2^58 and an edge function below 2^59: exact in `i64`. Exact integer edge functions make
+//! coverage exact: no cracks and no double hits along shared edges, whatever the triangle.
+//!
+//! # Fill rule
+//! A sample exactly on an edge (E = 0) belongs to the triangle only if the edge is a *top*
+//! edge (horizontal, with the triangle below it) or a *left* edge. With y down and A > 0, top
+//! edges run in +x (dy = 0, dx > 0) and left edges run upwards (dy < 0). Two triangles sharing
+//! an edge traverse it in opposite directions, so exactly one of them owns samples on it.
+//!
+//! # Depth
+//! Reversed-Z: depth = z_clip / w_clip is 1 at the near plane and 0 at the far plane, stored as
+//! `f32`, where floating point has most of its precision near 0: distant surfaces 10⁻³ apart at
+//! distance 100 with near = 10⁻³ stay distinct. Depth is the convex combination
+//! `Σ λᵢ·depthᵢ`, so it never leaves the triangle's depth range. The test is strict (`>`):
+//! on a tie the first triangle in submission order wins.
+
+use crate::render::TILE_SIZE;
+use glam::Vec3;
+
+/// Fractional bits of the fixed-point screen coordinates.
+pub const SUBPIXEL_BITS: u32 = 8;
+/// One pixel in fixed point.
+pub const SUBPIXEL_ONE: i64 = 1 << SUBPIXEL_BITS;
+/// Half a pixel: the offset of a pixel's centre.
+const SUBPIXEL_HALF: i64 = SUBPIXEL_ONE / 2;
+/// Projected coordinates never exceed this many pixels from the origin (the clipper's guard band).
+pub const GUARD_BAND_PIXELS: f32 = (1 << 20) as f32;
+
+/// A rectangle of pixels, `x0..x1` × `y0..y1` (exclusive ends).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PixelRect {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+impl PixelRect {
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+
+    pub fn intersect(&self, other: &PixelRect) -> Option<PixelRect> {
+        let rect = PixelRect {
+            x0: self.x0.max(other.x0),
+            y0: self.y0.max(other.y0),
+            x1: self.x1.min(other.x1),
+            y1: self.y1.min(other.y1),
+        };
+        (rect.x0 < rect.x1 && rect.y0 < rect.y1).then_some(rect)
+    }
+}
+
+/// A projected vertex, before snapping.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScreenVertex {
+    /// Pixels, origin top-left, y down.
+    pub x: f32,
+    pub y: f32,
+    /// Reversed-Z depth in [0, 1].
+    pub depth: f32,
+    /// 1 / w_clip, for perspective-correct interpolation.
+    pub inv_w: f32,
+    /// Barycentric weights of this vertex with respect to the source triangle's vertices.
+    pub weights: Vec3,
+}
+
+/// A triangle ready to rasterize: snapped, ordered with positive area, with its bounds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RasterTriangle {
+    /// Fixed-point corners.
+    pub x: [i32; 3],
+    pub y: [i32; 3],
+    pub depth: [f32; 3],
+    pub inv_w: [f32; 3],
+    /// Barycentric weights of each corner with respect to the source triangle's vertices
+    /// (the identity for an unclipped triangle, permuted if corners were reordered).
+    pub weights: [Vec3; 3],
+    /// 1 / A, with A the doubled fixed-point area.
+    pub inv_area: f32,
+    /// The pixels whose centres may be covered, clipped to the image.
+    pub bounds: PixelRect,
+    /// Index of the source triangle in the frame (for attributes and materials).
+    pub source: u32,
+    /// The source triangle is seen from behind.
+    pub back_facing: bool,
+}
+
+/// Snaps and orders a projected triangle; `None` when it has zero area or covers no pixel
+/// centre of a `width` × `height` image.
+pub fn setup_triangle(
+    corners: [ScreenVertex; 3],
+    width: u32,
+    height: u32,
+    source: u32,
+    back_facing: bool,
+) -> Option<RasterTriangle> {
+    let snap = |v: f32| (v * SUBPIXEL_ONE as f32).round() as i32;
+    let mut x = corners.map(|c| snap(c.x));
+    let mut y = corners.map(|c| snap(c.y));
+    let mut corners = corners;
+    let mut area = doubled_area(x, y);
+    if area == 0 {
+        return None;
+    }
+    if area < 0 {
+        x.swap(1, 2);
+        y.swap(1, 2);
+        corners.swap(1, 2);
+        area = -area;
+    }
+    let bounds = pixel_bounds(x, y, width, height)?;
+    Some(RasterTriangle {
+        x,
+        y,
+        depth: corners.map(|c| c.depth),
+        inv_w: corners.map(|c| c.inv_w),
+        weights: corners.map(|c| c.weights),
+        inv_area: 1.0 / area as f32,
+        bounds,
+        source,
+        back_facing,
+    })
+}
+
+fn doubled_area(x: [i32; 3], y: [i32; 3]) -> i64 {
+    let [x0, x1, x2] = x.map(i64::from);
+    let [y0, y1, y2] = y.map(i64::from);
+    (x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0)
+}
+
+/// Pixels whose centres lie within the fixed-point bounding box, clipped to the image.
+fn pixel_bounds(x: [i32; 3], y: [i32; 3], width: u32, height: u32) -> Option<PixelRect> {
+    // Pixel p's centre is p·256 + 128: the first centre ≥ lo is ceil((lo − 128) / 256),
+    // the last ≤ hi is floor((hi − 128) / 256).
+    let first = |lo: i32| -(SUBPIXEL_HALF - i64::from(lo)).div_euclid(SUBPIXEL_ONE);
+    let last = |hi: i32| (i64::from(hi) - SUBPIXEL_HALF).div_euclid(SUBPIXEL_ONE);
+    let x0 = first(*x.iter().min()?).max(0);
+    let y0 = first(*y.iter().min()?).max(0);
+    let x1 = (last(*x.iter().max()?) + 1).min(i64::from(width));
+    let y1 = (last(*y.iter().max()?) + 1).min(i64::from(height));
+    (x0 < x1 && y0 < y1).then(|| PixelRect {
+        x0: x0 as u32,
+        y0: y0 as u32,
+        x1: x1 as u32,
+        y1: y1 as u32,
+    })
+}
+
+/// One edge function, ready to evaluate and step.
+#[derive(Debug, Clone, Copy)]
+struct Edge {
+    /// Value at the first sample of the current row.
+    row_start: i64,
+    step_x: i64,
+    step_y: i64,
+    /// 0 for top-left edges (E = 0 is inside), 1 otherwise (E must be > 0).
+    min_inside: i64,
+}
+
+impl Edge {
+    /// The edge from `(ax, ay)` to `(bx, by)`, evaluated at the centre of pixel `(px, py)`.
+    fn new(ax: i32, ay: i32, bx: i32, by: i32, px: u32, py: u32) -> Edge {
+        let (ax, ay, bx, by) = (i64::from(ax), i64::from(ay), i64::from(bx), i64::from(by));
+        let (dx, dy) = (bx - ax, by - ay);
+        let sample_x = i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_HALF;
+        let sample_y = i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_HALF;
+        let is_top_left = (dy == 0 && dx > 0) || dy < 0;
+        Edge {
+            row_start: dx * (sample_y - ay) - dy * (sample_x - ax),
+            step_x: -dy * SUBPIXEL_ONE,
+            step_y: dx * SUBPIXEL_ONE,
+            min_inside: if is_top_left { 0 } else { 1 },
+        }
+    }
+}
+
+/// The three edge functions of `triangle` at the centre of pixel `(px, py)`: `E₀` (edge v1→v2,
+/// opposite v0), `E₁` (v2→v0), `E₂` (v0→v1). Their sum is the doubled area.
+pub fn edge_values(triangle: &RasterTriangle, px: u32, py: u32) -> [i64; 3] {
+    let [x0, x1, x2] = triangle.x;
+    let [y0, y1, y2] = triangle.y;
+    [
+        Edge::new(x1, y1, x2, y2, px, py).row_start,
+        Edge::new(x2, y2, x0, y0, px, py).row_start,
+        Edge::new(x0, y0, x1, y1, px, py).row_start,
+    ]
+}
+
+/// Sentinel triangle id of a pixel no triangle covers.
+pub const NO_TRIANGLE: u32 = u32::MAX;
+
+/// The nearest triangle at each pixel of one tile.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Visibility {
+    pub rect: PixelRect,
+    /// Reversed-Z depth of the nearest surface (−∞ where none).
+    pub depth: Vec<f32>,
+    /// Index into the frame's raster triangles, or [`NO_TRIANGLE`].
+    pub triangle: Vec<u32>,
+}
+
+/// Rasterizes the triangles `indices` (in order) into the tile `rect`, keeping the nearest.
+pub fn rasterize_tile(rect: PixelRect, triangles: &[RasterTriangle], indices: &[u32]) -> Visibility {
+    let pixel_count = (rect.width() * rect.height()) as usize;
+    let mut visibility = Visibility {
+        rect,
+        depth: vec![f32::NEG_INFINITY; pixel_count],
+        triangle: vec![NO_TRIANGLE; pixel_count],
+    };
+    debug_assert!(rect.width() <= TILE_SIZE);
+    let tile_width = rect.width() as usize;
+    for &index in indices {
+        let triangle = &triangles[index as usize];
+        for_each_covered_pixel(triangle, rect, |px, py, depth| {
+            let slot = (py - rect.y0) as usize * tile_width + (px - rect.x0) as usize;
+            if depth > visibility.depth[slot] {
+                visibility.depth[slot] = depth;
+                visibility.triangle[slot] = index;
+            }
+        });
+    }
+    visibility
+}
+
+/// Calls `visit(px, py, depth)` for every pixel of `rect` whose centre `triangle` covers, row by
+/// row. This is the one coverage loop: the tile rasterizer and the coverage tests both use it.
+#[inline]
+pub fn for_each_covered_pixel(triangle: &RasterTriangle, rect: PixelRect, mut visit: impl FnMut(u32, u32, f32)) {
+    let Some(area) = triangle.bounds.intersect(&rect) else {
+        return;
+    };
+    let [x0, x1, x2] = triangle.x;
+    let [y0, y1, y2] = triangle.y;
+    let mut edges = [
+        Edge::new(x1, y1, x2, y2, area.x0, area.y0),
+        Edge::new(x2, y2, x0, y0, area.x0, area.y0),
+        Edge::new(x0, y0, x1, y1, area.x0, area.y0),
+    ];
+    let [d0, d1, d2] = triangle.depth;
+    let inv_area = triangle.inv_area;
+    for py in area.y0..area.y1 {
+        let [mut e0, mut e1, mut e2] = edges.map(|e| e.row_start);
+        for px in area.x0..area.x1 {
+            if e0 >= edges[0].min_inside && e1 >= edges[1].min_inside && e2 >= edges[2].min_inside {
+                let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
+                visit(px, py, depth);
+            }
+            e0 += edges[0].step_x;
+            e1 += edges[1].step_x;
+            e2 += edges[2].step_x;
+        }
+        for edge in &mut edges {
+            edge.row_start += edge.step_y;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vertex(x: f32, y: f32) -> ScreenVertex {
+        ScreenVertex {
+            x,
+            y,
+            depth: 0.5,
+            inv_w: 1.0,
+            weights: Vec3::ZERO,
+        }
+    }
+
+    fn coverage(triangles: &[RasterTriangle], width: u32, height: u32) -> Vec<u32> {
+        let rect = PixelRect { x0: 0, y0: 0, x1: width, y1: height };
+        let mut counts = vec![0; (width * height) as usize];
+        for triangle in triangles {
+            for_each_covered_pixel(triangle, rect, |x, y, _| counts[(y * width + x) as usize] += 1);
+        }
+        counts
+    }
+
+    #[test]
+    fn two_triangles_of_a_square_cover_each_pixel_once() {
+        // The diagonal passes exactly through pixel centres: the fill rule decides.
+        let (a, b, c, d) = (vertex(0.0, 0.0), vertex(8.0, 0.0), vertex(8.0, 8.0), vertex(0.0, 8.0));
+        let triangles: Vec<_> = [[a, b, c], [a, c, d]]
+            .into_iter()
+            .filter_map(|t| setup_triangle(t, 8, 8, 0, false))
+            .collect();
+        assert!(coverage(&triangles, 8, 8).iter().all(|&n| n == 1));
+    }
+
+    #[test]
+    fn pixel_centre_on_a_vertical_left_edge_is_inside_right_edge_is_not() {
+        // The square [0.5, 2.5] × [0.5, 2.5] has pixel centres exactly on all four sides.
+        let (a, b, c, d) = (vertex(0.5, 0.5), vertex(2.5, 0.5), vertex(2.5, 2.5), vertex(0.5, 2.5));
+        let triangles: Vec<_> = [[a, b, c], [a, c, d]]
+            .into_iter()
+            .filter_map(|t| setup_triangle(t, 4, 4, 0, false))
+            .collect();
+        let counts = coverage(&triangles, 4, 4);
+        #[rustfmt::skip]
+        let expected = [
+            1, 1, 0, 0,
+            1, 1, 0, 0,
+            0, 0, 0, 0,
+            0, 0, 0, 0,
+        ];
+        assert_eq!(counts, expected);
+    }
+
+    #[test]
+    fn zero_area_triangles_are_dropped() {
+        assert!(setup_triangle([vertex(0.0, 0.0), vertex(4.0, 4.0), vertex(8.0, 8.0)], 8, 8, 0, false).is_none());
+        assert!(setup_triangle([vertex(1.0, 1.0); 3], 8, 8, 0, false).is_none());
+    }
+
+    #[test]
+    fn bounds_cover_only_pixel_centres_inside_the_box() {
+        let t = setup_triangle([vertex(0.6, 0.6), vertex(3.4, 0.6), vertex(0.6, 3.4)], 8, 8, 0, false).unwrap();
+        assert_eq!(t.bounds, PixelRect { x0: 1, y0: 1, x1: 3, y1: 3 });
+        let edge = setup_triangle([vertex(0.5, 0.5), vertex(3.5, 0.5), vertex(0.5, 3.5)], 8, 8, 0, false).unwrap();
+        assert_eq!(edge.bounds, PixelRect { x0: 0, y0: 0, x1: 4, y1: 4 });
+    }
+
+    #[test]
+    fn edge_values_sum_to_the_area() {
+        let t = setup_triangle([vertex(0.3, 0.2), vertex(7.1, 1.9), vertex(2.2, 6.6)], 8, 8, 0, false).unwrap();
+        let [e0, e1, e2] = edge_values(&t, 3, 3);
+        assert!(((e0 + e1 + e2) as f32 * t.inv_area - 1.0).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,264 @@
+//! The rasterizer's contract, checked through the library on scenes built in code:
+//! exact coverage, near-plane clipping, perspective-correct interpolation, determinism.
+
+use std::sync::Arc;
+
+use glam::{DMat4, DVec3, Vec3};
+use lampshade::mesh::Mesh;
+use lampshade::render::raster::{PixelRect, for_each_covered_pixel};
+use lampshade::render::{RenderOptions, geometry::build_frame, render};
+use lampshade::scene::{
+    BackFaces, Camera, ImageSettings, Light, LightingModel, Material, Object, Projection, Scene, Shading,
+};
+
+const UNLIT_WHITE: Material = Material {
+    ambient: Vec3::ZERO,
+    diffuse: Vec3::ONE,
+    specular: Vec3::ZERO,
+    shininess: 1.0,
+    emission: Vec3::ZERO,
+    model: LightingModel::Unlit,
+};
+
+fn object(mesh: Mesh, material: Material, shading: Shading) -> Object {
+    Object {
+        name: "test".into(),
+        mesh: Arc::new(mesh),
+        transform: DMat4::IDENTITY,
+        shading,
+        material: Some(material),
+        back_faces: BackFaces::Lit,
+    }
+}
+
+/// An orthographic camera mapping world (x, y) in [0, width] × [0, height] onto the image, one
+/// unit a pixel, looking down −Z at the plane z = 0.
+fn pixel_aligned_scene(width: u32, height: u32, objects: Vec<Object>) -> Scene {
+    let center = DVec3::new(f64::from(width) / 2.0, f64::from(height) / 2.0, 0.0);
+    Scene {
+        image: ImageSettings { width, height, background: Vec3::ZERO },
+        camera: Camera {
+            eye: center + DVec3::Z * 10.0,
+            target: center,
+            up: DVec3::Y,
+            projection: Projection::Orthographic { height: f64::from(height), near: 1.0, far: 100.0 },
+        },
+        ambient_light: Vec3::ZERO,
+        lights: vec![],
+        objects,
+    }
+}
+
+/// How many triangles cover each pixel centre.
+fn coverage_counts(scene: &Scene) -> Vec<u32> {
+    let (width, height) = (scene.image.width, scene.image.height);
+    let frame = build_frame(scene, None);
+    let rect = PixelRect { x0: 0, y0: 0, x1: width, y1: height };
+    let mut counts = vec![0; (width * height) as usize];
+    for triangle in &frame.raster {
+        for_each_covered_pixel(triangle, rect, |x, y, _| counts[(y * width + x) as usize] += 1);
+    }
+    counts
+}
+
+fn flat_mesh(positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Mesh {
+    Mesh {
+        normals: vec![Vec3::Z; positions.len()],
+        positions,
+        triangles,
+        ..Mesh::default()
+    }
+}
+
+/// A grid of `n × n` cells over [lo, hi]², interior vertices jittered (deterministically) so
+/// edges run at every angle, each cell split into two triangles along a varying diagonal.
+fn jittered_grid(n: u32, lo: f32, hi: f32, jitter: f32, seed: u32) -> Mesh {
+    let mut state = seed.wrapping_mul(2654435761).wrapping_add(1);
+    let mut random = move || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        (state as f32 / u32::MAX as f32) * 2.0 - 1.0
+    };
+    let step = (hi - lo) / n as f32;
+    let mut positions = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let interior = i > 0 && i < n && j > 0 && j < n;
+            let (dx, dy) = if interior { (random() * jitter * step, random() * jitter * step) } else { (0.0, 0.0) };
+            positions.push(Vec3::new(lo + i as f32 * step + dx, lo + j as f32 * step + dy, 0.0));
+        }
+    }
+    let index = |i: u32, j: u32| j * (n + 1) + i;
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (index(i, j), index(i + 1, j), index(i + 1, j + 1), index(i, j + 1));
+            if (i + j) % 2 == 0 {
+                triangles.extend([[a, b, c], [a, c, d]]);
+            } else {
+                triangles.extend([[a, b, d], [b, c, d]]);
+            }
+        }
+    }
+    flat_mesh(positions, triangles)
+}
+
+#[test]
+fn a_mesh_tiling_the_viewport_covers_every_pixel_exactly_once() {
+    for (seed, offset) in [(1, 0.0), (2, 0.25), (3, 0.5), (4, 1.0 / 3.0), (5, 0.999)] {
+        let mut mesh = jittered_grid(40, -3.0, 131.0, 0.2, seed);
+        for p in &mut mesh.positions {
+            *p += Vec3::new(offset, offset * 0.7, 0.0);
+        }
+        let counts = coverage_counts(&pixel_aligned_scene(128, 96, vec![object(mesh, UNLIT_WHITE, Shading::Flat)]));
+        let wrong: Vec<usize> = (0..counts.len()).filter(|&i| counts[i] != 1).collect();
+        assert!(wrong.is_empty(), "seed {seed}, offset {offset}: {} pixels not covered exactly once, first at {:?}", wrong.len(), wrong.first());
+    }
+}
+
+#[test]
+fn a_fan_of_thin_triangles_around_one_vertex_covers_its_disc_once() {
+    // 10,000 slivers around the centre of the image: every pixel inside the fan's outer polygon
+    // is covered once, none twice.
+    let center = Vec3::new(64.3, 48.6, 0.0);
+    let n = 10_000;
+    let radius = 200.0;
+    let mut positions = vec![center];
+    for k in 0..n {
+        let angle = k as f32 / n as f32 * std::f32::consts::TAU;
+        positions.push(center + Vec3::new(angle.cos(), angle.sin(), 0.0) * radius);
+    }
+    let triangles = (0..n).map(|k| [0, 1 + k, 1 + (k + 1) % n]).collect();
+    let counts = coverage_counts(&pixel_aligned_scene(128, 96, vec![object(flat_mesh(positions, triangles), UNLIT_WHITE, Shading::Flat)]));
+    assert!(counts.iter().all(|&c| c == 1), "max {:?}, zeros {}", counts.iter().max(), counts.iter().filter(|&&c| c == 0).count());
+}
+
+/// A perspective camera at the origin looking down −Z with a 90° field of view.
+fn camera_at_origin(near: f64) -> Camera {
+    Camera {
+        eye: DVec3::ZERO,
+        target: DVec3::new(0.0, 0.0, -1.0),
+        up: DVec3::Y,
+        projection: Projection::Perspective { fov_y_degrees: 90.0, near, far: 100.0 },
+    }
+}
+
+#[test]
+fn a_floor_passing_behind_the_camera_renders_only_its_visible_part() {
+    // A floor at y = −1 from 5 units behind the eye to 50 in front. Without clipping, the
+    // vertices behind the eye would project to the top of the screen and smear the floor
+    // across the sky.
+    let positions = vec![
+        Vec3::new(-50.0, -1.0, 5.0),
+        Vec3::new(50.0, -1.0, 5.0),
+        Vec3::new(50.0, -1.0, -50.0),
+        Vec3::new(-50.0, -1.0, -50.0),
+    ];
+    let floor = Mesh { normals: vec![Vec3::Y; 4], positions, triangles: vec![[0, 1, 2], [0, 2, 3]], ..Mesh::default() };
+    let (width, height) = (64, 64);
+    let scene = Scene {
+        image: ImageSettings { width, height, background: Vec3::ZERO },
+        camera: camera_at_origin(0.1),
+        ambient_light: Vec3::ZERO,
+        lights: vec![],
+        objects: vec![object(floor, UNLIT_WHITE, Shading::Flat)],
+    };
+    let (image, _) = render(&scene, &RenderOptions::default());
+    // The far edge (z = −50) projects to y_ndc = −1/50: 0.64 px below the centre line.
+    for y in 0..height {
+        for x in 0..width {
+            let covered = image.covered[(y * width + x) as usize];
+            assert_eq!(covered, y >= 33, "pixel ({x}, {y})");
+        }
+    }
+    assert!(image.color.iter().all(|c| c.is_finite()));
+}
+
+#[test]
+fn attributes_are_interpolated_perspective_correctly() {
+    // A floor strip from z = −1 to z = −9 at y = −1, Gouraud-shaded so that its near edge is
+    // black and its far edge white: the colour is linear in depth along the floor, not on
+    // screen.
+    let positions = vec![
+        Vec3::new(-1.0, -1.0, -1.0),
+        Vec3::new(1.0, -1.0, -1.0),
+        Vec3::new(1.0, -1.0, -9.0),
+        Vec3::new(-1.0, -1.0, -9.0),
+    ];
+    // Lambert with a light along +Z: N = X gives N·L = 0 (black), N = Z gives 1 (white).
+    let normals = vec![Vec3::X, Vec3::X, Vec3::Z, Vec3::Z];
+    let strip = Mesh { positions, normals, triangles: vec![[0, 1, 2], [0, 2, 3]], ..Mesh::default() };
+    let lambert = Material { model: LightingModel::Lambert, ..UNLIT_WHITE };
+    let (width, height) = (64u32, 64u32);
+    let scene = Scene {
+        image: ImageSettings { width, height, background: Vec3::ZERO },
+        camera: camera_at_origin(0.1),
+        ambient_light: Vec3::ZERO,
+        lights: vec![Light::Directional { direction: -Vec3::Z, color: Vec3::ONE }],
+        objects: vec![object(strip, lambert, Shading::Gouraud)],
+    };
+    let (image, _) = render(&scene, &RenderOptions::default());
+    let x = width / 2;
+    let mut checked = 0;
+    for y in 34..height - 1 {
+        let pixel = (y * width + x) as usize;
+        if !image.covered[pixel] {
+            continue;
+        }
+        // The row's centre sees the floor at y_ndc = 1 − 2(y + ½)/height = −1/d, d its depth.
+        let y_ndc = 1.0 - 2.0 * (y as f32 + 0.5) / height as f32;
+        let depth = -1.0 / y_ndc;
+        let perspective = (depth - 1.0) / 8.0;
+        let screen_linear = (y_ndc + 1.0) / (1.0 - 1.0 / 9.0);
+        let got = image.color[pixel].x;
+        assert!((got - perspective).abs() < 0.01, "row {y}: got {got}, perspective-correct {perspective}");
+        if (perspective - screen_linear).abs() > 0.1 {
+            assert!((got - screen_linear).abs() > 0.05, "row {y} looks screen-space interpolated");
+            checked += 1;
+        }
+    }
+    assert!(checked > 5, "the test must visit rows where the two interpolations differ");
+}
+
+fn busy_scene() -> Scene {
+    let sphere = lampshade::mesh::primitives::sphere(48);
+    let mut objects = Vec::new();
+    for (i, shading) in [Shading::Flat, Shading::Gouraud, Shading::Phong].into_iter().enumerate() {
+        let mut o = object(
+            sphere.clone(),
+            Material { specular: Vec3::splat(0.6), shininess: 30.0, model: LightingModel::BlinnPhong, ..Material { ambient: Vec3::splat(0.1), ..UNLIT_WHITE } },
+            shading,
+        );
+        o.transform = DMat4::from_translation(DVec3::new(i as f64 * 1.5 - 1.5, 0.2 * i as f64, -(i as f64)));
+        objects.push(o);
+    }
+    Scene {
+        image: ImageSettings { width: 301, height: 197, background: Vec3::new(0.1, 0.1, 0.1) },
+        camera: Camera {
+            eye: DVec3::new(0.5, 1.0, 5.0),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            projection: Projection::Perspective { fov_y_degrees: 50.0, near: 0.1, far: 50.0 },
+        },
+        ambient_light: Vec3::splat(0.3),
+        lights: vec![
+            Light::Directional { direction: Vec3::new(-1.0, -1.0, -1.0), color: Vec3::ONE },
+            Light::Point { position: DVec3::new(2.0, 2.0, 2.0), color: Vec3::new(0.5, 0.4, 0.3), attenuation: lampshade::scene::Attenuation { constant: 1.0, linear: 0.1, quadratic: 0.05 } },
+        ],
+        objects,
+    }
+}
+
+#[test]
+fn the_image_is_bit_identical_for_any_thread_count() {
+    let scene = busy_scene();
+    let (reference, _) = render(&scene, &RenderOptions { threads: Some(1), ..Default::default() });
+    assert!(reference.covered.iter().filter(|&&c| c).count() > 1000, "the scene must cover pixels");
+    for threads in [2, 3, 8] {
+        let (image, stats) = render(&scene, &RenderOptions { threads: Some(threads), ..Default::default() });
+        assert_eq!(stats.threads, threads);
+        let bits = |fb: &lampshade::render::FrameBuffer| fb.color.iter().flat_map(|c| c.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(bits(&image) == bits(&reference), "{threads} threads differ from 1");
+    }
+}
