@@ -25,7 +25,11 @@ pub const EXIT_BAD_INPUT: i32 = 2;
 pub const EXIT_INTERNAL_ERROR: i32 = 101;
 
 #[derive(Debug, Parser)]
-#[command(name = "lampshade", version, about = "Render hand-written RON scene files with a tiled CPU rasterizer")]
+#[command(
+    name = "lampshade",
+    version,
+    about = "Render hand-written RON scene files with a tiled CPU rasterizer"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -92,7 +96,11 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
         Ok(cli) => cli,
         Err(error) => {
             let _ = error.print();
-            return if error.use_stderr() { EXIT_BAD_INPUT } else { EXIT_OK };
+            return if error.use_stderr() {
+                EXIT_BAD_INPUT
+            } else {
+                EXIT_OK
+            };
         }
     };
     match cli.command {
@@ -106,7 +114,10 @@ fn use_color() -> bool {
 
 fn run_render(args: &RenderArgs) -> i32 {
     if args.output.is_some() && args.scenes.len() > 1 {
-        eprintln!("error: --output names one image, but {} scenes were given", args.scenes.len());
+        eprintln!(
+            "error: --output names one image, but {} scenes were given",
+            args.scenes.len()
+        );
         return EXIT_BAD_INPUT;
     }
     let load_options = LoadOptions {
@@ -131,7 +142,10 @@ fn run_render(args: &RenderArgs) -> i32 {
     let mut bad_inputs = Vec::new();
     let mut failed_outputs = 0;
     for scene_path in &args.scenes {
-        let output = args.output.clone().unwrap_or_else(|| scene_path.with_extension("png"));
+        let output = args
+            .output
+            .clone()
+            .unwrap_or_else(|| scene_path.with_extension("png"));
         match render_one(scene_path, &output, &load_options, &render_options, args.quiet) {
             Ok(()) => {}
             Err(RenderFailure::BadInput) => bad_inputs.push(scene_path),
@@ -140,7 +154,12 @@ fn run_render(args: &RenderArgs) -> i32 {
     }
     if args.scenes.len() > 1 && !bad_inputs.is_empty() {
         let names: Vec<String> = bad_inputs.iter().map(|p| p.display().to_string()).collect();
-        eprintln!("error: {} of {} scenes could not be rendered: {}", names.len(), args.scenes.len(), names.join(", "));
+        eprintln!(
+            "error: {} of {} scenes could not be rendered: {}",
+            names.len(),
+            args.scenes.len(),
+            names.join(", ")
+        );
     }
     if !bad_inputs.is_empty() {
         EXIT_BAD_INPUT
@@ -167,12 +186,18 @@ fn render_one(
     let loaded = match scene::load::load_scene(scene_path, load_options) {
         Ok(loaded) => loaded,
         Err(error) => {
-            eprint!("{}", render_diagnostics(&error.diagnostics, &error.sources, use_color()));
+            eprint!(
+                "{}",
+                render_diagnostics(&error.diagnostics, &error.sources, use_color())
+            );
             return Err(RenderFailure::BadInput);
         }
     };
     if !loaded.warnings.is_empty() && !quiet {
-        eprint!("{}", render_diagnostics(&loaded.warnings, &loaded.sources, use_color()));
+        eprint!(
+            "{}",
+            render_diagnostics(&loaded.warnings, &loaded.sources, use_color())
+        );
     }
     let load_time = started.elapsed();
 
@@ -212,7 +237,7 @@ pub fn thousands(n: usize) -> String {
     let digits = n.to_string();
     let mut out = String::new();
     for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i) % 3 == 0 {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
             out.push(',');
         }
         out.push(c);

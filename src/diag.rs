@@ -81,9 +81,7 @@ impl Sources {
 
     /// The path `id` was added with (empty for an id from another `Sources`).
     pub fn path(&self, id: SourceId) -> &Path {
-        self.files
-            .get(id.0)
-            .map_or(Path::new(""), |f| f.path.as_path())
+        self.files.get(id.0).map_or(Path::new(""), |f| f.path.as_path())
     }
 
     /// The text `id` was added with (empty for an id from another `Sources`).
@@ -223,11 +221,7 @@ fn clamp_span(text: &str, span: &Range<usize>) -> Range<usize> {
 /// place, with the message reworded for scene authors and hints for the common mistakes
 /// (unknown field or variant: the expected names and the closest one; missing field: what
 /// to add; unclosed brackets; ...).
-pub fn from_ron_error(
-    source: SourceId,
-    sources: &Sources,
-    error: &ron::error::SpannedError,
-) -> Diagnostic {
+pub fn from_ron_error(source: SourceId, sources: &Sources, error: &ron::error::SpannedError) -> Diagnostic {
     use ron::error::Error as E;
 
     let text = sources.text(source);
@@ -288,9 +282,7 @@ pub fn from_ron_error(
         }
         E::ExpectedDifferentStructName { expected, found } => {
             label = Some(format!("expected `{expected}`"));
-            hints.push(format!(
-                "write `{expected}(...)`, or leave the name out: `(...)`"
-            ));
+            hints.push(format!("write `{expected}(...)`, or leave the name out: `(...)`"));
             format!("expected `{expected}(...)`, found `{found}(...)`")
         }
         E::TrailingCharacters => {
@@ -344,9 +336,7 @@ fn trim_span(text: &str, start: usize, end: usize) -> (usize, usize) {
     if start >= content_end {
         return (content_end, content_end);
     }
-    let skip = text[start..]
-        .find(|c: char| !c.is_whitespace())
-        .unwrap_or(0);
+    let skip = text[start..].find(|c: char| !c.is_whitespace()).unwrap_or(0);
     if skip == 0 || (start == end) {
         return (start, end);
     }
@@ -445,8 +435,8 @@ fn to_codespan(diagnostic: &Diagnostic, sources: &Sources) -> cs::Diagnostic<Sou
     match location {
         Some((source, span)) => {
             let span = clamp_span(sources.text(*source), span);
-            let label = cs::Label::primary(*source, span)
-                .with_message(diagnostic.label.as_deref().unwrap_or(""));
+            let label =
+                cs::Label::primary(*source, span).with_message(diagnostic.label.as_deref().unwrap_or(""));
             cs::Diagnostic::new(severity)
                 .with_message(&diagnostic.message)
                 .with_label(label)
@@ -510,11 +500,7 @@ impl<'a> Files<'a> for CodespanFiles<'_> {
             .unwrap_or_else(|next_line| next_line.saturating_sub(1)))
     }
 
-    fn line_range(
-        &'a self,
-        id: SourceId,
-        line_index: usize,
-    ) -> Result<Range<usize>, cs_files::Error> {
+    fn line_range(&'a self, id: SourceId, line_index: usize) -> Result<Range<usize>, cs_files::Error> {
         let file = self.file(id)?;
         let line_start = |index: usize| match index.cmp(&file.line_starts.len()) {
             std::cmp::Ordering::Less => Ok(file.line_starts[index]),
@@ -562,11 +548,7 @@ mod tests {
     fn byte_offset_clamps() {
         let text = "ab\ncd";
         assert_eq!(byte_offset(text, 0, 0), 0);
-        assert_eq!(
-            byte_offset(text, 1, 99),
-            2,
-            "past the line's end: the newline"
-        );
+        assert_eq!(byte_offset(text, 1, 99), 2, "past the line's end: the newline");
         assert_eq!(byte_offset(text, 2, 99), text.len());
         assert_eq!(byte_offset(text, 9, 1), text.len());
         assert_eq!(byte_offset("", 1, 1), 0);
@@ -596,10 +578,7 @@ mod tests {
         assert!(text.contains("error: unknown material `rubyy`"), "{text}");
         assert!(text.contains("file.ron:3:6"), "{text}");
         assert!(text.contains("(material: \"rubyy\"),"), "{text}");
-        assert!(
-            text.contains("^^^^^^^^ not a material in this scene"),
-            "{text}"
-        );
+        assert!(text.contains("^^^^^^^^ not a material in this scene"), "{text}");
         assert!(text.contains("= help: did you mean `ruby`?"), "{text}");
     }
 
@@ -732,10 +711,7 @@ mod tests {
     fn ron_unknown_field_lists_expected_fields() {
         let text = "Scene(\n  camera: Camera(\n    eye: (0, 0, 5),\n    fov_y_degree: 45,\n  ),\n)";
         let (diagnostic, rendered) = ron_diagnostic(text);
-        assert_eq!(
-            diagnostic.message,
-            "unknown field `fov_y_degree` in `Camera`"
-        );
+        assert_eq!(diagnostic.message, "unknown field `fov_y_degree` in `Camera`");
         assert_eq!(spanned_text(text, &diagnostic), "fov_y_degree");
         assert_eq!(diagnostic.line_column(&ron_sources(text)), Some((4, 5)));
         assert!(
@@ -771,10 +747,7 @@ mod tests {
         assert_eq!(spanned_text(text, &diagnostic), "Cub");
         assert_eq!(
             diagnostic.hints,
-            [
-                "did you mean `Cube`?",
-                "expected one of: `Sphere`, `Cube`, `Obj`"
-            ]
+            ["did you mean `Cube`?", "expected one of: `Sphere`, `Cube`, `Obj`"]
         );
     }
 
@@ -782,26 +755,17 @@ mod tests {
     fn ron_missing_field_says_what_to_add() {
         let text = "Scene(camera: Camera(eye: (0, 0, 5)))";
         let (diagnostic, _) = ron_diagnostic(text);
-        assert_eq!(
-            diagnostic.message,
-            "missing field `fov_y_degrees` in `Camera`"
-        );
+        assert_eq!(diagnostic.message, "missing field `fov_y_degrees` in `Camera`");
         assert_eq!(diagnostic.hints, ["add `fov_y_degrees: ...`"]);
         // ron points at the `)` that closes the struct.
-        assert_eq!(
-            diagnostic.location.unwrap().1,
-            text.len() - 2..text.len() - 2
-        );
+        assert_eq!(diagnostic.location.unwrap().1, text.len() - 2..text.len() - 2);
     }
 
     #[test]
     fn ron_wrong_struct_name() {
         let text = "Scene(camera: Cam(eye: (0, 0, 5), fov_y_degrees: 45))";
         let (diagnostic, _) = ron_diagnostic(text);
-        assert_eq!(
-            diagnostic.message,
-            "expected `Camera(...)`, found `Cam(...)`"
-        );
+        assert_eq!(diagnostic.message, "expected `Camera(...)`, found `Cam(...)`");
         assert_eq!(spanned_text(text, &diagnostic), "Cam");
     }
 
@@ -809,10 +773,7 @@ mod tests {
     fn ron_trailing_characters() {
         let text = "Scene(camera: Camera(eye: (0, 0, 5), fov_y_degrees: 45))\n)";
         let (diagnostic, rendered) = ron_diagnostic(text);
-        assert_eq!(
-            diagnostic.message,
-            "unexpected text after the end of the scene"
-        );
+        assert_eq!(diagnostic.message, "unexpected text after the end of the scene");
         assert!(rendered.contains("scene.ron:2:1"), "{rendered}");
     }
 
@@ -824,10 +785,7 @@ mod tests {
         // After the last token, not on the empty line after the final newline.
         assert!(rendered.contains("scene.ron:1:56"), "{rendered}");
         assert!(
-            diagnostic
-                .hints
-                .iter()
-                .any(|hint| hint.contains("missing `)`")),
+            diagnostic.hints.iter().any(|hint| hint.contains("missing `)`")),
             "{diagnostic:?}"
         );
     }
@@ -837,10 +795,7 @@ mod tests {
         let text = "Scene(camera: Camera(eye: (0, 5), fov_y_degrees: 45))";
         let (diagnostic, _) = ron_diagnostic(text);
         assert_eq!(diagnostic.message, "expected a tuple of size 3, found 2");
-        assert_eq!(
-            diagnostic.hints,
-            ["write all three components: `(x, y, z)`"]
-        );
+        assert_eq!(diagnostic.hints, ["write all three components: `(x, y, z)`"]);
     }
 
     #[test]

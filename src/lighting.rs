@@ -107,9 +107,7 @@ pub fn illuminate(
         terms.diffuse += material.diffuse * intensity * n_dot_l;
         if let Some(model) = specular_model {
             let cosine = match model {
-                LightingModel::BlinnPhong => {
-                    normal.dot((to_light + to_viewer).normalize_or_zero())
-                }
+                LightingModel::BlinnPhong => normal.dot((to_light + to_viewer).normalize_or_zero()),
                 _ => reflect(to_light, normal).dot(to_viewer),
             };
             terms.specular += material.specular * intensity * specular_power(cosine, material.shininess);
@@ -216,11 +214,25 @@ mod tests {
         let v = Vec3::Z;
         let light = directional(Vec3::new(1.0, 0.0, 1.0));
         let c45 = std::f32::consts::FRAC_1_SQRT_2;
-        let phong = illuminate(&material(LightingModel::Phong), &[light], Vec3::splat(0.5), Vec3::ZERO, n, v);
+        let phong = illuminate(
+            &material(LightingModel::Phong),
+            &[light],
+            Vec3::splat(0.5),
+            Vec3::ZERO,
+            n,
+            v,
+        );
         check(phong.ambient, Vec3::new(0.05, 0.0, 0.0));
         check(phong.diffuse, Vec3::new(0.0, 0.6 * c45, 0.0));
         check(phong.specular, Vec3::new(0.0, 0.0, 0.7 * c45.powf(5.0)));
-        let blinn = illuminate(&material(LightingModel::BlinnPhong), &[light], Vec3::ZERO, Vec3::ZERO, n, v);
+        let blinn = illuminate(
+            &material(LightingModel::BlinnPhong),
+            &[light],
+            Vec3::ZERO,
+            Vec3::ZERO,
+            n,
+            v,
+        );
         let c22 = (std::f32::consts::PI / 8.0).cos();
         check(blinn.specular, Vec3::new(0.0, 0.0, 0.7 * c22.powf(5.0)));
         check(blinn.total(), blinn.diffuse + blinn.specular);
@@ -229,8 +241,18 @@ mod tests {
     #[test]
     fn several_lights_add_up() {
         let lights = [directional(Vec3::Z), directional(Vec3::new(0.0, 1.0, 1.0))];
-        let terms = illuminate(&material(LightingModel::Lambert), &lights, Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z);
-        check(terms.diffuse, Vec3::new(0.0, 0.6 * (1.0 + std::f32::consts::FRAC_1_SQRT_2), 0.0));
+        let terms = illuminate(
+            &material(LightingModel::Lambert),
+            &lights,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::Z,
+            Vec3::Z,
+        );
+        check(
+            terms.diffuse,
+            Vec3::new(0.0, 0.6 * (1.0 + std::f32::consts::FRAC_1_SQRT_2), 0.0),
+        );
         assert_eq!(terms.specular, Vec3::ZERO);
     }
 
@@ -238,16 +260,30 @@ mod tests {
     fn no_specular_where_the_light_is_behind_the_surface() {
         // The viewer sits on the reflection of a light below the horizon: R·V would be 1.
         let light = directional(Vec3::new(0.0, 0.0, -1.0));
-        let terms = illuminate(&material(LightingModel::Phong), &[light], Vec3::ZERO, Vec3::ZERO, Vec3::Z, -Vec3::Z);
+        let terms = illuminate(
+            &material(LightingModel::Phong),
+            &[light],
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::Z,
+            -Vec3::Z,
+        );
         assert_eq!(terms.diffuse + terms.specular, Vec3::ZERO);
     }
 
     #[test]
     fn point_light_attenuation_and_spot_cone() {
-        let attenuation = Attenuation { constant: 1.0, linear: 0.5, quadratic: 0.25 };
+        let attenuation = Attenuation {
+            constant: 1.0,
+            linear: 0.5,
+            quadratic: 0.25,
+        };
         let point = ShadingLight {
             color: WHITE,
-            kind: ShadingLightKind::Point { position: Vec3::new(0.0, 0.0, 2.0), attenuation },
+            kind: ShadingLightKind::Point {
+                position: Vec3::new(0.0, 0.0, 2.0),
+                attenuation,
+            },
         };
         let lambert = material(LightingModel::Lambert);
         let terms = illuminate(&lambert, &[point], Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z);
@@ -267,11 +303,32 @@ mod tests {
         // A point 1 unit off-axis, 1 unit below: 45° from the spot's axis, N·L = cos 45°.
         let off_axis = Vec3::new(1.0, 0.0, 0.0);
         let c45 = std::f32::consts::FRAC_1_SQRT_2;
-        let inside = illuminate(&lambert, &[spot(50.0, 2.0)], Vec3::ZERO, off_axis, Vec3::Z, Vec3::Z);
+        let inside = illuminate(
+            &lambert,
+            &[spot(50.0, 2.0)],
+            Vec3::ZERO,
+            off_axis,
+            Vec3::Z,
+            Vec3::Z,
+        );
         check(inside.diffuse, Vec3::new(0.0, 0.6 * c45 * c45 * c45, 0.0));
-        let outside = illuminate(&lambert, &[spot(40.0, 2.0)], Vec3::ZERO, off_axis, Vec3::Z, Vec3::Z);
+        let outside = illuminate(
+            &lambert,
+            &[spot(40.0, 2.0)],
+            Vec3::ZERO,
+            off_axis,
+            Vec3::Z,
+            Vec3::Z,
+        );
         assert_eq!(outside.diffuse, Vec3::ZERO);
-        let on_axis_zero_cutoff = illuminate(&lambert, &[spot(0.0, 1.0)], Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z);
+        let on_axis_zero_cutoff = illuminate(
+            &lambert,
+            &[spot(0.0, 1.0)],
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::Z,
+            Vec3::Z,
+        );
         check(on_axis_zero_cutoff.diffuse, Vec3::new(0.0, 0.6, 0.0));
     }
 
@@ -281,7 +338,11 @@ mod tests {
             color: WHITE,
             kind: ShadingLightKind::Point {
                 position: Vec3::ZERO,
-                attenuation: Attenuation { constant: 0.0, linear: 0.0, quadratic: 1.0 },
+                attenuation: Attenuation {
+                    constant: 0.0,
+                    linear: 0.0,
+                    quadratic: 1.0,
+                },
             },
         };
         let opposite = directional(-Vec3::Z);
@@ -289,21 +350,47 @@ mod tests {
         for model in [LightingModel::Phong, LightingModel::BlinnPhong] {
             for shininess in [0.0, 1.0, 1e4, 1e6] {
                 for normal in [Vec3::ZERO, Vec3::Z] {
-                    let m = Material { shininess, ..material(model) };
+                    let m = Material {
+                        shininess,
+                        ..material(model)
+                    };
                     // Viewer exactly opposite to the last light: L + V = 0 for the Blinn half vector.
                     let terms = illuminate(&m, &lights, Vec3::ONE, Vec3::ZERO, normal, -Vec3::Z);
-                    assert!(terms.total().is_finite(), "{model:?} n={shininess} N={normal}: {terms:?}");
+                    assert!(
+                        terms.total().is_finite(),
+                        "{model:?} n={shininess} N={normal}: {terms:?}"
+                    );
                 }
             }
         }
         assert_eq!(specular_power(0.0, 0.0), 1.0);
-        assert!(attenuate(Attenuation { constant: 0.0, linear: 0.0, quadratic: 1.0 }, 0.0).is_finite());
+        assert!(
+            attenuate(
+                Attenuation {
+                    constant: 0.0,
+                    linear: 0.0,
+                    quadratic: 1.0
+                },
+                0.0
+            )
+            .is_finite()
+        );
     }
 
     #[test]
     fn unlit_is_diffuse_plus_emission() {
-        let m = Material { emission: Vec3::splat(0.1), ..material(LightingModel::Unlit) };
-        let terms = illuminate(&m, &[directional(Vec3::Z)], Vec3::ONE, Vec3::ZERO, Vec3::Z, Vec3::Z);
+        let m = Material {
+            emission: Vec3::splat(0.1),
+            ..material(LightingModel::Unlit)
+        };
+        let terms = illuminate(
+            &m,
+            &[directional(Vec3::Z)],
+            Vec3::ONE,
+            Vec3::ZERO,
+            Vec3::Z,
+            Vec3::Z,
+        );
         check(terms.total(), Vec3::new(0.1, 0.7, 0.1));
     }
 }

@@ -67,7 +67,12 @@ pub fn write_png(path: &Path, image: &RgbImage, compression: PngCompression) -> 
     };
     write_atomically(path, |writer| {
         PngEncoder::new_with_quality(writer, compression, FilterType::Adaptive)
-            .write_image(image.as_raw(), image.width(), image.height(), image::ExtendedColorType::Rgb8)
+            .write_image(
+                image.as_raw(),
+                image.width(),
+                image.height(),
+                image::ExtendedColorType::Rgb8,
+            )
             .map_err(|source| OutputError::Encode {
                 path: path.to_path_buf(),
                 source,
@@ -88,11 +93,13 @@ pub fn write_atomically(
         Some(parent) if !parent.as_os_str().is_empty() => parent,
         _ => Path::new("."),
     };
-    let mut temporary = tempfile::Builder::new()
-        .prefix(".lampshade-")
-        .suffix(".tmp")
-        .tempfile_in(folder)
-        .map_err(io_error)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".lampshade-").suffix(".tmp");
+    // Temporary files are private (0600) by default; an image is an ordinary file, so ask for
+    // 0666 and let the umask decide, as any other program's output would.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut temporary = builder.tempfile_in(folder).map_err(io_error)?;
     {
         let mut writer = BufWriter::new(temporary.as_file_mut());
         write(&mut writer)?;

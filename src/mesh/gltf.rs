@@ -63,8 +63,7 @@ use crate::scene::{LightingModel, Material};
 /// Required extensions a file may list and still load: both are understood by the `gltf`
 /// crate as built here, and neither changes the geometry (`KHR_lights_punctual` adds lights,
 /// which are not part of a mesh and are ignored).
-const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] =
-    ["KHR_materials_emissive_strength", "KHR_lights_punctual"];
+const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] = ["KHR_materials_emissive_strength", "KHR_lights_punctual"];
 
 /// The Blinn-Phong exponent equivalent to a glTF perceptual roughness (clamped to [0, 1]):
 /// with `α = r²` (the GGX remapping glTF uses), the Beckmann-matched exponent
@@ -82,12 +81,7 @@ pub fn blinn_phong_exponent(roughness: f32) -> f32 {
 
 /// A glTF material's factors as a [`Material`] (module documentation). `metallic` and
 /// `roughness` are clamped to [0, 1]; non-finite inputs fall back to the glTF defaults.
-pub fn material_from_factors(
-    base_color: Vec3,
-    metallic: f32,
-    roughness: f32,
-    emission: Vec3,
-) -> Material {
+pub fn material_from_factors(base_color: Vec3, metallic: f32, roughness: f32, emission: Vec3) -> Material {
     let base_color = if base_color.is_finite() {
         base_color
     } else {
@@ -121,23 +115,17 @@ pub fn default_material() -> Material {
 /// Loads a `.gltf` or `.glb` file into one [`Mesh`]; see the module documentation.
 pub fn load_gltf(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
     let bytes = std::fs::read(path).map_err(|error| MeshError::cannot_read(path, &error))?;
-    catch_unwind(AssertUnwindSafe(|| load_gltf_bytes(path, &bytes, options))).unwrap_or_else(
-        |panic| {
-            let reason = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "the glTF reader gave up on this file".to_string());
-            Err(MeshError::new(path, format!("malformed glTF: {reason}")))
-        },
-    )
+    catch_unwind(AssertUnwindSafe(|| load_gltf_bytes(path, &bytes, options))).unwrap_or_else(|panic| {
+        let reason = panic
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "the glTF reader gave up on this file".to_string());
+        Err(MeshError::new(path, format!("malformed glTF: {reason}")))
+    })
 }
 
-fn load_gltf_bytes(
-    path: &Path,
-    bytes: &[u8],
-    options: &MeshOptions,
-) -> Result<LoadedMesh, MeshError> {
+fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
     let fail = |message: String| MeshError::new(path, message);
     let (document, blob) = parse_document(bytes).map_err(fail)?;
     let mut files_read = vec![path.to_path_buf()];
@@ -189,10 +177,7 @@ fn load_gltf_bytes(
         ));
     }
 
-    mesh.materials = document
-        .materials()
-        .map(|m| material_from_gltf(&m))
-        .collect();
+    mesh.materials = document.materials().map(|m| material_from_gltf(&m)).collect();
     if mesh.triangle_materials.contains(&default_material_index) {
         mesh.materials.push(default_material());
     }
@@ -253,8 +238,7 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), Str
             }
         }
     }
-    let document =
-        gltf::Document::from_json(json).map_err(|error| format!("malformed glTF: {error}"))?;
+    let document = gltf::Document::from_json(json).map_err(|error| format!("malformed glTF: {error}"))?;
     Ok((document, blob))
 }
 
@@ -275,14 +259,12 @@ fn load_buffers(
             })?,
             gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                 gltf::buffer::Data::from_source(buffer.source(), None)
-                    .map_err(|error| {
-                        format!("buffer {index}: cannot decode its data URI: {error}")
-                    })?
+                    .map_err(|error| format!("buffer {index}: cannot decode its data URI: {error}"))?
                     .0
             }
             gltf::buffer::Source::Uri(uri) => {
-                let relative = percent_decode(uri)
-                    .ok_or_else(|| format!("buffer {index}: malformed URI '{uri}'"))?;
+                let relative =
+                    percent_decode(uri).ok_or_else(|| format!("buffer {index}: malformed URI '{uri}'"))?;
                 if relative.contains(':') {
                     return Err(format!(
                         "buffer {index}: unsupported URI '{uri}' (only relative paths and data: URIs)"
@@ -331,20 +313,14 @@ fn percent_decode(uri: &str) -> Option<String> {
 
 /// Every node of the drawn scene with its world matrix, in depth-first order.
 fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMat4)>, String> {
-    let roots: Vec<gltf::Node> = match document
-        .default_scene()
-        .or_else(|| document.scenes().next())
-    {
+    let roots: Vec<gltf::Node> = match document.default_scene().or_else(|| document.scenes().next()) {
         Some(scene) => scene.nodes().collect(),
         None => {
             let mut is_child = vec![false; document.nodes().len()];
             for child in document.nodes().flat_map(|node| node.children()) {
                 is_child[child.index()] = true;
             }
-            document
-                .nodes()
-                .filter(|node| !is_child[node.index()])
-                .collect()
+            document.nodes().filter(|node| !is_child[node.index()]).collect()
         }
     };
     let mut visited = vec![false; document.nodes().len()];
@@ -385,20 +361,11 @@ struct Baker<'a> {
 
 impl Baker<'_> {
     /// Appends one primitive of one node instance, transformed by `world`.
-    fn bake(
-        &mut self,
-        mesh: &gltf::Mesh,
-        primitive: &gltf::Primitive,
-        world: DMat4,
-    ) -> Result<(), String> {
+    fn bake(&mut self, mesh: &gltf::Mesh, primitive: &gltf::Primitive, world: DMat4) -> Result<(), String> {
         let mode = primitive.mode();
         let here = format!("mesh {} primitive {}", mesh.index(), primitive.index());
-        if !matches!(
-            mode,
-            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-        ) {
-            self.skipped_primitives
-                .push((mesh.index(), primitive.index()));
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            self.skipped_primitives.push((mesh.index(), primitive.index()));
             return Ok(());
         }
         let buffers = self.buffers;
@@ -476,9 +443,7 @@ impl Baker<'_> {
                 let normals: Vec<Vec3> = reader
                     .read_normals()
                     .ok_or_else(|| format!("{here}: NORMAL data lies outside its buffer"))?
-                    .map(|n| {
-                        normals::unit_or_zero((cofactor * DVec3::from(n.map(f64::from))).as_vec3())
-                    })
+                    .map(|n| normals::unit_or_zero((cofactor * DVec3::from(n.map(f64::from))).as_vec3()))
                     .collect();
                 if normals.len() == vertex_count {
                     Some(normals)
@@ -494,18 +459,12 @@ impl Baker<'_> {
 
         let baked = match file_normals {
             Some(file_normals) => {
-                let repaired = normals::repair_normals(
-                    &positions,
-                    &file_normals,
-                    &triangles,
-                    self.crease_angle_degrees,
-                );
+                let repaired =
+                    normals::repair_normals(&positions, &file_normals, &triangles, self.crease_angle_degrees);
                 self.repaired_normals += repaired.replaced_count;
                 repaired.mesh
             }
-            None => {
-                normals::compute_vertex_normals(&positions, &triangles, self.crease_angle_degrees)
-            }
+            None => normals::compute_vertex_normals(&positions, &triangles, self.crease_angle_degrees),
         };
         self.append(
             baked,
@@ -523,11 +482,9 @@ impl Baker<'_> {
             .ok_or_else(|| "too many vertices (more than 2³²)".to_string())?;
         self.mesh.positions.extend(part.positions);
         self.mesh.normals.extend(part.normals);
-        self.mesh.triangles.extend(
-            part.triangles
-                .iter()
-                .map(|triangle| triangle.map(|v| v + offset)),
-        );
+        self.mesh
+            .triangles
+            .extend(part.triangles.iter().map(|triangle| triangle.map(|v| v + offset)));
         self.mesh
             .triangle_materials
             .extend(std::iter::repeat_n(material, part.triangles.len()));
@@ -546,10 +503,7 @@ fn assemble_triangles(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
         Mode::TriangleFan => (0..spans)
             .map(|i| [indices[i + 1], indices[i + 2], indices[0]])
             .collect(),
-        _ => indices
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect(),
+        _ => indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
     }
 }
 
@@ -574,10 +528,7 @@ fn check_accessor(
 }
 
 fn check_index_accessor(accessor: &gltf::Accessor) -> Result<(), String> {
-    let integer = matches!(
-        accessor.data_type(),
-        DataType::U8 | DataType::U16 | DataType::U32
-    );
+    let integer = matches!(accessor.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
     if !integer || accessor.dimensions() != Dimensions::Scalar {
         return Err(format!(
             "accessor {} holds {:?} {:?}; expected unsigned integer scalars",
@@ -619,14 +570,8 @@ fn material_from_gltf(material: &gltf::Material) -> Material {
     } else {
         pbr.metallic_factor()
     };
-    let emission =
-        Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
-    material_from_factors(
-        Vec3::new(r, g, b),
-        metallic,
-        pbr.roughness_factor(),
-        emission,
-    )
+    let emission = Vec3::from(material.emissive_factor()) * material.emissive_strength().unwrap_or(1.0);
+    material_from_factors(Vec3::new(r, g, b), metallic, pbr.roughness_factor(), emission)
 }
 
 #[cfg(test)]
@@ -708,10 +653,7 @@ mod tests {
         // One 1-triangle mesh used by two nodes: 2 instances.
         check_asset("SimpleMeshes/glTF/SimpleMeshes.gltf", 2);
         // 5 nodes, each with its own 2-triangle mesh.
-        check_asset(
-            "TextureCoordinateTest/glTF-Binary/TextureCoordinateTest.glb",
-            10,
-        );
+        check_asset("TextureCoordinateTest/glTF-Binary/TextureCoordinateTest.glb", 10);
         check_asset(
             "TextureCoordinateTest/glTF-Embedded/TextureCoordinateTest.gltf",
             10,
@@ -749,21 +691,14 @@ mod tests {
         let binary = check_asset("Box/glTF-Binary/Box.glb", 12);
         assert_eq!(binary.files_read, vec![asset("Box/glTF-Binary/Box.glb")]);
         let embedded = check_asset("Box/glTF-Embedded/Box.gltf", 12);
-        assert_eq!(
-            embedded.files_read,
-            vec![asset("Box/glTF-Embedded/Box.gltf")]
-        );
+        assert_eq!(embedded.files_read, vec![asset("Box/glTF-Embedded/Box.gltf")]);
     }
 
     #[test]
     fn box_material_maps_metallic_roughness() {
         let loaded = check_asset("Box/glTF/Box.gltf", 12);
         // "Red": baseColorFactor 0.8 0 0, metallic 0, roughness 1 (default).
-        assert_eq!(
-            loaded.mesh.materials.len(),
-            1,
-            "every primitive has a material"
-        );
+        assert_eq!(loaded.mesh.materials.len(), 1, "every primitive has a material");
         let red = loaded.mesh.materials[0];
         assert_eq!(
             (red.diffuse, red.ambient),
@@ -780,11 +715,7 @@ mod tests {
         assert_eq!(loaded.mesh.materials, vec![default_material()]);
         let white_metal = default_material();
         assert_eq!(
-            (
-                white_metal.diffuse,
-                white_metal.specular,
-                white_metal.shininess
-            ),
+            (white_metal.diffuse, white_metal.specular, white_metal.shininess),
             (Vec3::ONE, Vec3::ONE, 1.0)
         );
     }
@@ -821,17 +752,11 @@ mod tests {
         // Duck: the root node scales by 0.01; the raw positions reach about ±100.
         let duck = check_asset("Duck/glTF/Duck.gltf", 4212);
         let (lo, hi) = duck.mesh.bounds().unwrap_or_default();
-        assert!(
-            lo.min_element() > -2.0 && hi.max_element() < 2.0,
-            "{lo} {hi}"
-        );
+        assert!(lo.min_element() > -2.0 && hi.max_element() < 2.0, "{lo} {hi}");
         assert!(hi.max_element() > 0.5, "{lo} {hi}");
         // SimpleMeshes: the triangle spans [0, 1]² in XY, and the second node moves it by +1 in x.
         let simple = check_asset("SimpleMeshes/glTF/SimpleMeshes.gltf", 2);
-        assert_eq!(
-            simple.mesh.bounds(),
-            Some((Vec3::ZERO, Vec3::new(2.0, 1.0, 0.0)))
-        );
+        assert_eq!(simple.mesh.bounds(), Some((Vec3::ZERO, Vec3::new(2.0, 1.0, 0.0))));
     }
 
     #[test]
@@ -857,11 +782,7 @@ mod tests {
     #[test]
     fn broken_binary_files_are_errors_not_panics() {
         let dir = scratch_dir();
-        let header_only = write(
-            dir.path(),
-            "header.glb",
-            b"glTF\x02\x00\x00\x00\xff\xff\x00\x00",
-        );
+        let header_only = write(dir.path(), "header.glb", b"glTF\x02\x00\x00\x00\xff\xff\x00\x00");
         check_error(&header_only, "malformed glTF");
         let glb = std::fs::read(asset("Box/glTF-Binary/Box.glb")).unwrap_or_default();
         let truncated = write(dir.path(), "truncated.glb", &glb[..glb.len() / 2]);
@@ -886,8 +807,7 @@ mod tests {
 
     fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
         let path = dir.join(name);
-        std::fs::write(&path, bytes)
-            .unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
+        std::fs::write(&path, bytes).unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
         path
     }
 
@@ -900,13 +820,7 @@ mod tests {
     /// Writes `fixture.gltf` and `fixture.bin`, each block in its own buffer view and
     /// accessor. `primitives` and `nodes` are JSON arrays; `extra` is more top-level JSON
     /// members, each followed by a comma.
-    fn write_fixture(
-        dir: &Path,
-        blocks: &[Block],
-        primitives: &str,
-        nodes: &str,
-        extra: &str,
-    ) -> PathBuf {
+    fn write_fixture(dir: &Path, blocks: &[Block], primitives: &str, nodes: &str, extra: &str) -> PathBuf {
         let mut bin = Vec::new();
         let mut views = Vec::new();
         let mut accessors = Vec::new();
@@ -915,15 +829,14 @@ mod tests {
             let accessor = match block {
                 Block::Vec3(vectors) => {
                     bin.extend(vectors.iter().flatten().flat_map(|c| c.to_le_bytes()));
-                    let (lo, hi) =
-                        vectors
-                            .iter()
-                            .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
-                                (
-                                    [0, 1, 2].map(|k| lo[k].min(p[k])),
-                                    [0, 1, 2].map(|k| hi[k].max(p[k])),
-                                )
-                            });
+                    let (lo, hi) = vectors
+                        .iter()
+                        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(lo, hi), p| {
+                            (
+                                [0, 1, 2].map(|k| lo[k].min(p[k])),
+                                [0, 1, 2].map(|k| hi[k].max(p[k])),
+                            )
+                        });
                     format!(
                         r#"{{"bufferView": {index}, "componentType": 5126, "count": {}, "type": "VEC3", "min": {lo:?}, "max": {hi:?}}}"#,
                         vectors.len()
@@ -962,12 +875,7 @@ mod tests {
         write(dir, "fixture.gltf", json.as_bytes())
     }
 
-    const SQUARE: [[f32; 3]; 4] = [
-        [0.0, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [1.0, 1.0, 0.0],
-    ];
+    const SQUARE: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
     const ONE_NODE: &str = r#"[{"mesh": 0}]"#;
     const TRIANGLES: &str = r#"[{"attributes": {"POSITION": 0}, "indices": 1}]"#;
 
@@ -1017,16 +925,9 @@ mod tests {
     fn non_indexed_triangles_and_skipped_points() {
         let dir = scratch_dir();
         let positions = [SQUARE[0], SQUARE[1], SQUARE[3]];
-        let primitives =
-            r#"[{"attributes": {"POSITION": 0}}, {"attributes": {"POSITION": 0}, "mode": 0}]"#;
+        let primitives = r#"[{"attributes": {"POSITION": 0}}, {"attributes": {"POSITION": 0}, "mode": 0}]"#;
         let loaded = check_faces_up(
-            &write_fixture(
-                dir.path(),
-                &[Block::Vec3(&positions)],
-                primitives,
-                ONE_NODE,
-                "",
-            ),
+            &write_fixture(dir.path(), &[Block::Vec3(&positions)], primitives, ONE_NODE, ""),
             1,
         );
         assert!(
@@ -1039,10 +940,7 @@ mod tests {
         );
         assert_eq!(
             loaded.files_read,
-            vec![
-                dir.path().join("fixture.gltf"),
-                dir.path().join("fixture.bin")
-            ]
+            vec![dir.path().join("fixture.gltf"), dir.path().join("fixture.bin")]
         );
     }
 
@@ -1055,13 +953,7 @@ mod tests {
         // the computed normals follow.
         let mirror_z = r#"[{"mesh": 0, "scale": [1, 1, -1]}]"#;
         check_faces_up(
-            &write_fixture(
-                dir.path(),
-                &[Block::Vec3(&facing_down)],
-                primitive,
-                mirror_z,
-                "",
-            ),
+            &write_fixture(dir.path(), &[Block::Vec3(&facing_down)], primitive, mirror_z, ""),
             1,
         );
         // The same with file normals, which go through the inverse transpose.
@@ -1114,10 +1006,7 @@ mod tests {
             ONE_NODE,
             extra,
         );
-        check_error(
-            &path,
-            "requires the glTF extension KHR_draco_mesh_compression",
-        );
+        check_error(&path, "requires the glTF extension KHR_draco_mesh_compression");
     }
 
     #[test]
@@ -1138,12 +1027,10 @@ mod tests {
     fn attribute_naming_a_missing_accessor_is_an_error_not_a_panic() {
         // gltf-json's own validation would index past the end here.
         let dir = scratch_dir();
-        let json = r#"{"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 5}}]}]}"#;
+        let json =
+            r#"{"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 5}}]}]}"#;
         let path = write(dir.path(), "missing-accessor.gltf", json.as_bytes());
-        check_error(
-            &path,
-            "mesh 0 primitive 0 refers to accessor 5, but there are 0",
-        );
+        check_error(&path, "mesh 0 primitive 0 refers to accessor 5, but there are 0");
     }
 
     #[test]
@@ -1163,10 +1050,7 @@ mod tests {
 
     #[test]
     fn percent_encoded_uris_are_decoded() {
-        assert_eq!(
-            percent_decode("my%20model.bin").as_deref(),
-            Some("my model.bin")
-        );
+        assert_eq!(percent_decode("my%20model.bin").as_deref(), Some("my model.bin"));
         assert_eq!(percent_decode("plain.bin").as_deref(), Some("plain.bin"));
         assert_eq!(percent_decode("bad%2").as_deref(), None);
         assert_eq!(percent_decode("bad%FF.bin").as_deref(), None, "not UTF-8");

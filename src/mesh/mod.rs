@@ -102,10 +102,7 @@ impl MeshError {
 
     /// The file could not be read at all: "cannot read mesh file: No such file or directory".
     pub fn cannot_read(path: &Path, error: &std::io::Error) -> Self {
-        MeshError::new(
-            path,
-            format!("cannot read mesh file: {}", io_error_text(error)),
-        )
+        MeshError::new(path, format!("cannot read mesh file: {}", io_error_text(error)))
     }
 }
 

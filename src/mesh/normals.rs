@@ -98,16 +98,10 @@ pub fn unit_or_zero(v: Vec3) -> Vec3 {
 ///
 /// Every index in `triangles` must be less than `positions.len()` (loaders check this
 /// before calling). `crease_angle_degrees` is clamped to [0, 180].
-pub fn compute_vertex_normals(
-    positions: &[Vec3],
-    triangles: &[[u32; 3]],
-    crease_angle_degrees: f32,
-) -> Mesh {
+pub fn compute_vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]], crease_angle_degrees: f32) -> Mesh {
     let groups = PositionGroups::new(positions);
     let corner_normals = corner_normals(positions, triangles, &groups, crease_angle_degrees);
-    split_vertices(positions, triangles, &groups, |corner| {
-        corner_normals[corner]
-    })
+    split_vertices(positions, triangles, &groups, |corner| corner_normals[corner])
 }
 
 /// A mesh whose file-provided normals were checked, with how many had to be replaced.
@@ -133,12 +127,7 @@ pub fn repair_normals(
     triangles: &[[u32; 3]],
     crease_angle_degrees: f32,
 ) -> RepairedNormals {
-    let file_normal = |vertex: usize| {
-        normals
-            .get(vertex)
-            .copied()
-            .map_or(Vec3::ZERO, unit_or_zero)
-    };
+    let file_normal = |vertex: usize| normals.get(vertex).copied().map_or(Vec3::ZERO, unit_or_zero);
     let mut is_broken = vec![false; positions.len()];
     for &vertex in triangles.iter().flatten() {
         let vertex = vertex as usize;
@@ -165,10 +154,7 @@ pub fn repair_normals(
             }
         })
     };
-    RepairedNormals {
-        mesh,
-        replaced_count,
-    }
+    RepairedNormals { mesh, replaced_count }
 }
 
 /// Vertices grouped by the exact value of their position.
@@ -261,8 +247,7 @@ fn corner_normals(
         *slot += 1;
     }
 
-    let crease_cosine =
-        crease_angle_degrees.clamp(0.0, 180.0).to_radians().cos() - CREASE_COSINE_TOLERANCE;
+    let crease_cosine = crease_angle_degrees.clamp(0.0, 180.0).to_radians().cos() - CREASE_COSINE_TOLERANCE;
     let mut normals = vec![Vec3::ZERO; corner_count];
     let mut crease_sums = Vec::new();
     for group in 0..groups.group_count {
@@ -317,8 +302,7 @@ fn sum_within_crease_exact(
         if own_face != Vec3::ZERO {
             for &other in corners {
                 let other_face = face_of_corner[other];
-                if other_face != Vec3::ZERO
-                    && (other == corner || own_face.dot(other_face) >= crease_cosine)
+                if other_face != Vec3::ZERO && (other == corner || own_face.dot(other_face) >= crease_cosine)
                 {
                     sum += weight_of_corner[other] * other_face;
                 }
@@ -534,12 +518,7 @@ mod tests {
                 expected.push((p, axis * p.dot(axis).signum()));
             }
         }
-        check(
-            &positions,
-            &triangles,
-            DEFAULT_CREASE_ANGLE_DEGREES,
-            &expected,
-        );
+        check(&positions, &triangles, DEFAULT_CREASE_ANGLE_DEGREES, &expected);
     }
 
     #[test]
@@ -554,11 +533,7 @@ mod tests {
         // sphere(16) stores the seam and poles as separate vertices with equal positions;
         // grouping by position value must still weld them into one smooth vertex each.
         let sphere = super::super::primitives::sphere(16);
-        let mesh = compute_vertex_normals(
-            &sphere.positions,
-            &sphere.triangles,
-            DEFAULT_CREASE_ANGLE_DEGREES,
-        );
+        let mesh = compute_vertex_normals(&sphere.positions, &sphere.triangles, DEFAULT_CREASE_ANGLE_DEGREES);
         check_same_corners(&mesh, &sphere.positions, &sphere.triangles);
         // 15 rings of 16 plus the two poles.
         assert_eq!(mesh.positions.len(), 15 * 16 + 2);
@@ -589,13 +564,9 @@ mod tests {
             "one welded vertex at the origin"
         );
 
-        let by_angle =
-            (std::f32::consts::FRAC_PI_2 * Vec3::Z + FRAC_PI_4 * tilted_normal).normalize();
+        let by_angle = (std::f32::consts::FRAC_PI_2 * Vec3::Z + FRAC_PI_4 * tilted_normal).normalize();
         let by_area = (0.5 * Vec3::Z + 50.0 * FRAC_PI_4.sin() * tilted_normal).normalize();
-        assert!(
-            at_origin.distance(by_angle) < 1e-5,
-            "{at_origin} vs {by_angle}"
-        );
+        assert!(at_origin.distance(by_angle) < 1e-5, "{at_origin} vs {by_angle}");
         assert!(
             at_origin.distance(by_area) > 0.1,
             "area weighting would give {by_area}"
@@ -626,12 +597,7 @@ mod tests {
             (Vec3::Y, -Vec3::Z),
             (0.5 * Vec3::X, FALLBACK_NORMAL),
         ];
-        check(
-            &positions,
-            &triangles,
-            DEFAULT_CREASE_ANGLE_DEGREES,
-            &expected,
-        );
+        check(&positions, &triangles, DEFAULT_CREASE_ANGLE_DEGREES, &expected);
     }
 
     #[test]
@@ -691,12 +657,7 @@ mod tests {
     fn repair_keeps_good_normals_and_renormalises() {
         let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let normals = [Vec3::Z * 2.0, Vec3::new(0.0, 1.2, 1.6), Vec3::Z * 1e-30];
-        let repaired = repair_normals(
-            &positions,
-            &normals,
-            &[[0, 1, 2]],
-            DEFAULT_CREASE_ANGLE_DEGREES,
-        );
+        let repaired = repair_normals(&positions, &normals, &[[0, 1, 2]], DEFAULT_CREASE_ANGLE_DEGREES);
         assert_eq!(repaired.replaced_count, 0);
         check_vertices(
             &repaired.mesh,
@@ -717,12 +678,7 @@ mod tests {
         let mut normals = vec![Vec3::ZERO; 8];
         normals[3] = Vec3::new(f32::NAN, 0.0, 1.0);
         normals[5] = Vec3::splat(f32::INFINITY);
-        let repaired = repair_normals(
-            &positions,
-            &normals,
-            &triangles,
-            DEFAULT_CREASE_ANGLE_DEGREES,
-        );
+        let repaired = repair_normals(&positions, &normals, &triangles, DEFAULT_CREASE_ANGLE_DEGREES);
         assert_eq!(repaired.replaced_count, 8);
         let expected: Vec<_> = positions
             .iter()
@@ -736,16 +692,8 @@ mod tests {
     fn repair_mixes_file_and_computed_normals() {
         let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let normals = [Vec3::new(0.0, 0.6, 0.8), Vec3::ZERO];
-        let repaired = repair_normals(
-            &positions,
-            &normals,
-            &[[0, 1, 2]],
-            DEFAULT_CREASE_ANGLE_DEGREES,
-        );
-        assert_eq!(
-            repaired.replaced_count, 2,
-            "one zero and one missing normal"
-        );
+        let repaired = repair_normals(&positions, &normals, &[[0, 1, 2]], DEFAULT_CREASE_ANGLE_DEGREES);
+        assert_eq!(repaired.replaced_count, 2, "one zero and one missing normal");
         check_vertices(
             &repaired.mesh,
             &[

@@ -80,8 +80,7 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
     // OBJ is ASCII in practice; a stray Latin-1 byte in a comment or name should not
     // reject the file.
     let text = String::from_utf8_lossy(&bytes);
-    let scan =
-        scan_obj(&text).map_err(|(line, message)| MeshError::at_line(path, line, message))?;
+    let scan = scan_obj(&text).map_err(|(line, message)| MeshError::at_line(path, line, message))?;
 
     let libraries = MaterialLibraries {
         directory: path.parent().unwrap_or(Path::new("")).to_path_buf(),
@@ -100,11 +99,9 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
         ..Default::default()
     };
     let parsed = catch_unwind(AssertUnwindSafe(|| {
-        tobj::load_obj_buf(
-            &mut Cursor::new(scan.text.as_bytes()),
-            &load_options,
-            |library| libraries.load(library),
-        )
+        tobj::load_obj_buf(&mut Cursor::new(scan.text.as_bytes()), &load_options, |library| {
+            libraries.load(library)
+        })
     }));
     let (models, library_materials) = match parsed {
         Ok(Ok(parsed)) => parsed,
@@ -133,12 +130,8 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
     let crease = options.crease_angle_degrees;
     let mut mesh = match &geometry.normals {
         FileNormals::All(file_normals) => {
-            let repaired = normals::repair_normals(
-                &geometry.positions,
-                file_normals,
-                &geometry.triangles,
-                crease,
-            );
+            let repaired =
+                normals::repair_normals(&geometry.positions, file_normals, &geometry.triangles, crease);
             if repaired.replaced_count > 0 {
                 warnings.push(format!(
                     "{} vertex normals in the file were zero or not finite and were recomputed",
@@ -167,9 +160,7 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
     if !library_materials.is_empty() {
         let mut reported: Vec<&str> = Vec::new();
         for (name, line) in &scan.material_uses {
-            let defined = library_materials
-                .iter()
-                .any(|material| &material.name == name);
+            let defined = library_materials.iter().any(|material| &material.name == name);
             if !defined && !reported.contains(&name.as_str()) {
                 reported.push(name);
                 warnings.push(format!(
@@ -297,9 +288,7 @@ fn check_vertex_line(words: &[&str]) -> Result<(), String> {
         3 | 6 => Ok(()),
         4 => match number(words[3]) {
             Some(w) if w != 0.0 && coordinates.iter().all(|c| (c / w).is_finite()) => Ok(()),
-            Some(_) => {
-                Err("vertex weight w must be non-zero and keep the position finite".to_string())
-            }
+            Some(_) => Err("vertex weight w must be non-zero and keep the position finite".to_string()),
             None => Err(format!("vertex weight w '{}' is not a number", words[3])),
         },
         _ => Err("a vertex is x y z, optionally followed by w or by an r g b colour".to_string()),
@@ -307,15 +296,8 @@ fn check_vertex_line(words: &[&str]) -> Result<(), String> {
 }
 
 /// The first `count` words must be numbers (more are allowed and ignored, as `tobj` does).
-fn check_numbers<'a>(
-    words: impl Iterator<Item = &'a str>,
-    count: usize,
-    what: &str,
-) -> Result<(), String> {
-    let parsed = words
-        .take(count)
-        .filter(|w| w.parse::<f32>().is_ok())
-        .count();
+fn check_numbers<'a>(words: impl Iterator<Item = &'a str>, count: usize, what: &str) -> Result<(), String> {
+    let parsed = words.take(count).filter(|w| w.parse::<f32>().is_ok()).count();
     if parsed == count {
         Ok(())
     } else {
@@ -396,8 +378,7 @@ impl MaterialLibraries {
                 return Err(tobj::LoadError::MaterialParseError);
             }
         };
-        tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes()))
-            .inspect_err(|error| warn(error.to_string()))
+        tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes())).inspect_err(|error| warn(error.to_string()))
     }
 }
 
@@ -407,9 +388,7 @@ impl MaterialLibraries {
 fn prepare_mtl(text: &str) -> Result<Cow<'_, str>, (usize, String)> {
     let mut expanded: Vec<(usize, String)> = Vec::new();
     for (index, line) in text.lines().enumerate() {
-        let mut words = line
-            .split_whitespace()
-            .take_while(|word| !word.starts_with('#'));
+        let mut words = line.split_whitespace().take_while(|word| !word.starts_with('#'));
         let Some(keyword) = words.next() else {
             continue;
         };
@@ -423,9 +402,7 @@ fn prepare_mtl(text: &str) -> Result<Cow<'_, str>, (usize, String)> {
                     .filter(|w| w.parse::<f32>().is_ok())
                     .count();
                 match (arguments.len(), numbers) {
-                    (1, 1) => {
-                        expanded.push((index, format!("{keyword} {0} {0} {0}", arguments[0])))
-                    }
+                    (1, 1) => expanded.push((index, format!("{keyword} {0} {0} {0}", arguments[0]))),
                     (3.., 3) => {}
                     _ if matches!(arguments.first(), Some(&"spectral") | Some(&"xyz")) => {
                         return Err(fail(format!(
@@ -565,15 +542,14 @@ fn material_from_mtl(mtl: &tobj::Material, warnings: &mut Vec<String>) -> Materi
             mtl.name
         ));
     };
-    let mut colour =
-        |value: Option<[f32; 3]>, statement: &str, default: Vec3| match value.map(Vec3::from) {
-            None => default,
-            Some(colour) if colour.is_finite() => colour,
-            Some(_) => {
-                warn_not_finite(statement);
-                default
-            }
-        };
+    let mut colour = |value: Option<[f32; 3]>, statement: &str, default: Vec3| match value.map(Vec3::from) {
+        None => default,
+        Some(colour) if colour.is_finite() => colour,
+        Some(_) => {
+            warn_not_finite(statement);
+            default
+        }
+    };
     let diffuse = colour(mtl.diffuse, "Kd", defaults.diffuse);
     let ambient = colour(mtl.ambient, "Ka", diffuse);
     let specular = colour(mtl.specular, "Ks", defaults.specular);
@@ -659,8 +635,7 @@ mod tests {
 
     fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
         let path = dir.join(name);
-        std::fs::write(&path, text)
-            .unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
+        std::fs::write(&path, text).unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
         path
     }
 
@@ -769,11 +744,7 @@ mod tests {
             .materials
             .iter()
             .find(|m| m.diffuse == Vec3::ONE && m.emission == Vec3::ONE);
-        assert!(
-            white.is_some(),
-            "white has Ke 1 1 1: {:?}",
-            loaded.mesh.materials
-        );
+        assert!(white.is_some(), "white has Ke 1 1 1: {:?}", loaded.mesh.materials);
     }
 
     #[test]
@@ -821,10 +792,7 @@ mod tests {
         check_invariant(&loaded.mesh);
         assert!(loaded.mesh.normals.iter().all(|&n| n == Vec3::Z));
         assert!(
-            loaded
-                .warnings
-                .iter()
-                .any(|w| w.contains("1 vertex normals")),
+            loaded.warnings.iter().any(|w| w.contains("1 vertex normals")),
             "{:?}",
             loaded.warnings
         );
@@ -846,10 +814,7 @@ mod tests {
         let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
         assert!(loaded.mesh.materials.is_empty() && loaded.mesh.triangle_materials.is_empty());
         assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
-        assert!(
-            loaded.warnings[0].contains("nowhere.mtl")
-                && loaded.warnings[0].contains("cannot read")
-        );
+        assert!(loaded.warnings[0].contains("nowhere.mtl") && loaded.warnings[0].contains("cannot read"));
         assert_eq!(loaded.files_read.len(), 1, "the missing file was not read");
     }
 
@@ -867,11 +832,7 @@ mod tests {
             "{:?}",
             loaded.warnings
         );
-        assert_eq!(
-            loaded.files_read.len(),
-            2,
-            "a malformed library was still read"
-        );
+        assert_eq!(loaded.files_read.len(), 2, "a malformed library was still read");
     }
 
     #[test]
@@ -933,11 +894,7 @@ mod tests {
 
     #[test]
     fn out_of_range_and_zero_indices_are_errors_with_lines() {
-        check_error(
-            &format!("{TRIANGLE}f 1 2 4\n"),
-            Some(4),
-            "vertex 4, but only 3",
-        );
+        check_error(&format!("{TRIANGLE}f 1 2 4\n"), Some(4), "vertex 4, but only 3");
         check_error(&format!("{TRIANGLE}f 1 2 -4\n"), Some(4), "vertex -4");
         check_error(&format!("{TRIANGLE}f 0 1 2\n"), Some(4), "index 0");
         check_error(
@@ -975,11 +932,7 @@ mod tests {
 
     #[test]
     fn bad_positions_are_errors_with_lines() {
-        check_error(
-            "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n",
-            Some(2),
-            "not finite",
-        );
+        check_error("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", Some(2), "not finite");
         check_error("v 0 0 0\nv 1 1e39 0\n", Some(2), "not finite");
         check_error("v 0 0\n", Some(1), "three numbers");
         check_error("v 0 0 1 0\n", Some(1), "w must be non-zero");
@@ -988,11 +941,7 @@ mod tests {
     #[test]
     fn files_that_cannot_be_meshes_are_errors() {
         check_error("# nothing\nv 0 0 0\n", None, "contains no triangles");
-        check_error(
-            &format!("{TRIANGLE}l 1 2 3\n"),
-            None,
-            "contains no triangles",
-        );
+        check_error(&format!("{TRIANGLE}l 1 2 3\n"), None, "contains no triangles");
         let missing = scratch_dir().path().join("missing.obj");
         let error = load(&missing).err();
         assert_eq!(
@@ -1005,11 +954,7 @@ mod tests {
     fn polylines_and_short_faces_are_dropped_with_warnings() {
         let obj = format!("{TRIANGLE}l 1 2 3\nf 1 2\nf 1 2 3\n");
         let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
-        assert_eq!(
-            loaded.mesh.triangle_count(),
-            1,
-            "the polyline is not a triangle"
-        );
+        assert_eq!(loaded.mesh.triangle_count(), 1, "the polyline is not a triangle");
         assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
         assert!(loaded.warnings[0].contains("line 5") && loaded.warnings[1].contains("line 4"));
     }

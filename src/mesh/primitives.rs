@@ -142,10 +142,7 @@ mod tests {
         }
         let mut degenerate = 0;
         for triangle in &mesh.triangles {
-            assert!(
-                triangle.iter().all(|&v| (v as usize) < vertices),
-                "{triangle:?}"
-            );
+            assert!(triangle.iter().all(|&v| (v as usize) < vertices), "{triangle:?}");
             let [a, b, c] = triangle.map(|v| mesh.positions[v as usize]);
             let geometric = face_normal(a, b, c);
             if geometric == Vec3::ZERO {
@@ -154,10 +151,7 @@ mod tests {
             }
             for &v in triangle {
                 let vertex_normal = mesh.normals[v as usize];
-                assert!(
-                    geometric.dot(vertex_normal) > 0.0,
-                    "{triangle:?} faces inward"
-                );
+                assert!(geometric.dot(vertex_normal) > 0.0, "{triangle:?} faces inward");
             }
         }
         assert_eq!(degenerate, degenerate_triangles, "degenerate triangles");
@@ -186,11 +180,7 @@ mod tests {
             "south pole, cos φ forced to 0"
         );
         assert_eq!(at(4, 1), Vec3::new(0.0, 0.0, 1.0), "north pole");
-        assert_eq!(
-            at(2, 0),
-            Vec3::new(-1.0, 0.0, 0.0),
-            "θ = −π, sin θ forced to 0"
-        );
+        assert_eq!(at(2, 0), Vec3::new(-1.0, 0.0, 0.0), "θ = −π, sin θ forced to 0");
         assert_eq!(at(2, 4), at(2, 0), "the seam closes exactly");
         assert!(at(2, 2).distance(Vec3::X) < 1e-7, "θ = 0 on the equator");
         assert!(at(2, 3).distance(Vec3::Y) < 1e-7, "θ = π/2");

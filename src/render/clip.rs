@@ -36,6 +36,9 @@ impl ClippedPolygon {
 }
 
 /// What clipping made of a triangle.
+// The polygon is returned by value and consumed at once; boxing it would allocate per clipped
+// triangle for nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Clipped {
     /// Inside every plane: draw as it is.
@@ -50,12 +53,12 @@ pub enum Clipped {
 /// Signed distances of a clip-space point to the six planes; inside when all are `>= 0`.
 fn plane_distances(p: Vec4, guard_x: f32, guard_y: f32) -> [f32; 6] {
     [
-        p.w - p.z,             // near (reversed-Z: depth 1)
-        p.z,                   // far (depth 0)
-        p.x + guard_x * p.w,   // left guard band
-        guard_x * p.w - p.x,   // right guard band
-        p.y + guard_y * p.w,   // bottom guard band
-        guard_y * p.w - p.y,   // top guard band
+        p.w - p.z,           // near (reversed-Z: depth 1)
+        p.z,                 // far (depth 0)
+        p.x + guard_x * p.w, // left guard band
+        guard_x * p.w - p.x, // right guard band
+        p.y + guard_y * p.w, // bottom guard band
+        guard_y * p.w - p.y, // top guard band
     ]
 }
 
@@ -65,7 +68,11 @@ pub fn clip_triangle(corners: [Vec4; 3], guard_x: f32, guard_y: f32) -> Clipped 
     let distances = corners.map(|p| plane_distances(p, guard_x, guard_y));
     let mut any_outside = false;
     for plane in 0..6 {
-        let outside = distances.iter().filter(|d| !(d[plane] >= 0.0)).count();
+        // `is_nan` too: a NaN vertex is outside every plane.
+        let outside = distances
+            .iter()
+            .filter(|d| d[plane] < 0.0 || d[plane].is_nan())
+            .count();
         if outside == 3 {
             return Clipped::Outside;
         }
@@ -96,7 +103,12 @@ pub fn clip_triangle(corners: [Vec4; 3], guard_x: f32, guard_y: f32) -> Clipped 
     Clipped::Polygon(polygon)
 }
 
-fn clip_polygon_by_plane(polygon: &ClippedPolygon, plane: usize, guard_x: f32, guard_y: f32) -> ClippedPolygon {
+fn clip_polygon_by_plane(
+    polygon: &ClippedPolygon,
+    plane: usize,
+    guard_x: f32,
+    guard_y: f32,
+) -> ClippedPolygon {
     let mut output = ClippedPolygon {
         vertices: polygon.vertices,
         len: 0,
@@ -143,7 +155,11 @@ mod tests {
 
     #[test]
     fn inside_and_outside() {
-        let inside = [Vec4::new(0.0, 0.0, 0.5, 1.0), Vec4::new(0.5, 0.0, 0.5, 1.0), Vec4::new(0.0, 0.5, 0.5, 1.0)];
+        let inside = [
+            Vec4::new(0.0, 0.0, 0.5, 1.0),
+            Vec4::new(0.5, 0.0, 0.5, 1.0),
+            Vec4::new(0.0, 0.5, 0.5, 1.0),
+        ];
         assert_eq!(clip_triangle(inside, GUARD, GUARD), Clipped::Inside);
         let behind = inside.map(|p| Vec4::new(p.x, p.y, 2.0, 1.0));
         assert_eq!(clip_triangle(behind, GUARD, GUARD), Clipped::Outside);
@@ -152,13 +168,20 @@ mod tests {
     #[test]
     fn crossing_the_near_plane_keeps_the_front_part_with_weights() {
         // One vertex in front (z < w), two behind the eye (w < 0).
-        let corners = [Vec4::new(0.0, 0.0, 0.5, 1.0), Vec4::new(1.0, 0.0, 1.5, -1.0), Vec4::new(0.0, 1.0, 1.5, -1.0)];
+        let corners = [
+            Vec4::new(0.0, 0.0, 0.5, 1.0),
+            Vec4::new(1.0, 0.0, 1.5, -1.0),
+            Vec4::new(0.0, 1.0, 1.5, -1.0),
+        ];
         let Clipped::Polygon(polygon) = clip_triangle(corners, GUARD, GUARD) else {
             panic!("expected a polygon")
         };
         assert_eq!(polygon.vertices().len(), 3);
         for v in polygon.vertices() {
-            assert!(v.position.z <= v.position.w + 1e-6 && v.position.z >= 0.0 && v.position.w > 0.0, "{v:?}");
+            assert!(
+                v.position.z <= v.position.w + 1e-6 && v.position.z >= 0.0 && v.position.w > 0.0,
+                "{v:?}"
+            );
             assert!((v.weights.element_sum() - 1.0).abs() < 1e-6);
             // Weights reproduce the clip position from the original corners.
             let rebuilt = corners[0] * v.weights.x + corners[1] * v.weights.y + corners[2] * v.weights.z;
@@ -168,7 +191,11 @@ mod tests {
 
     #[test]
     fn a_quad_comes_out_when_one_vertex_is_behind() {
-        let corners = [Vec4::new(0.0, 0.0, 1.5, -1.0), Vec4::new(1.0, 0.0, 0.5, 1.0), Vec4::new(0.0, 1.0, 0.5, 1.0)];
+        let corners = [
+            Vec4::new(0.0, 0.0, 1.5, -1.0),
+            Vec4::new(1.0, 0.0, 0.5, 1.0),
+            Vec4::new(0.0, 1.0, 0.5, 1.0),
+        ];
         let Clipped::Polygon(polygon) = clip_triangle(corners, GUARD, GUARD) else {
             panic!("expected a polygon")
         };
@@ -177,7 +204,11 @@ mod tests {
 
     #[test]
     fn nan_is_outside_not_a_panic() {
-        let corners = [Vec4::splat(f32::NAN), Vec4::new(1.0, 0.0, 0.5, 1.0), Vec4::new(0.0, 1.0, 0.5, 1.0)];
+        let corners = [
+            Vec4::splat(f32::NAN),
+            Vec4::new(1.0, 0.0, 0.5, 1.0),
+            Vec4::new(0.0, 1.0, 0.5, 1.0),
+        ];
         let _ = clip_triangle(corners, GUARD, GUARD);
     }
 }

@@ -116,7 +116,11 @@ pub fn build_frame(scene: &Scene, debug_view: Option<DebugView>) -> Frame {
         triangles: Vec::with_capacity(scene.triangle_count()),
         raster: Vec::new(),
         materials: Vec::new(),
-        lights: scene.lights.iter().map(|l| shading_light(l, scene.camera.eye)).collect(),
+        lights: scene
+            .lights
+            .iter()
+            .map(|l| shading_light(l, scene.camera.eye))
+            .collect(),
         ambient_light: scene.ambient_light,
         viewer: camera.viewer,
         forward: camera.forward.as_vec3(),
@@ -185,10 +189,22 @@ fn reversed_z_perspective(fov_y: f64, aspect: f64, near: f64, far: f64) -> DMat4
     let focal = 1.0 / (fov_y / 2.0).tan();
     let depth_scale = near / (far - near);
     DMat4::from_cols_array(&[
-        focal / aspect, 0.0, 0.0, 0.0,
-        0.0, focal, 0.0, 0.0,
-        0.0, 0.0, depth_scale, -1.0,
-        0.0, 0.0, far * depth_scale, 0.0,
+        focal / aspect,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        focal,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        depth_scale,
+        -1.0,
+        0.0,
+        0.0,
+        far * depth_scale,
+        0.0,
     ])
 }
 
@@ -196,10 +212,22 @@ fn reversed_z_perspective(fov_y: f64, aspect: f64, near: f64, far: f64) -> DMat4
 fn reversed_z_orthographic(width: f64, height: f64, near: f64, far: f64) -> DMat4 {
     let depth_scale = 1.0 / (far - near);
     DMat4::from_cols_array(&[
-        2.0 / width, 0.0, 0.0, 0.0,
-        0.0, 2.0 / height, 0.0, 0.0,
-        0.0, 0.0, depth_scale, 0.0,
-        0.0, 0.0, far * depth_scale, 1.0,
+        2.0 / width,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        2.0 / height,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        depth_scale,
+        0.0,
+        0.0,
+        0.0,
+        far * depth_scale,
+        1.0,
     ])
 }
 
@@ -423,7 +451,8 @@ fn process_triangle(
             weights,
         }
     };
-    let setup = |corners: [ScreenVertex; 3]| setup_triangle(corners, width, height, input.source, back_facing);
+    let setup =
+        |corners: [ScreenVertex; 3]| setup_triangle(corners, width, height, input.source, back_facing);
     match clip_triangle(clip, viewport.guard_x, viewport.guard_y) {
         Clipped::Outside => {}
         Clipped::Inside => {
@@ -431,8 +460,11 @@ fn process_triangle(
             raster.extend(setup(corners));
         }
         Clipped::Polygon(polygon) => {
-            let projected: Vec<ScreenVertex> =
-                polygon.vertices().iter().map(|v| project(v.position, v.weights)).collect();
+            let projected: Vec<ScreenVertex> = polygon
+                .vertices()
+                .iter()
+                .map(|v| project(v.position, v.weights))
+                .collect();
             for i in 1..projected.len().saturating_sub(1) {
                 raster.extend(setup([projected[0], projected[i], projected[i + 1]]));
             }
@@ -477,7 +509,11 @@ mod tests {
     #[test]
     fn facing_sign_survives_a_vertex_behind_the_eye() {
         // Counter-clockwise seen from the eye, one vertex behind it (w < 0).
-        let front = [Vec4::new(-1.0, -1.0, 0.5, 1.0), Vec4::new(1.0, -1.0, 0.5, 1.0), Vec4::new(0.0, 5.0, 0.0, -1.0)];
+        let front = [
+            Vec4::new(-1.0, -1.0, 0.5, 1.0),
+            Vec4::new(1.0, -1.0, 0.5, 1.0),
+            Vec4::new(0.0, 5.0, 0.0, -1.0),
+        ];
         let a = homogeneous_facing([front[0], front[1], Vec4::new(0.0, 1.0, 0.5, 1.0)]);
         assert!(a > 0.0);
         let back = [front[0], front[2], front[1]];

@@ -168,7 +168,11 @@ fn normalize_depth(framebuffer: &mut FrameBuffer) {
     let range = farthest - nearest;
     for (color, &covered) in framebuffer.color.iter_mut().zip(&framebuffer.covered) {
         if covered {
-            let shade = if range > 0.0 { 1.0 - (color.x - nearest) / range } else { 1.0 };
+            let shade = if range > 0.0 {
+                1.0 - (color.x - nearest) / range
+            } else {
+                1.0
+            };
             *color = Vec3::splat(shade);
         }
     }

@@ -161,7 +161,7 @@ fn pixel_bounds(x: [i32; 3], y: [i32; 3], width: u32, height: u32) -> Option<Pix
     let y0 = first(*y.iter().min()?).max(0);
     let x1 = (last(*x.iter().max()?) + 1).min(i64::from(width));
     let y1 = (last(*y.iter().max()?) + 1).min(i64::from(height));
-    (x0 < x1 && y0 < y1).then(|| PixelRect {
+    (x0 < x1 && y0 < y1).then_some(PixelRect {
         x0: x0 as u32,
         y0: y0 as u32,
         x1: x1 as u32,
@@ -248,7 +248,11 @@ pub fn rasterize_tile(rect: PixelRect, triangles: &[RasterTriangle], indices: &[
 /// Calls `visit(px, py, depth)` for every pixel of `rect` whose centre `triangle` covers, row by
 /// row. This is the one coverage loop: the tile rasterizer and the coverage tests both use it.
 #[inline]
-pub fn for_each_covered_pixel(triangle: &RasterTriangle, rect: PixelRect, mut visit: impl FnMut(u32, u32, f32)) {
+pub fn for_each_covered_pixel(
+    triangle: &RasterTriangle,
+    rect: PixelRect,
+    mut visit: impl FnMut(u32, u32, f32),
+) {
     let Some(area) = triangle.bounds.intersect(&rect) else {
         return;
     };
@@ -293,7 +297,12 @@ mod tests {
     }
 
     fn coverage(triangles: &[RasterTriangle], width: u32, height: u32) -> Vec<u32> {
-        let rect = PixelRect { x0: 0, y0: 0, x1: width, y1: height };
+        let rect = PixelRect {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        };
         let mut counts = vec![0; (width * height) as usize];
         for triangle in triangles {
             for_each_covered_pixel(triangle, rect, |x, y, _| counts[(y * width + x) as usize] += 1);
@@ -304,7 +313,12 @@ mod tests {
     #[test]
     fn two_triangles_of_a_square_cover_each_pixel_once() {
         // The diagonal passes exactly through pixel centres: the fill rule decides.
-        let (a, b, c, d) = (vertex(0.0, 0.0), vertex(8.0, 0.0), vertex(8.0, 8.0), vertex(0.0, 8.0));
+        let (a, b, c, d) = (
+            vertex(0.0, 0.0),
+            vertex(8.0, 0.0),
+            vertex(8.0, 8.0),
+            vertex(0.0, 8.0),
+        );
         let triangles: Vec<_> = [[a, b, c], [a, c, d]]
             .into_iter()
             .filter_map(|t| setup_triangle(t, 8, 8, 0, false))
@@ -315,7 +329,12 @@ mod tests {
     #[test]
     fn pixel_centre_on_a_vertical_left_edge_is_inside_right_edge_is_not() {
         // The square [0.5, 2.5] × [0.5, 2.5] has pixel centres exactly on all four sides.
-        let (a, b, c, d) = (vertex(0.5, 0.5), vertex(2.5, 0.5), vertex(2.5, 2.5), vertex(0.5, 2.5));
+        let (a, b, c, d) = (
+            vertex(0.5, 0.5),
+            vertex(2.5, 0.5),
+            vertex(2.5, 2.5),
+            vertex(0.5, 2.5),
+        );
         let triangles: Vec<_> = [[a, b, c], [a, c, d]]
             .into_iter()
             .filter_map(|t| setup_triangle(t, 4, 4, 0, false))
@@ -333,21 +352,67 @@ mod tests {
 
     #[test]
     fn zero_area_triangles_are_dropped() {
-        assert!(setup_triangle([vertex(0.0, 0.0), vertex(4.0, 4.0), vertex(8.0, 8.0)], 8, 8, 0, false).is_none());
+        assert!(
+            setup_triangle(
+                [vertex(0.0, 0.0), vertex(4.0, 4.0), vertex(8.0, 8.0)],
+                8,
+                8,
+                0,
+                false
+            )
+            .is_none()
+        );
         assert!(setup_triangle([vertex(1.0, 1.0); 3], 8, 8, 0, false).is_none());
     }
 
     #[test]
     fn bounds_cover_only_pixel_centres_inside_the_box() {
-        let t = setup_triangle([vertex(0.6, 0.6), vertex(3.4, 0.6), vertex(0.6, 3.4)], 8, 8, 0, false).unwrap();
-        assert_eq!(t.bounds, PixelRect { x0: 1, y0: 1, x1: 3, y1: 3 });
-        let edge = setup_triangle([vertex(0.5, 0.5), vertex(3.5, 0.5), vertex(0.5, 3.5)], 8, 8, 0, false).unwrap();
-        assert_eq!(edge.bounds, PixelRect { x0: 0, y0: 0, x1: 4, y1: 4 });
+        let t = setup_triangle(
+            [vertex(0.6, 0.6), vertex(3.4, 0.6), vertex(0.6, 3.4)],
+            8,
+            8,
+            0,
+            false,
+        )
+        .unwrap();
+        assert_eq!(
+            t.bounds,
+            PixelRect {
+                x0: 1,
+                y0: 1,
+                x1: 3,
+                y1: 3
+            }
+        );
+        let edge = setup_triangle(
+            [vertex(0.5, 0.5), vertex(3.5, 0.5), vertex(0.5, 3.5)],
+            8,
+            8,
+            0,
+            false,
+        )
+        .unwrap();
+        assert_eq!(
+            edge.bounds,
+            PixelRect {
+                x0: 0,
+                y0: 0,
+                x1: 4,
+                y1: 4
+            }
+        );
     }
 
     #[test]
     fn edge_values_sum_to_the_area() {
-        let t = setup_triangle([vertex(0.3, 0.2), vertex(7.1, 1.9), vertex(2.2, 6.6)], 8, 8, 0, false).unwrap();
+        let t = setup_triangle(
+            [vertex(0.3, 0.2), vertex(7.1, 1.9), vertex(2.2, 6.6)],
+            8,
+            8,
+            0,
+            false,
+        )
+        .unwrap();
         let [e0, e1, e2] = edge_values(&t, 3, 3);
         assert!(((e0 + e1 + e2) as f32 * t.inv_area - 1.0).abs() < 1e-6);
     }

@@ -58,7 +58,13 @@ pub fn source_weights(triangle: &RasterTriangle, px: u32, py: u32) -> Vec3 {
     triangle.weights[0] * corner.x + triangle.weights[1] * corner.y + triangle.weights[2] * corner.z
 }
 
-fn shade_pixel(frame: &Frame, raster: &RasterTriangle, px: u32, py: u32, back_colors: &mut BackColorCache) -> Vec3 {
+fn shade_pixel(
+    frame: &Frame,
+    raster: &RasterTriangle,
+    px: u32,
+    py: u32,
+    back_colors: &mut BackColorCache,
+) -> Vec3 {
     let weights = source_weights(raster, px, py);
     let triangle = &frame.triangles[raster.source as usize];
     let [a, b, c] = triangle.vertices.map(|v| &frame.vertices[v as usize]);

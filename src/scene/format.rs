@@ -60,7 +60,7 @@ pub struct ImageFile {
 }
 
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "Camera", deny_unknown_fields)]
 pub enum CameraFile {
     Perspective {
         eye: Option<Vec3File>,
@@ -84,7 +84,7 @@ pub enum CameraFile {
 
 /// The lighting model names of the file.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "LightingModel", deny_unknown_fields)]
 pub enum LightingModelFile {
     Phong,
     BlinnPhong,
@@ -122,7 +122,7 @@ pub struct AttenuationFile {
 }
 
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "Light", deny_unknown_fields)]
 pub enum LightFile {
     Directional {
         /// The direction the light travels in.
@@ -150,12 +150,10 @@ pub enum LightFile {
 }
 
 #[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "Mesh", deny_unknown_fields)]
 pub enum MeshFile {
     /// MATLAB's `sphere(N)`: a unit sphere around the origin, poles on ±Z.
-    Sphere {
-        segments: Option<u32>,
-    },
+    Sphere { segments: Option<u32> },
     /// The square [-1, 1]² in the XZ plane, facing +Y.
     Plane,
     /// The cube [-1, 1]³.
@@ -167,7 +165,7 @@ pub enum MeshFile {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "Shading", deny_unknown_fields)]
 pub enum ShadingFile {
     Flat,
     Gouraud,
@@ -175,7 +173,7 @@ pub enum ShadingFile {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(rename = "BackFaces", deny_unknown_fields)]
 pub enum BackFacesFile {
     /// Lit as seen from behind: the normal is flipped (two-sided lighting).
     Lit,
@@ -308,7 +306,10 @@ mod tests {
         let scene = parse("(objects: [(mesh: Sphere())])").unwrap();
         assert_eq!(scene.objects.len(), 1);
         assert!(scene.camera.is_none() && scene.lights.is_none());
-        assert!(matches!(scene.objects[0].mesh, MeshFile::Sphere { segments: None }));
+        assert!(matches!(
+            scene.objects[0].mesh,
+            MeshFile::Sphere { segments: None }
+        ));
     }
 
     #[test]

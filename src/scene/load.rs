@@ -27,8 +27,7 @@ use crate::scene::format::{
 use crate::scene::locate::{PathSegment, locate, locate_keys};
 use crate::scene::presets::{self, DEFAULT_RECIPE, MaterialRecipe};
 use crate::scene::{
-    Attenuation, BackFaces, Camera, ImageSettings, Light, LightingModel, Object, Projection, Scene,
-    Shading,
+    Attenuation, BackFaces, Camera, ImageSettings, Light, LightingModel, Object, Projection, Scene, Shading,
 };
 
 /// Image size when the scene gives none.
@@ -187,7 +186,13 @@ impl Loader<'_> {
         let bounds = scene_bounds(&objects);
         let camera = self.camera(file.camera.as_ref(), source, bounds, image);
         let ambient = match file.ambient {
-            Some(ambient) => self.color(ambient, At { source, path: &ron_path!["ambient"] }),
+            Some(ambient) => self.color(
+                ambient,
+                At {
+                    source,
+                    path: &ron_path!["ambient"],
+                },
+            ),
             None => Some(DEFAULT_AMBIENT),
         };
         let lights = match (&file.lights, camera) {
@@ -298,7 +303,15 @@ impl Loader<'_> {
         let mut ok = true;
         for (i, &component) in value.iter().enumerate() {
             let path = [at.path, &[PathSegment::Index(i)]].concat();
-            ok &= self.finite(component, At { source: at.source, path: &path }).is_some();
+            ok &= self
+                .finite(
+                    component,
+                    At {
+                        source: at.source,
+                        path: &path,
+                    },
+                )
+                .is_some();
         }
         ok.then(|| DVec3::from(value))
     }
@@ -306,8 +319,13 @@ impl Loader<'_> {
     fn direction(&mut self, value: [f64; 3], at: At) -> Option<DVec3> {
         let vector = self.vector(value, at)?;
         let length = vector.length();
-        if !(length > 1e-12) || !length.is_finite() {
-            self.error(at, "a direction cannot be the zero vector", Some("zero length"), None);
+        if length.is_nan() || length <= 1e-12 || !length.is_finite() {
+            self.error(
+                at,
+                "a direction cannot be the zero vector",
+                Some("zero length"),
+                None,
+            );
             return None;
         }
         Some(vector / length)
@@ -317,7 +335,12 @@ impl Loader<'_> {
     fn color(&mut self, value: [f32; 3], at: At) -> Option<Vec3> {
         let vector = self.vector(value.map(f64::from), at)?;
         if vector.min_element() < 0.0 {
-            self.error(at, "colour components cannot be negative", Some("negative component"), None);
+            self.error(
+                at,
+                "colour components cannot be negative",
+                Some("negative component"),
+                None,
+            );
             return None;
         }
         Some(vector.as_vec3())
@@ -332,7 +355,12 @@ impl Loader<'_> {
             } else {
                 format!("between {min} and {max}")
             };
-            self.error(at, format!("{what} must be {range}, not {value}"), Some("out of range"), None);
+            self.error(
+                at,
+                format!("{what} must be {range}, not {value}"),
+                Some("out of range"),
+                None,
+            );
             return None;
         }
         Some(value)
@@ -348,10 +376,18 @@ impl Loader<'_> {
         stack: &mut Vec<PathBuf>,
         table: &mut HashMap<String, MaterialDefinition>,
     ) {
-        let base = self.sources.path(source).parent().map(Path::to_path_buf).unwrap_or_default();
+        let base = self
+            .sources
+            .path(source)
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
         for (index, include) in includes.iter().enumerate() {
             let at_path = [path_prefix, &ron_path!["include", index]].concat();
-            let at = At { source, path: &at_path };
+            let at = At {
+                source,
+                path: &at_path,
+            };
             let path = base.join(include);
             let key = canonical(&path);
             if stack.contains(&key) {
@@ -364,7 +400,12 @@ impl Loader<'_> {
                 continue;
             }
             if stack.len() > MAX_INCLUDE_DEPTH {
-                self.error(at, format!("includes nest deeper than {MAX_INCLUDE_DEPTH} files"), None, None);
+                self.error(
+                    at,
+                    format!("includes nest deeper than {MAX_INCLUDE_DEPTH} files"),
+                    None,
+                    None,
+                );
                 continue;
             }
             let Some(library_source) = self.read_source(&path, Some(at)) else {
@@ -392,9 +433,11 @@ impl Loader<'_> {
         for (name, material) in &materials.0 {
             if !seen.insert(name.clone()) {
                 let keys = locate_keys(self.sources.text(source), &map_path, name);
-                let mut diagnostic =
-                    Diagnostic::error(self.sources.path(source), format!("material `{name}` is defined twice"))
-                        .with_hint("rename one of them or remove the duplicate");
+                let mut diagnostic = Diagnostic::error(
+                    self.sources.path(source),
+                    format!("material `{name}` is defined twice"),
+                )
+                .with_hint("rename one of them or remove the duplicate");
                 if let Some(span) = keys.get(1).cloned() {
                     diagnostic = diagnostic.at(source, span).with_label("second definition");
                 }
@@ -414,7 +457,10 @@ impl Loader<'_> {
     }
 
     /// Resolves every table material (following `base` chains) to a recipe.
-    fn resolve_table(&mut self, table: &HashMap<String, MaterialDefinition>) -> HashMap<String, MaterialRecipe> {
+    fn resolve_table(
+        &mut self,
+        table: &HashMap<String, MaterialDefinition>,
+    ) -> HashMap<String, MaterialRecipe> {
         let mut resolved = HashMap::new();
         let mut names: Vec<&String> = table.keys().collect();
         names.sort(); // a stable order for the diagnostics
@@ -440,13 +486,28 @@ impl Loader<'_> {
             return presets::preset(&key);
         };
         if chain.contains(&key) {
-            let at = At { source: definition.source, path: &definition.path };
-            self.error(at, format!("material `{name}` is its own base"), Some("`base` chain loops"), None);
+            let at = At {
+                source: definition.source,
+                path: &definition.path,
+            };
+            self.error(
+                at,
+                format!("material `{name}` is its own base"),
+                Some("`base` chain loops"),
+                None,
+            );
             return None;
         }
         chain.push(key.clone());
         let definition = definition.clone();
-        let recipe = self.recipe(&definition.material, definition.source, &definition.path, table, resolved, chain);
+        let recipe = self.recipe(
+            &definition.material,
+            definition.source,
+            &definition.path,
+            table,
+            resolved,
+            chain,
+        );
         chain.pop();
         if let Some(recipe) = recipe {
             resolved.insert(key, recipe);
@@ -475,7 +536,14 @@ impl Loader<'_> {
                         return None; // the base itself failed and said why
                     }
                     let at_path = field("base");
-                    self.unknown_material(base, At { source, path: &at_path }, table);
+                    self.unknown_material(
+                        base,
+                        At {
+                            source,
+                            path: &at_path,
+                        },
+                        table,
+                    );
                     return None;
                 }
             },
@@ -484,19 +552,39 @@ impl Loader<'_> {
         let mut strength = |loader: &mut Self, value: Option<f32>, name: &str, max: f64| -> Option<f32> {
             let value = value?;
             let at_path = field(name);
-            let checked = loader.ranged(f64::from(value), 0.0, max, At { source, path: &at_path }, &format!("`{name}`"));
+            let checked = loader.ranged(
+                f64::from(value),
+                0.0,
+                max,
+                At {
+                    source,
+                    path: &at_path,
+                },
+                &format!("`{name}`"),
+            );
             ok &= checked.is_some();
             checked.map(|v| v as f32)
         };
         let ka = strength(self, material.ka, "ka", f64::INFINITY);
         let kd = strength(self, material.kd, "kd", f64::INFINITY);
         let ks = strength(self, material.ks, "ks", f64::INFINITY);
-        let scr = strength(self, material.specular_color_reflectance, "specular_color_reflectance", 1.0);
+        let scr = strength(
+            self,
+            material.specular_color_reflectance,
+            "specular_color_reflectance",
+            1.0,
+        );
         let shininess = strength(self, material.shininess, "shininess", f64::INFINITY);
         let mut color_field = |loader: &mut Self, value: Option<[f32; 3]>, name: &str| -> Option<Vec3> {
             let value = value?;
             let at_path = field(name);
-            let checked = loader.color(value, At { source, path: &at_path });
+            let checked = loader.color(
+                value,
+                At {
+                    source,
+                    path: &at_path,
+                },
+            );
             ok &= checked.is_some();
             checked
         };
@@ -516,17 +604,20 @@ impl Loader<'_> {
             ("ks", ks.is_some()),
             ("specular_color_reflectance", scr.is_some()),
         ];
-        if recipe.is_fully_explicit() && ambient.is_none() && diffuse.is_none() && specular.is_none() {
-            if let Some((name, _)) = matlab_style.iter().find(|(_, set)| *set) {
-                let at_path = field(name);
-                self.error(
-                    At { source, path: &at_path },
-                    format!("`{name}` has no effect: the base material sets `ambient`, `diffuse` and `specular` directly"),
-                    Some("ignored"),
-                    Some("set `ambient`, `diffuse` or `specular` instead, or use a MATLAB-style base such as \"shiny\"".into()),
-                );
-                return None;
-            }
+        if recipe.is_fully_explicit()
+            && ambient.is_none()
+            && diffuse.is_none()
+            && specular.is_none()
+            && let Some((name, _)) = matlab_style.iter().find(|(_, set)| *set)
+        {
+            let at_path = field(name);
+            self.error(
+                At { source, path: &at_path },
+                format!("`{name}` has no effect: the base material sets `ambient`, `diffuse` and `specular` directly"),
+                Some("ignored"),
+                Some("set `ambient`, `diffuse` or `specular` instead, or use a MATLAB-style base such as \"shiny\"".into()),
+            );
+            return None;
         }
         recipe.color = color.unwrap_or(recipe.color);
         recipe.ka = ka.unwrap_or(recipe.ka);
@@ -565,34 +656,55 @@ impl Loader<'_> {
                 presets::preset_names().collect::<Vec<_>>().join(", ")
             ),
         };
-        self.error(at, format!("unknown material `{name}`"), Some("not defined in this scene, its includes, or the presets"), Some(hint));
+        self.error(
+            at,
+            format!("unknown material `{name}`"),
+            Some("not defined in this scene, its includes, or the presets"),
+            Some(hint),
+        );
     }
 
     // ----- image, objects -----
 
     fn image(&mut self, file: &SceneFile, source: SourceId, options: &LoadOptions) -> Option<ImageSettings> {
         let max = f64::from(crate::render::MAX_IMAGE_DIMENSION);
-        let size = |loader: &mut Self, value: Option<u32>, overridden: Option<u32>, default: u32, name: &str| {
-            if let Some(value) = overridden {
-                if value == 0 || f64::from(value) > max {
-                    loader.diagnostics.push(Diagnostic::error(
-                        &loader.scene_path,
-                        format!("--{name} must be between 1 and {max}, not {value}"),
-                    ));
-                    return None;
+        let size =
+            |loader: &mut Self, value: Option<u32>, overridden: Option<u32>, default: u32, name: &str| {
+                if let Some(value) = overridden {
+                    if value == 0 || f64::from(value) > max {
+                        loader.diagnostics.push(Diagnostic::error(
+                            &loader.scene_path,
+                            format!("--{name} must be between 1 and {max}, not {value}"),
+                        ));
+                        return None;
+                    }
+                    return Some(value);
                 }
-                return Some(value);
-            }
-            let at_path = ron_path!["image", name];
-            let value = value.unwrap_or(default);
-            loader
-                .ranged(f64::from(value), 1.0, max, At { source, path: &at_path }, &format!("image {name}"))
-                .map(|v| v as u32)
-        };
+                let at_path = ron_path!["image", name];
+                let value = value.unwrap_or(default);
+                loader
+                    .ranged(
+                        f64::from(value),
+                        1.0,
+                        max,
+                        At {
+                            source,
+                            path: &at_path,
+                        },
+                        &format!("image {name}"),
+                    )
+                    .map(|v| v as u32)
+            };
         let width = size(self, file.image.width, options.width, DEFAULT_WIDTH, "width");
         let height = size(self, file.image.height, options.height, DEFAULT_HEIGHT, "height");
         let background = match file.image.background {
-            Some(color) => self.color(color, At { source, path: &ron_path!["image", "background"] }),
+            Some(color) => self.color(
+                color,
+                At {
+                    source,
+                    path: &ron_path!["image", "background"],
+                },
+            ),
             None => Some(Vec3::ZERO),
         };
         Some(ImageSettings {
@@ -614,7 +726,16 @@ impl Loader<'_> {
         let field = |name: &str| ron_path!["objects", index, name];
         let crease_angle = match object.crease_angle {
             Some(angle) => self
-                .ranged(f64::from(angle), 0.0, 180.0, At { source, path: &field("crease_angle") }, "`crease_angle`")
+                .ranged(
+                    f64::from(angle),
+                    0.0,
+                    180.0,
+                    At {
+                        source,
+                        path: &field("crease_angle"),
+                    },
+                    "`crease_angle`",
+                )
                 .map(|a| a as f32),
             None => Some(crate::mesh::normals::DEFAULT_CREASE_ANGLE_DEGREES),
         };
@@ -625,12 +746,21 @@ impl Loader<'_> {
             Some(MaterialRefFile::Named(name)) => {
                 let key = presets::normalize_name(name);
                 match materials.get(&key).copied().or_else(|| {
-                    (!table.contains_key(&key)).then(|| presets::preset(&key)).flatten()
+                    (!table.contains_key(&key))
+                        .then(|| presets::preset(&key))
+                        .flatten()
                 }) {
                     Some(recipe) => Some(Some(recipe.resolve())),
                     None if table.contains_key(&key) => None, // its definition failed and said why
                     None => {
-                        self.unknown_material(name, At { source, path: &field("material") }, table);
+                        self.unknown_material(
+                            name,
+                            At {
+                                source,
+                                path: &field("material"),
+                            },
+                            table,
+                        );
                         None
                     }
                 }
@@ -638,8 +768,15 @@ impl Loader<'_> {
             Some(MaterialRefFile::Inline(material)) => {
                 let mut resolved = materials.clone();
                 let mut chain = Vec::new();
-                self.recipe(material, source, &field("material"), table, &mut resolved, &mut chain)
-                    .map(|recipe| Some(recipe.resolve()))
+                self.recipe(
+                    material,
+                    source,
+                    &field("material"),
+                    table,
+                    &mut resolved,
+                    &mut chain,
+                )
+                .map(|recipe| Some(recipe.resolve()))
             }
         };
         let shading = options.shading.unwrap_or(match object.shading {
@@ -665,15 +802,30 @@ impl Loader<'_> {
     fn transform(&mut self, object: &format::ObjectFile, index: usize, source: SourceId) -> Option<DMat4> {
         let field = |name: &str| ron_path!["objects", index, name];
         let translate = match object.translate {
-            Some(v) => self.vector(v, At { source, path: &field("translate") }),
+            Some(v) => self.vector(
+                v,
+                At {
+                    source,
+                    path: &field("translate"),
+                },
+            ),
             None => Some(DVec3::ZERO),
         };
         let rotate = match object.rotate {
-            Some(v) => self.vector(v, At { source, path: &field("rotate") }),
+            Some(v) => self.vector(
+                v,
+                At {
+                    source,
+                    path: &field("rotate"),
+                },
+            ),
             None => Some(DVec3::ZERO),
         };
         let scale_path = field("scale");
-        let scale_at = At { source, path: &scale_path };
+        let scale_at = At {
+            source,
+            path: &scale_path,
+        };
         let scale = match object.scale {
             None => Some(DVec3::ONE),
             Some(ScaleFile::Uniform(s)) => self.finite(s, scale_at).map(DVec3::splat),
@@ -681,7 +833,12 @@ impl Loader<'_> {
         };
         let scale = scale?;
         if scale.abs().min_element() < 1e-12 {
-            self.error(scale_at, "scale cannot be zero", Some("flattens the object to nothing"), None);
+            self.error(
+                scale_at,
+                "scale cannot be zero",
+                Some("flattens the object to nothing"),
+                None,
+            );
             return None;
         }
         let rotate = rotate?;
@@ -691,28 +848,57 @@ impl Loader<'_> {
             rotate.y.to_radians(),
             rotate.x.to_radians(),
         );
-        Some(DMat4::from_scale_rotation_translation(scale, rotation, translate?))
+        Some(DMat4::from_scale_rotation_translation(
+            scale, rotation, translate?,
+        ))
     }
 
-    fn mesh(&mut self, mesh: &MeshFile, index: usize, source: SourceId, crease_angle: f32) -> Option<Arc<Mesh>> {
+    fn mesh(
+        &mut self,
+        mesh: &MeshFile,
+        index: usize,
+        source: SourceId,
+        crease_angle: f32,
+    ) -> Option<Arc<Mesh>> {
         let mesh_path = ron_path!["objects", index, "mesh"];
         match mesh {
             MeshFile::Sphere { segments } => {
                 let segments = segments.unwrap_or(DEFAULT_SPHERE_SEGMENTS);
                 let at_path = [mesh_path.as_slice(), &ron_path!["segments"]].concat();
-                let at = At { source, path: &at_path };
-                self.ranged(f64::from(segments), 3.0, f64::from(MAX_SPHERE_SEGMENTS), at, "sphere `segments`")?;
+                let at = At {
+                    source,
+                    path: &at_path,
+                };
+                self.ranged(
+                    f64::from(segments),
+                    3.0,
+                    f64::from(MAX_SPHERE_SEGMENTS),
+                    at,
+                    "sphere `segments`",
+                )?;
                 Some(Arc::new(primitives::sphere(segments)))
             }
             MeshFile::Plane => Some(Arc::new(primitives::plane())),
             MeshFile::Cube => Some(Arc::new(primitives::cube())),
             MeshFile::Obj(file) | MeshFile::Gltf(file) => {
                 let at_path = [mesh_path.as_slice(), &ron_path![0]].concat();
-                let at = At { source, path: &at_path };
-                let base = self.sources.path(source).parent().map(Path::to_path_buf).unwrap_or_default();
+                let at = At {
+                    source,
+                    path: &at_path,
+                };
+                let base = self
+                    .sources
+                    .path(source)
+                    .parent()
+                    .map(Path::to_path_buf)
+                    .unwrap_or_default();
                 let path = base.join(file);
                 if !path.is_file() {
-                    let why = if path.is_dir() { "is a directory" } else { "does not exist" };
+                    let why = if path.is_dir() {
+                        "is a directory"
+                    } else {
+                        "does not exist"
+                    };
                     self.error(
                         at,
                         format!("mesh file `{}` {why}", path.display()),
@@ -734,17 +920,32 @@ impl Loader<'_> {
             crease_angle_bits: crease_angle.to_bits(),
         };
         let fresh = self.cache.entries.get(&key).filter(|cached| {
-            cached.stamps.iter().all(|(file, stamp)| modified(file) == *stamp && stamp.is_some())
+            cached
+                .stamps
+                .iter()
+                .all(|(file, stamp)| modified(file) == *stamp && stamp.is_some())
         });
         let (mesh, files_read, warnings) = match fresh {
-            Some(cached) => (cached.mesh.clone(), cached.files_read.clone(), cached.warnings.clone()),
+            Some(cached) => (
+                cached.mesh.clone(),
+                cached.files_read.clone(),
+                cached.warnings.clone(),
+            ),
             None => {
                 let options = MeshOptions {
                     crease_angle_degrees: crease_angle,
                 };
-                let loaded = if is_obj { load_obj(path, &options) } else { load_gltf(path, &options) };
+                let loaded = if is_obj {
+                    load_obj(path, &options)
+                } else {
+                    load_gltf(path, &options)
+                };
                 match loaded {
-                    Ok(LoadedMesh { mesh, files_read, warnings }) => {
+                    Ok(LoadedMesh {
+                        mesh,
+                        files_read,
+                        warnings,
+                    }) => {
                         let mesh = Arc::new(mesh);
                         let mut stamped: Vec<PathBuf> = files_read.clone();
                         if !stamped.iter().any(|f| f == path) {
@@ -785,8 +986,11 @@ impl Loader<'_> {
         self.diagnostics.push(diagnostic);
         // Also say which object asked for it, so the user knows where the mesh is used.
         let used_here = self.locate(
-            Diagnostic::error(self.sources.path(at.source), format!("mesh `{}` could not be loaded", error.path.display()))
-                .with_label("used here"),
+            Diagnostic::error(
+                self.sources.path(at.source),
+                format!("mesh `{}` could not be loaded", error.path.display()),
+            )
+            .with_label("used here"),
             at,
         );
         self.diagnostics.push(used_here);
@@ -794,12 +998,32 @@ impl Loader<'_> {
 
     // ----- camera and lights -----
 
-    fn camera(&mut self, camera: Option<&CameraFile>, source: SourceId, bounds: Bounds, image: Option<ImageSettings>) -> Option<Camera> {
+    fn camera(
+        &mut self,
+        camera: Option<&CameraFile>,
+        source: SourceId,
+        bounds: Bounds,
+        image: Option<ImageSettings>,
+    ) -> Option<Camera> {
         let field = |name: &str| ron_path!["camera", name];
         let (eye, target, up, near, far) = match camera {
             None => (None, None, None, None, None),
-            Some(CameraFile::Perspective { eye, target, up, near, far, .. })
-            | Some(CameraFile::Orthographic { eye, target, up, near, far, .. }) => (*eye, *target, *up, *near, *far),
+            Some(CameraFile::Perspective {
+                eye,
+                target,
+                up,
+                near,
+                far,
+                ..
+            })
+            | Some(CameraFile::Orthographic {
+                eye,
+                target,
+                up,
+                near,
+                far,
+                ..
+            }) => (*eye, *target, *up, *near, *far),
         };
         let up = match up {
             Some(up) => self.direction(up, At::new(source, &field("up")))?,
@@ -822,7 +1046,12 @@ impl Loader<'_> {
         };
         let offset = target - eye;
         if offset.length() < 1e-12 {
-            self.error(At::new(source, &field("target")), "the camera's `target` is the same point as its `eye`", Some("nothing to look at"), None);
+            self.error(
+                At::new(source, &field("target")),
+                "the camera's `target` is the same point as its `eye`",
+                Some("nothing to look at"),
+                None,
+            );
             return None;
         }
         if offset.normalize().cross(up).length() < 1e-9 {
@@ -830,7 +1059,10 @@ impl Loader<'_> {
                 At::new(source, &field("up")),
                 "the camera's `up` is parallel to its view direction",
                 Some("parallel to `target - eye`"),
-                Some("pick an `up` that is not along the line of sight, e.g. (0, 0, 1) when looking along Y".into()),
+                Some(
+                    "pick an `up` that is not along the line of sight, e.g. (0, 0, 1) when looking along Y"
+                        .into(),
+                ),
             );
             return None;
         }
@@ -841,25 +1073,51 @@ impl Loader<'_> {
             None => (2.0 * reach).max(1e-3),
         };
         let near = match near {
-            Some(near) => self.ranged(near, 1e-12, f64::INFINITY, At::new(source, &field("near")), "`near`")?,
+            Some(near) => self.ranged(
+                near,
+                1e-12,
+                f64::INFINITY,
+                At::new(source, &field("near")),
+                "`near`",
+            )?,
             None => far / 10_000.0,
         };
         if near >= far {
-            self.error(At::new(source, &field("near")), format!("`near` ({near}) must be less than `far` ({far})"), Some("not in front of `far`"), None);
+            self.error(
+                At::new(source, &field("near")),
+                format!("`near` ({near}) must be less than `far` ({far})"),
+                Some("not in front of `far`"),
+                None,
+            );
             return None;
         }
         let projection = match camera {
             Some(CameraFile::Orthographic { height, .. }) => Projection::Orthographic {
                 height: match height {
-                    Some(h) => self.ranged(*h, 1e-12, f64::INFINITY, At::new(source, &field("height")), "`height`")?,
+                    Some(h) => self.ranged(
+                        *h,
+                        1e-12,
+                        f64::INFINITY,
+                        At::new(source, &field("height")),
+                        "`height`",
+                    )?,
                     None => 2.2 * bounds.radius.max(1e-6),
                 },
                 near,
                 far,
             },
-            _ => Projection::Perspective { fov_y_degrees: fov, near, far },
+            _ => Projection::Perspective {
+                fov_y_degrees: fov,
+                near,
+                far,
+            },
         };
-        Some(Camera { eye, target, up, projection })
+        Some(Camera {
+            eye,
+            target,
+            up,
+            projection,
+        })
     }
 
     fn light(&mut self, light: &LightFile, index: usize, source: SourceId, camera: &Camera) -> Option<Light> {
@@ -875,7 +1133,13 @@ impl Loader<'_> {
             None => Some(Vec3::ONE),
         };
         let intensity = match intensity {
-            Some(i) => self.ranged(f64::from(i), 0.0, f64::INFINITY, At::new(source, &field("intensity")), "`intensity`"),
+            Some(i) => self.ranged(
+                f64::from(i),
+                0.0,
+                f64::INFINITY,
+                At::new(source, &field("intensity")),
+                "`intensity`",
+            ),
             None => Some(1.0),
         };
         let color = color? * intensity? as f32;
@@ -885,17 +1149,35 @@ impl Loader<'_> {
                     Some(d) => self.direction(*d, At::new(source, &field("direction")))?,
                     None => toward_target,
                 };
-                Some(Light::Directional { direction: direction.as_vec3(), color })
+                Some(Light::Directional {
+                    direction: direction.as_vec3(),
+                    color,
+                })
             }
-            LightFile::Point { position, attenuation, .. } => {
+            LightFile::Point {
+                position,
+                attenuation,
+                ..
+            } => {
                 let position = match position {
                     Some(p) => self.vector(*p, At::new(source, &field("position")))?,
                     None => camera.eye,
                 };
                 let attenuation = self.attenuation(attenuation.as_ref(), index, source)?;
-                Some(Light::Point { position, color, attenuation })
+                Some(Light::Point {
+                    position,
+                    color,
+                    attenuation,
+                })
             }
-            LightFile::Spot { position, direction, cutoff, exponent, attenuation, .. } => {
+            LightFile::Spot {
+                position,
+                direction,
+                cutoff,
+                exponent,
+                attenuation,
+                ..
+            } => {
                 let position = match position {
                     Some(p) => self.vector(*p, At::new(source, &field("position"))),
                     None => Some(camera.eye),
@@ -905,11 +1187,23 @@ impl Loader<'_> {
                     None => Some(toward_target),
                 };
                 let cutoff = match cutoff {
-                    Some(c) => self.ranged(f64::from(*c), 0.0, 90.0, At::new(source, &field("cutoff")), "spot `cutoff`"),
+                    Some(c) => self.ranged(
+                        f64::from(*c),
+                        0.0,
+                        90.0,
+                        At::new(source, &field("cutoff")),
+                        "spot `cutoff`",
+                    ),
                     None => Some(f64::from(DEFAULT_SPOT_CUTOFF_DEGREES)),
                 };
                 let exponent = match exponent {
-                    Some(e) => self.ranged(f64::from(*e), 0.0, f64::INFINITY, At::new(source, &field("exponent")), "spot `exponent`"),
+                    Some(e) => self.ranged(
+                        f64::from(*e),
+                        0.0,
+                        f64::INFINITY,
+                        At::new(source, &field("exponent")),
+                        "spot `exponent`",
+                    ),
                     None => Some(0.0),
                 };
                 let attenuation = self.attenuation(attenuation.as_ref(), index, source);
@@ -925,7 +1219,12 @@ impl Loader<'_> {
         }
     }
 
-    fn attenuation(&mut self, attenuation: Option<&AttenuationFile>, index: usize, source: SourceId) -> Option<Attenuation> {
+    fn attenuation(
+        &mut self,
+        attenuation: Option<&AttenuationFile>,
+        index: usize,
+        source: SourceId,
+    ) -> Option<Attenuation> {
         let Some(file) = attenuation else {
             return Some(Attenuation::NONE);
         };
@@ -935,16 +1234,31 @@ impl Loader<'_> {
             };
             let path = ron_path!["lights", index, "attenuation", name];
             loader
-                .ranged(f64::from(value), 0.0, f64::INFINITY, At { source, path: &path }, &format!("attenuation `{name}`"))
+                .ranged(
+                    f64::from(value),
+                    0.0,
+                    f64::INFINITY,
+                    At { source, path: &path },
+                    &format!("attenuation `{name}`"),
+                )
                 .map(|v| v as f32)
         };
         let constant = coefficient(self, file.constant, "constant", 1.0);
         let linear = coefficient(self, file.linear, "linear", 0.0);
         let quadratic = coefficient(self, file.quadratic, "quadratic", 0.0);
-        let attenuation = Attenuation { constant: constant?, linear: linear?, quadratic: quadratic? };
+        let attenuation = Attenuation {
+            constant: constant?,
+            linear: linear?,
+            quadratic: quadratic?,
+        };
         if attenuation.constant + attenuation.linear + attenuation.quadratic <= 0.0 {
             let path = ron_path!["lights", index, "attenuation"];
-            self.error(At { source, path: &path }, "attenuation coefficients cannot all be zero", Some("1 / 0 everywhere"), None);
+            self.error(
+                At { source, path: &path },
+                "attenuation coefficients cannot all be zero",
+                Some("1 / 0 everywhere"),
+                None,
+            );
             return None;
         }
         Some(attenuation)
@@ -962,17 +1276,26 @@ fn scene_bounds(objects: &[Object]) -> Bounds {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
     for object in objects {
-        let Some((min, max)) = object.mesh.bounds() else { continue };
+        let Some((min, max)) = object.mesh.bounds() else {
+            continue;
+        };
         for corner in 0..8 {
             let pick = |bit: u32, a: f32, b: f32| f64::from(if corner & bit == 0 { a } else { b });
-            let local = DVec3::new(pick(1, min.x, max.x), pick(2, min.y, max.y), pick(4, min.z, max.z));
+            let local = DVec3::new(
+                pick(1, min.x, max.x),
+                pick(2, min.y, max.y),
+                pick(4, min.z, max.z),
+            );
             let world = object.transform.transform_point3(local);
             lo = lo.min(world);
             hi = hi.max(world);
         }
     }
     if lo.x > hi.x {
-        return Bounds { center: DVec3::ZERO, radius: 1.0 };
+        return Bounds {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        };
     }
     Bounds {
         center: (lo + hi) / 2.0,
@@ -1011,7 +1334,9 @@ fn edit_distance(a: &str, b: &str) -> usize {
     for (i, ca) in a.chars().enumerate() {
         let mut current = vec![i + 1; b.len() + 1];
         for (j, &cb) in b.iter().enumerate() {
-            current[j + 1] = (previous[j] + usize::from(ca != cb)).min(previous[j + 1] + 1).min(current[j] + 1);
+            current[j + 1] = (previous[j] + usize::from(ca != cb))
+                .min(previous[j + 1] + 1)
+                .min(current[j] + 1);
         }
         previous = current;
     }

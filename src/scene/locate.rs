@@ -241,14 +241,10 @@ impl<'a> Walker<'a> {
                     .clone()
                     .is_some_and(|key| strip_raw(self.text(key)) == name)
             }),
-            (PathSegment::Index(index), b'(' | b'[') => entries
-                .iter()
-                .filter(|entry| entry.key.is_none())
-                .nth(*index),
-            (PathSegment::Key(key), b'{') => entries
-                .iter()
-                .rev()
-                .find(|entry| self.key_matches(entry, key)),
+            (PathSegment::Index(index), b'(' | b'[') => {
+                entries.iter().filter(|entry| entry.key.is_none()).nth(*index)
+            }
+            (PathSegment::Key(key), b'{') => entries.iter().rev().find(|entry| self.key_matches(entry, key)),
             _ => None,
         }?;
         self.pos = entry.value_start;
@@ -315,9 +311,7 @@ impl<'a> Walker<'a> {
                 return Some(entries);
             }
             let key = match close {
-                b')' if token.kind == Kind::Ident
-                    && lex(self.source, token.end)?.kind == Kind::Colon =>
-                {
+                b')' if token.kind == Kind::Ident && lex(self.source, token.end)?.kind == Kind::Colon => {
                     self.next()?;
                     self.next()?;
                     Some(token.range())
@@ -484,10 +478,8 @@ fn end_of_number(source: &str, pos: usize) -> Option<usize> {
         .get(end..end + 2)
         .is_some_and(|p| p.eq_ignore_ascii_case(b"0x"));
     while let Some(&b) = bytes.get(end) {
-        let exponent_sign = matches!(b, b'+' | b'-')
-            && !hex
-            && end > digits_start
-            && matches!(bytes[end - 1], b'e' | b'E');
+        let exponent_sign =
+            matches!(b, b'+' | b'-') && !hex && end > digits_start && matches!(bytes[end - 1], b'e' | b'E');
         if b.is_ascii_alphanumeric() || b == b'_' || b == b'.' || exponent_sign {
             end += 1;
         } else {
@@ -561,8 +553,7 @@ mod tests {
     /// Asserts that `path` leads to exactly `expected` in `source`.
     #[track_caller]
     fn check(source: &str, path: &[PathSegment], expected: &str) {
-        let range =
-            locate(source, path).unwrap_or_else(|| panic!("{path:?} not found in:\n{source}"));
+        let range = locate(source, path).unwrap_or_else(|| panic!("{path:?} not found in:\n{source}"));
         assert_eq!(&source[range], expected, "path {path:?}");
     }
 
@@ -642,11 +633,7 @@ Scene(
 
     #[test]
     fn enum_variants() {
-        check(
-            SCENE,
-            &ron_path!["objects", 0, "mesh"],
-            "Sphere(segments: 180)",
-        );
+        check(SCENE, &ron_path!["objects", 0, "mesh"], "Sphere(segments: 180)");
         check(SCENE, &ron_path!["objects", 0, "mesh", "segments"], "180");
         check(
             SCENE,
@@ -659,21 +646,13 @@ Scene(
 
     #[test]
     fn some_is_transparent() {
-        check(
-            SCENE,
-            &ron_path!["lights", 1, "attenuation", "constant"],
-            "1",
-        );
+        check(SCENE, &ron_path!["lights", 1, "attenuation", "constant"], "1");
         check(
             SCENE,
             &ron_path!["lights", 1, "attenuation"],
             "Some((constant: 1))",
         );
-        check(
-            SCENE,
-            &ron_path!["objects", 2, "material"],
-            "Some(\"jade\")",
-        );
+        check(SCENE, &ron_path!["objects", 2, "material"], "Some(\"jade\")");
         check(SCENE, &ron_path!["objects", 2, "transform", 1, 0], "3");
     }
 
@@ -838,10 +817,7 @@ Scene(
     fn string_contents_unescapes() {
         assert_eq!(string_contents(r#""a\"b\n""#).as_deref(), Some("a\"b\n"));
         assert_eq!(string_contents(r#""\u{e9}\x41""#).as_deref(), Some("éA"));
-        assert_eq!(
-            string_contents(r###"r##"a"#b"##"###).as_deref(),
-            Some("a\"#b")
-        );
+        assert_eq!(string_contents(r###"r##"a"#b"##"###).as_deref(), Some("a\"#b"));
         assert_eq!(string_contents("r\"x\"").as_deref(), Some("x"));
         assert_eq!(string_contents("ruby").as_deref(), None);
         assert_eq!(string_contents("r#").as_deref(), None);

@@ -36,12 +36,20 @@ fn object(mesh: Mesh, material: Material, shading: Shading) -> Object {
 fn pixel_aligned_scene(width: u32, height: u32, objects: Vec<Object>) -> Scene {
     let center = DVec3::new(f64::from(width) / 2.0, f64::from(height) / 2.0, 0.0);
     Scene {
-        image: ImageSettings { width, height, background: Vec3::ZERO },
+        image: ImageSettings {
+            width,
+            height,
+            background: Vec3::ZERO,
+        },
         camera: Camera {
             eye: center + DVec3::Z * 10.0,
             target: center,
             up: DVec3::Y,
-            projection: Projection::Orthographic { height: f64::from(height), near: 1.0, far: 100.0 },
+            projection: Projection::Orthographic {
+                height: f64::from(height),
+                near: 1.0,
+                far: 100.0,
+            },
         },
         ambient_light: Vec3::ZERO,
         lights: vec![],
@@ -53,7 +61,12 @@ fn pixel_aligned_scene(width: u32, height: u32, objects: Vec<Object>) -> Scene {
 fn coverage_counts(scene: &Scene) -> Vec<u32> {
     let (width, height) = (scene.image.width, scene.image.height);
     let frame = build_frame(scene, None);
-    let rect = PixelRect { x0: 0, y0: 0, x1: width, y1: height };
+    let rect = PixelRect {
+        x0: 0,
+        y0: 0,
+        x1: width,
+        y1: height,
+    };
     let mut counts = vec![0; (width * height) as usize];
     for triangle in &frame.raster {
         for_each_covered_pixel(triangle, rect, |x, y, _| counts[(y * width + x) as usize] += 1);
@@ -85,8 +98,16 @@ fn jittered_grid(n: u32, lo: f32, hi: f32, jitter: f32, seed: u32) -> Mesh {
     for j in 0..=n {
         for i in 0..=n {
             let interior = i > 0 && i < n && j > 0 && j < n;
-            let (dx, dy) = if interior { (random() * jitter * step, random() * jitter * step) } else { (0.0, 0.0) };
-            positions.push(Vec3::new(lo + i as f32 * step + dx, lo + j as f32 * step + dy, 0.0));
+            let (dx, dy) = if interior {
+                (random() * jitter * step, random() * jitter * step)
+            } else {
+                (0.0, 0.0)
+            };
+            positions.push(Vec3::new(
+                lo + i as f32 * step + dx,
+                lo + j as f32 * step + dy,
+                0.0,
+            ));
         }
     }
     let index = |i: u32, j: u32| j * (n + 1) + i;
@@ -111,9 +132,18 @@ fn a_mesh_tiling_the_viewport_covers_every_pixel_exactly_once() {
         for p in &mut mesh.positions {
             *p += Vec3::new(offset, offset * 0.7, 0.0);
         }
-        let counts = coverage_counts(&pixel_aligned_scene(128, 96, vec![object(mesh, UNLIT_WHITE, Shading::Flat)]));
+        let counts = coverage_counts(&pixel_aligned_scene(
+            128,
+            96,
+            vec![object(mesh, UNLIT_WHITE, Shading::Flat)],
+        ));
         let wrong: Vec<usize> = (0..counts.len()).filter(|&i| counts[i] != 1).collect();
-        assert!(wrong.is_empty(), "seed {seed}, offset {offset}: {} pixels not covered exactly once, first at {:?}", wrong.len(), wrong.first());
+        assert!(
+            wrong.is_empty(),
+            "seed {seed}, offset {offset}: {} pixels not covered exactly once, first at {:?}",
+            wrong.len(),
+            wrong.first()
+        );
     }
 }
 
@@ -130,8 +160,21 @@ fn a_fan_of_thin_triangles_around_one_vertex_covers_its_disc_once() {
         positions.push(center + Vec3::new(angle.cos(), angle.sin(), 0.0) * radius);
     }
     let triangles = (0..n).map(|k| [0, 1 + k, 1 + (k + 1) % n]).collect();
-    let counts = coverage_counts(&pixel_aligned_scene(128, 96, vec![object(flat_mesh(positions, triangles), UNLIT_WHITE, Shading::Flat)]));
-    assert!(counts.iter().all(|&c| c == 1), "max {:?}, zeros {}", counts.iter().max(), counts.iter().filter(|&&c| c == 0).count());
+    let counts = coverage_counts(&pixel_aligned_scene(
+        128,
+        96,
+        vec![object(
+            flat_mesh(positions, triangles),
+            UNLIT_WHITE,
+            Shading::Flat,
+        )],
+    ));
+    assert!(
+        counts.iter().all(|&c| c == 1),
+        "max {:?}, zeros {}",
+        counts.iter().max(),
+        counts.iter().filter(|&&c| c == 0).count()
+    );
 }
 
 /// A perspective camera at the origin looking down −Z with a 90° field of view.
@@ -140,7 +183,11 @@ fn camera_at_origin(near: f64) -> Camera {
         eye: DVec3::ZERO,
         target: DVec3::new(0.0, 0.0, -1.0),
         up: DVec3::Y,
-        projection: Projection::Perspective { fov_y_degrees: 90.0, near, far: 100.0 },
+        projection: Projection::Perspective {
+            fov_y_degrees: 90.0,
+            near,
+            far: 100.0,
+        },
     }
 }
 
@@ -155,10 +202,19 @@ fn a_floor_passing_behind_the_camera_renders_only_its_visible_part() {
         Vec3::new(50.0, -1.0, -50.0),
         Vec3::new(-50.0, -1.0, -50.0),
     ];
-    let floor = Mesh { normals: vec![Vec3::Y; 4], positions, triangles: vec![[0, 1, 2], [0, 2, 3]], ..Mesh::default() };
+    let floor = Mesh {
+        normals: vec![Vec3::Y; 4],
+        positions,
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        ..Mesh::default()
+    };
     let (width, height) = (64, 64);
     let scene = Scene {
-        image: ImageSettings { width, height, background: Vec3::ZERO },
+        image: ImageSettings {
+            width,
+            height,
+            background: Vec3::ZERO,
+        },
         camera: camera_at_origin(0.1),
         ambient_light: Vec3::ZERO,
         lights: vec![],
@@ -188,14 +244,29 @@ fn attributes_are_interpolated_perspective_correctly() {
     ];
     // Lambert with a light along +Z: N = X gives N·L = 0 (black), N = Z gives 1 (white).
     let normals = vec![Vec3::X, Vec3::X, Vec3::Z, Vec3::Z];
-    let strip = Mesh { positions, normals, triangles: vec![[0, 1, 2], [0, 2, 3]], ..Mesh::default() };
-    let lambert = Material { model: LightingModel::Lambert, ..UNLIT_WHITE };
+    let strip = Mesh {
+        positions,
+        normals,
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        ..Mesh::default()
+    };
+    let lambert = Material {
+        model: LightingModel::Lambert,
+        ..UNLIT_WHITE
+    };
     let (width, height) = (64u32, 64u32);
     let scene = Scene {
-        image: ImageSettings { width, height, background: Vec3::ZERO },
+        image: ImageSettings {
+            width,
+            height,
+            background: Vec3::ZERO,
+        },
         camera: camera_at_origin(0.1),
         ambient_light: Vec3::ZERO,
-        lights: vec![Light::Directional { direction: -Vec3::Z, color: Vec3::ONE }],
+        lights: vec![Light::Directional {
+            direction: -Vec3::Z,
+            color: Vec3::ONE,
+        }],
         objects: vec![object(strip, lambert, Shading::Gouraud)],
     };
     let (image, _) = render(&scene, &RenderOptions::default());
@@ -212,39 +283,78 @@ fn attributes_are_interpolated_perspective_correctly() {
         let perspective = (depth - 1.0) / 8.0;
         let screen_linear = (y_ndc + 1.0) / (1.0 - 1.0 / 9.0);
         let got = image.color[pixel].x;
-        assert!((got - perspective).abs() < 0.01, "row {y}: got {got}, perspective-correct {perspective}");
+        assert!(
+            (got - perspective).abs() < 0.01,
+            "row {y}: got {got}, perspective-correct {perspective}"
+        );
         if (perspective - screen_linear).abs() > 0.1 {
-            assert!((got - screen_linear).abs() > 0.05, "row {y} looks screen-space interpolated");
+            assert!(
+                (got - screen_linear).abs() > 0.05,
+                "row {y} looks screen-space interpolated"
+            );
             checked += 1;
         }
     }
-    assert!(checked > 5, "the test must visit rows where the two interpolations differ");
+    assert!(
+        checked > 5,
+        "the test must visit rows where the two interpolations differ"
+    );
 }
 
 fn busy_scene() -> Scene {
     let sphere = lampshade::mesh::primitives::sphere(48);
     let mut objects = Vec::new();
-    for (i, shading) in [Shading::Flat, Shading::Gouraud, Shading::Phong].into_iter().enumerate() {
+    for (i, shading) in [Shading::Flat, Shading::Gouraud, Shading::Phong]
+        .into_iter()
+        .enumerate()
+    {
         let mut o = object(
             sphere.clone(),
-            Material { specular: Vec3::splat(0.6), shininess: 30.0, model: LightingModel::BlinnPhong, ..Material { ambient: Vec3::splat(0.1), ..UNLIT_WHITE } },
+            Material {
+                specular: Vec3::splat(0.6),
+                shininess: 30.0,
+                model: LightingModel::BlinnPhong,
+                ..Material {
+                    ambient: Vec3::splat(0.1),
+                    ..UNLIT_WHITE
+                }
+            },
             shading,
         );
         o.transform = DMat4::from_translation(DVec3::new(i as f64 * 1.5 - 1.5, 0.2 * i as f64, -(i as f64)));
         objects.push(o);
     }
     Scene {
-        image: ImageSettings { width: 301, height: 197, background: Vec3::new(0.1, 0.1, 0.1) },
+        image: ImageSettings {
+            width: 301,
+            height: 197,
+            background: Vec3::new(0.1, 0.1, 0.1),
+        },
         camera: Camera {
             eye: DVec3::new(0.5, 1.0, 5.0),
             target: DVec3::ZERO,
             up: DVec3::Y,
-            projection: Projection::Perspective { fov_y_degrees: 50.0, near: 0.1, far: 50.0 },
+            projection: Projection::Perspective {
+                fov_y_degrees: 50.0,
+                near: 0.1,
+                far: 50.0,
+            },
         },
         ambient_light: Vec3::splat(0.3),
         lights: vec![
-            Light::Directional { direction: Vec3::new(-1.0, -1.0, -1.0), color: Vec3::ONE },
-            Light::Point { position: DVec3::new(2.0, 2.0, 2.0), color: Vec3::new(0.5, 0.4, 0.3), attenuation: lampshade::scene::Attenuation { constant: 1.0, linear: 0.1, quadratic: 0.05 } },
+            Light::Directional {
+                direction: Vec3::new(-1.0, -1.0, -1.0),
+                color: Vec3::ONE,
+            },
+            Light::Point {
+                position: DVec3::new(2.0, 2.0, 2.0),
+                color: Vec3::new(0.5, 0.4, 0.3),
+                attenuation: lampshade::scene::Attenuation {
+                    constant: 1.0,
+                    linear: 0.1,
+                    quadratic: 0.05,
+                },
+            },
         ],
         objects,
     }
@@ -253,12 +363,35 @@ fn busy_scene() -> Scene {
 #[test]
 fn the_image_is_bit_identical_for_any_thread_count() {
     let scene = busy_scene();
-    let (reference, _) = render(&scene, &RenderOptions { threads: Some(1), ..Default::default() });
-    assert!(reference.covered.iter().filter(|&&c| c).count() > 1000, "the scene must cover pixels");
+    let (reference, _) = render(
+        &scene,
+        &RenderOptions {
+            threads: Some(1),
+            ..Default::default()
+        },
+    );
+    assert!(
+        reference.covered.iter().filter(|&&c| c).count() > 1000,
+        "the scene must cover pixels"
+    );
     for threads in [2, 3, 8] {
-        let (image, stats) = render(&scene, &RenderOptions { threads: Some(threads), ..Default::default() });
+        let (image, stats) = render(
+            &scene,
+            &RenderOptions {
+                threads: Some(threads),
+                ..Default::default()
+            },
+        );
         assert_eq!(stats.threads, threads);
-        let bits = |fb: &lampshade::render::FrameBuffer| fb.color.iter().flat_map(|c| c.to_array().map(f32::to_bits)).collect::<Vec<_>>();
-        assert!(bits(&image) == bits(&reference), "{threads} threads differ from 1");
+        let bits = |fb: &lampshade::render::FrameBuffer| {
+            fb.color
+                .iter()
+                .flat_map(|c| c.to_array().map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert!(
+            bits(&image) == bits(&reference),
+            "{threads} threads differ from 1"
+        );
     }
 }

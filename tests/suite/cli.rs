@@ -1,0 +1,230 @@
+//! The `lampshade` binary: exit codes, diagnostics with file:line:column, and outputs that are
+//! written whole or not at all.
+//!
+//! `tests/bad-scenes/*.ron` are data: each starts with comment lines
+//! `// expect: LINE:COLUMN message fragment` (or `// expect: message fragment` when there is no
+//! location), and rendering it must fail with exit code 2, print each expectation as
+//! `NAME.ron:LINE:COLUMN` with the message, and write no image.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use crate::{repo, ron_files};
+
+fn lampshade(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lampshade"))
+        .args(args)
+        .current_dir(dir)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("the lampshade binary runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+#[test]
+fn every_bad_scene_fails_with_its_expected_diagnostics_and_writes_nothing() {
+    let bad = repo().join("tests/bad-scenes");
+    let scenes = ron_files(&bad);
+    assert!(scenes.len() >= 5, "the corpus must not be empty");
+    let work = tempfile::tempdir().unwrap();
+    for scene in scenes {
+        let name = scene.file_name().unwrap().to_str().unwrap();
+        let text = String::from_utf8_lossy(&std::fs::read(&scene).unwrap()).into_owned();
+        let expectations: Vec<&str> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("// expect: "))
+            .collect();
+        assert!(!expectations.is_empty(), "{name} has no `// expect:` line");
+
+        // Render in place (meshes and includes are relative to it), the image into a scratch folder.
+        let image = work.path().join(name).with_extension("png");
+        let output = lampshade(&["render", name, "-o", image.to_str().unwrap()], &bad);
+        let message = stderr(&output);
+        assert_eq!(output.status.code(), Some(2), "{name}: exit code\n{message}");
+        for expectation in expectations {
+            let (location, fragment) = match expectation.split_once(' ') {
+                Some((loc, rest)) if loc.contains(':') && loc.starts_with(|c: char| c.is_ascii_digit()) => {
+                    (Some(format!("{name}:{loc}")), rest)
+                }
+                _ => (None, expectation),
+            };
+            if let Some(location) = location {
+                assert!(
+                    message.contains(&location),
+                    "{name}: expected `{location}` in\n{message}"
+                );
+            }
+            assert!(
+                message.contains(fragment),
+                "{name}: expected `{fragment}` in\n{message}"
+            );
+        }
+        assert!(!message.contains("panicked"), "{name}: panicked\n{message}");
+        assert!(!image.exists(), "{name}: an image was written");
+    }
+}
+
+#[test]
+fn a_failed_render_keeps_the_previous_image() {
+    let work = tempfile::tempdir().unwrap();
+    let scene = work.path().join("scene.ron");
+    let image = work.path().join("scene.png");
+    std::fs::write(&image, b"previous good image").unwrap();
+    std::fs::write(&scene, "(objects: [(mesh: Sphere(), material: \"nope\")])").unwrap();
+    let output = lampshade(&["render", "scene.ron"], work.path());
+    assert_eq!(output.status.code(), Some(2));
+    assert_eq!(std::fs::read(&image).unwrap(), b"previous good image");
+}
+
+#[test]
+fn several_scenes_render_past_a_bad_one_and_exit_2() {
+    let work = tempfile::tempdir().unwrap();
+    std::fs::write(
+        work.path().join("a.ron"),
+        "(image: (width: 32, height: 24), objects: [(mesh: Cube)])",
+    )
+    .unwrap();
+    std::fs::write(work.path().join("b.ron"), "(objects: [(mesh: Cone)])").unwrap();
+    std::fs::write(
+        work.path().join("c.ron"),
+        "(image: (width: 32, height: 24), objects: [(mesh: Sphere())])",
+    )
+    .unwrap();
+    let output = lampshade(&["render", "a.ron", "b.ron", "c.ron"], work.path());
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(work.path().join("a.png").exists() && work.path().join("c.png").exists());
+    assert!(!work.path().join("b.png").exists());
+    assert!(stderr(&output).contains("b.ron:1:19"), "{}", stderr(&output));
+}
+
+#[test]
+fn render_writes_the_image_and_a_summary_line() {
+    let work = tempfile::tempdir().unwrap();
+    std::fs::write(
+        work.path().join("s.ron"),
+        "(image: (width: 40, height: 30), objects: [(mesh: Sphere(segments: 8))])",
+    )
+    .unwrap();
+    let output = lampshade(&["render", "s.ron", "-o", "out.png"], work.path());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let summary = String::from_utf8_lossy(&output.stdout);
+    for part in [
+        "128 triangles",
+        "40×30 px",
+        "load",
+        "geometry",
+        "raster+shade",
+        "encode",
+    ] {
+        assert!(summary.contains(part), "summary lacks `{part}`: {summary}");
+    }
+    let image = image::open(work.path().join("out.png")).unwrap().to_rgb8();
+    assert_eq!(image.dimensions(), (40, 30));
+    assert!(
+        image.pixels().any(|p| p.0 != [0, 0, 0]),
+        "the sphere must be visible"
+    );
+}
+
+#[test]
+fn thread_count_does_not_change_a_byte() {
+    let scene = repo().join("scenes/opengl-materials.ron");
+    let work = tempfile::tempdir().unwrap();
+    let mut images = Vec::new();
+    for threads in ["1", "2", "5"] {
+        let out = work.path().join(format!("t{threads}.png"));
+        let output = lampshade(
+            &[
+                "render",
+                scene.to_str().unwrap(),
+                "--threads",
+                threads,
+                "--width",
+                "200",
+                "--height",
+                "150",
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            work.path(),
+        );
+        assert!(output.status.success(), "{}", stderr(&output));
+        images.push(image::open(&out).unwrap().to_rgb8().into_raw());
+    }
+    assert!(images.windows(2).all(|pair| pair[0] == pair[1]));
+}
+
+#[test]
+fn debug_views_show_the_separate_terms() {
+    let work = tempfile::tempdir().unwrap();
+    let scene = work.path().join("s.ron");
+    std::fs::write(
+        &scene,
+        "(image: (width: 48, height: 48), ambient: (1, 1, 1),
+          camera: Perspective(eye: (0, 0, 4), target: (0, 0, 0)),
+          lights: [Directional(direction: (0, 0, -1))],
+          objects: [(mesh: Sphere(segments: 96), rotate: (90, 0, 0), material: (ambient: (0.2, 0, 0), diffuse: (0, 0.5, 0), specular: (0, 0, 0.5), shininess: 1))])",
+    )
+    .unwrap();
+    let center = |view: &str| {
+        let out = format!("{view}.png");
+        let output = lampshade(&["render", "s.ron", "--debug", view, "-o", &out], work.path());
+        assert!(output.status.success(), "{}", stderr(&output));
+        image::open(work.path().join(out))
+            .unwrap()
+            .to_rgb8()
+            .get_pixel(24, 24)
+            .0
+    };
+    // Near the centre N ≈ L ≈ V: diffuse 0.5, specular 0.5, ambient 0.2 (the pixel centre sits
+    // half a pixel off the axis, hence the tolerance).
+    let close = |got: [u8; 3], expected: [u8; 3]| {
+        assert!(
+            got.iter().zip(expected).all(|(g, e)| g.abs_diff(e) <= 2),
+            "got {got:?}, expected {expected:?}"
+        )
+    };
+    close(center("ambient"), [51, 0, 0]);
+    close(center("diffuse"), [0, 128, 0]);
+    close(center("specular"), [0, 0, 128]);
+    let normal = center("normals");
+    assert!(
+        normal[2] > 250 && (120..=136).contains(&normal[0]) && (120..=136).contains(&normal[1]),
+        "{normal:?}"
+    );
+    assert_eq!(center("depth"), [255, 255, 255]);
+}
+
+#[test]
+fn bad_arguments_exit_2() {
+    let work = tempfile::tempdir().unwrap();
+    assert_eq!(lampshade(&["render"], work.path()).status.code(), Some(2));
+    assert_eq!(
+        lampshade(&["render", "a.ron", "b.ron", "-o", "x.png"], work.path())
+            .status
+            .code(),
+        Some(2)
+    );
+    assert_eq!(
+        lampshade(&["render", "missing.ron"], work.path()).status.code(),
+        Some(2)
+    );
+    let output = lampshade(&["render", "x.ron", "--width", "0"], work.path());
+    assert_eq!(output.status.code(), Some(2));
+}
+
+#[test]
+fn an_unwritable_output_exits_1() {
+    let work = tempfile::tempdir().unwrap();
+    std::fs::write(
+        work.path().join("s.ron"),
+        "(image: (width: 8, height: 8), objects: [(mesh: Cube)])",
+    )
+    .unwrap();
+    let output = lampshade(&["render", "s.ron", "-o", "no/such/folder/out.png"], work.path());
+    assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
+    assert!(stderr(&output).contains("out.png"));
+}

@@ -1,0 +1,26 @@
+//! lampshade's integration tests, one binary (it links the library once):
+//! - `render`: the rasterizer's contract on scenes built in code;
+//! - `cli`: the command line on good and bad scene files (`tests/bad-scenes/`);
+//! - `golden`: every bundled scene against its reference image (`scenes/refs/`).
+
+mod cli;
+mod golden;
+mod render;
+
+use std::path::{Path, PathBuf};
+
+/// The repository's root folder.
+pub fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Every `*.ron` file directly in `folder`, sorted.
+pub fn ron_files(folder: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(folder)
+        .unwrap_or_else(|e| panic!("cannot list {}: {e}", folder.display()))
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|e| e == "ron"))
+        .collect();
+    files.sort();
+    files
+}
