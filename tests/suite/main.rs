@@ -5,6 +5,7 @@
 
 mod cli;
 mod golden;
+mod loading;
 mod render;
 
 use std::path::{Path, PathBuf};

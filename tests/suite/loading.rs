@@ -1,0 +1,208 @@
+//! Scene files as users write them: includes, defaults, many lights, mirrored objects, and the
+//! examples of the format reference.
+
+use std::path::Path;
+
+use glam::Vec3;
+use lampshade::render::{FrameBuffer, RenderOptions, render};
+use lampshade::scene::{LoadOptions, Scene, load_scene};
+
+use crate::repo;
+
+fn write(folder: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let path = folder.join(name);
+    if let Some(parent) = path.parent() {
+        std::fs::create_dir_all(parent).unwrap();
+    }
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn load(path: &Path) -> Scene {
+    match load_scene(path, &LoadOptions::default()) {
+        Ok(loaded) => loaded.scene,
+        Err(error) => panic!(
+            "{}",
+            lampshade::diag::render_diagnostics(&error.diagnostics, &error.sources, false)
+        ),
+    }
+}
+
+fn draw(scene: &Scene) -> FrameBuffer {
+    render(scene, &RenderOptions::default()).0
+}
+
+#[test]
+fn includes_nest_resolve_bases_and_the_scene_overrides_them() {
+    let folder = tempfile::tempdir().unwrap();
+    write(
+        folder.path(),
+        "lib/base.ron",
+        r#"Materials(materials: { "base-red": (color: (1, 0, 0), kd: 0.5) })"#,
+    );
+    write(
+        folder.path(),
+        "lib/paints.ron",
+        r#"Materials(include: ["base.ron"], materials: {
+            "bright-red": (base: "base-red", kd: 1.0),
+            "overridden": (diffuse: (0, 1, 0)),
+        })"#,
+    );
+    let scene = write(
+        folder.path(),
+        "scene.ron",
+        r#"Scene(
+            include: ["lib/paints.ron"],
+            materials: { "overridden": (diffuse: (0, 0, 1)) },
+            objects: [
+                (mesh: Cube, material: "bright-red"),
+                (mesh: Cube, material: "overridden"),
+                (mesh: Cube, material: (base: "Bright_Red", ks: 0)),
+            ],
+        )"#,
+    );
+    let loaded = load_scene(&scene, &LoadOptions::default()).unwrap();
+    let materials: Vec<_> = loaded.scene.objects.iter().map(|o| o.material.unwrap()).collect();
+    assert_eq!(materials[0].diffuse, Vec3::new(1.0, 0.0, 0.0));
+    assert_eq!(
+        materials[0].ambient,
+        Vec3::new(0.3, 0.0, 0.0),
+        "ka from the default recipe"
+    );
+    assert_eq!(materials[1].diffuse, Vec3::new(0.0, 0.0, 1.0));
+    assert_eq!(materials[2].specular, Vec3::ZERO);
+    for file in ["scene.ron", "lib/paints.ron", "lib/base.ron"] {
+        assert!(
+            loaded.files_read.iter().any(|f| f.ends_with(file)),
+            "{file} not recorded"
+        );
+    }
+}
+
+#[test]
+fn the_default_camera_frames_every_object() {
+    let folder = tempfile::tempdir().unwrap();
+    // Objects far from the origin and of very different sizes.
+    let scene = write(
+        folder.path(),
+        "s.ron",
+        "(image: (width: 160, height: 100), objects: [
+            (mesh: Sphere(), translate: (1000, 20, 5), scale: 3),
+            (mesh: Cube, translate: (1010, 20, 5), scale: 0.5),
+        ])",
+    );
+    let image = draw(&load(&scene));
+    let (w, h) = (image.width as usize, image.height as usize);
+    let covered = image.covered.iter().filter(|&&c| c).count();
+    assert!(
+        covered > w * h / 50,
+        "the objects should fill a good part of the frame: {covered}"
+    );
+    for y in 0..h {
+        for x in 0..w {
+            if x == 0 || y == 0 || x == w - 1 || y == h - 1 {
+                assert!(
+                    !image.covered[y * w + x],
+                    "({x}, {y}) touches the border: the framing cuts an object"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn nine_lights_all_contribute() {
+    let folder = tempfile::tempdir().unwrap();
+    let scene_with = |n: usize| {
+        let lights: Vec<String> = (0..n)
+            .map(|_| "Directional(direction: (0, 0, -1), color: (0.1, 0.1, 0.1))".to_string())
+            .collect();
+        let text = format!(
+            "(image: (width: 16, height: 16), ambient: (0, 0, 0),
+              camera: Orthographic(eye: (0, 0, 5), target: (0, 0, 0), height: 1),
+              lights: [{}],
+              objects: [(mesh: Cube, material: (diffuse: (1, 1, 1), model: Lambert))])",
+            lights.join(", ")
+        );
+        draw(&load(&write(folder.path(), &format!("l{n}.ron"), &text))).color[8 * 16 + 8].x
+    };
+    let brightness: Vec<f32> = (1..=9).map(scene_with).collect();
+    for (n, pair) in brightness.windows(2).enumerate() {
+        assert!(
+            (pair[1] - pair[0] - 0.1).abs() < 1e-4,
+            "light {} adds {}",
+            n + 2,
+            pair[1] - pair[0]
+        );
+    }
+}
+
+#[test]
+fn a_mirrored_object_keeps_its_front_faces() {
+    let folder = tempfile::tempdir().unwrap();
+    let scene = |scale: &str| {
+        let text = format!(
+            "(image: (width: 64, height: 64),
+              camera: Perspective(eye: (3, 2.5, 4), target: (0, 0, 0)),
+              lights: [Directional(direction: (-1, -2, -3))],
+              objects: [(mesh: Cube, scale: {scale}, shading: Flat, back_faces: Cull)])"
+        );
+        draw(&load(&write(folder.path(), "m.ron", &text)))
+    };
+    let plain = scene("(1, 1, 1)");
+    assert!(plain.covered.iter().any(|&c| c));
+    for mirror in ["(-1, 1, 1)", "(1, -1, 1)", "(-1, -1, -1)"] {
+        assert_eq!(scene(mirror).color, plain.color, "scale {mirror}");
+    }
+}
+
+#[test]
+fn the_format_reference_examples_load() {
+    let folder = tempfile::tempdir().unwrap();
+    // The include example of docs/scene-format.md, verbatim.
+    write(
+        folder.path(),
+        "materials/metals.ron",
+        r#"Materials(
+    include: ["base.ron"],   // libraries may include libraries
+    materials: { "brushed-steel": (base: "chrome", shininess: 20) },
+)"#,
+    );
+    write(folder.path(), "materials/base.ron", "Materials()");
+    let scene = write(
+        folder.path(),
+        "scene.ron",
+        r#"Scene(include: ["materials/metals.ron"], objects: [(mesh: Cube, material: "brushed-steel")])"#,
+    );
+    load(&scene);
+    // Every `Scene(`/`(objects:` block of the reference is a complete scene that loads.
+    let reference = std::fs::read_to_string(repo().join("docs/scene-format.md")).unwrap();
+    let mut complete = 0;
+    for block in reference.split("```ron").skip(1) {
+        let code = block.split("```").next().unwrap();
+        let first_line = code
+            .lines()
+            .find(|l| !l.trim().is_empty() && !l.trim_start().starts_with("//"))
+            .unwrap_or("");
+        if first_line.starts_with("Scene(") || first_line.starts_with("(objects") {
+            load(&write(folder.path(), "example.ron", code));
+            complete += 1;
+        }
+    }
+    assert!(complete >= 1);
+}
+
+#[test]
+fn every_bundled_scene_loads_without_warnings_except_untextured_gltf() {
+    for scene in crate::ron_files(&repo().join("scenes")) {
+        let loaded = load_scene(&scene, &LoadOptions::default()).unwrap();
+        for warning in &loaded.warnings {
+            assert!(
+                warning.message.contains("textures are not sampled"),
+                "{}: {}",
+                scene.display(),
+                warning.message
+            );
+        }
+    }
+}
