@@ -16,8 +16,10 @@ use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::diag::render_diagnostics;
 use crate::output::{self, PngCompression};
-use crate::render::{self, DebugView, RenderOptions};
-use crate::scene::{self, LoadOptions, Shading};
+use crate::pipeline::{RenderedScene, render_scene_file};
+use crate::render::{DebugView, RenderOptions};
+use crate::scene::Shading;
+use crate::scene::load::{LoadOptions, MeshCache};
 
 pub const EXIT_OK: i32 = 0;
 pub const EXIT_OUTPUT_FAILED: i32 = 1;
@@ -39,6 +41,10 @@ pub struct Cli {
 pub enum Command {
     /// Render scene files to PNG images.
     Render(RenderArgs),
+    /// Render a suite of scenes and compare each with its reference image.
+    Check(crate::check::CheckArgs),
+    /// Re-render a scene whenever it, or any file it uses, changes.
+    Watch(crate::watch::WatchArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -105,10 +111,13 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
     };
     match cli.command {
         Command::Render(args) => run_render(&args),
+        Command::Check(args) => crate::check::run(&args),
+        Command::Watch(args) => crate::watch::run(&args),
     }
 }
 
-fn use_color() -> bool {
+/// Whether diagnostics on stderr should be coloured.
+pub fn use_color() -> bool {
     std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none()
 }
 
@@ -182,26 +191,17 @@ fn render_one(
     render_options: &RenderOptions,
     quiet: bool,
 ) -> Result<(), RenderFailure> {
-    let started = Instant::now();
-    let loaded = match scene::load::load_scene(scene_path, load_options) {
-        Ok(loaded) => loaded,
+    let rendered = match render_scene_file(scene_path, load_options, render_options, &mut MeshCache::default()) {
+        Ok(rendered) => rendered,
         Err(error) => {
-            eprint!(
-                "{}",
-                render_diagnostics(&error.diagnostics, &error.sources, use_color())
-            );
+            eprint!("{}", render_diagnostics(&error.diagnostics, &error.sources, use_color()));
             return Err(RenderFailure::BadInput);
         }
     };
-    if !loaded.warnings.is_empty() && !quiet {
-        eprint!(
-            "{}",
-            render_diagnostics(&loaded.warnings, &loaded.sources, use_color())
-        );
+    if !rendered.warnings.is_empty() && !quiet {
+        eprint!("{}", render_diagnostics(&rendered.warnings, &rendered.sources, use_color()));
     }
-    let load_time = started.elapsed();
-
-    let (framebuffer, stats) = render::render(&loaded.scene, render_options);
+    let RenderedScene { framebuffer, stats, load_time, .. } = rendered;
 
     let started = Instant::now();
     let image = output::to_rgb8(&framebuffer);

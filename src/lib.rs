@@ -12,10 +12,13 @@
 //! by the loader as a [`diag::Diagnostic`]. See `ARCHITECTURE.md` for the code map.
 #![deny(unsafe_code)]
 
+pub mod check;
 pub mod cli;
 pub mod diag;
 pub mod lighting;
 pub mod mesh;
 pub mod output;
+pub mod pipeline;
 pub mod render;
 pub mod scene;
+pub mod watch;

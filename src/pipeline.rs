@@ -1,0 +1,45 @@
+//! One scene file, loaded and rendered: the build that `render`, `check` and `watch` share.
+//!
+//! Writing the image is left to the caller (each command writes it differently: beside the
+//! scene, nowhere, or atomically on every save), so this stage does no output I/O.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use crate::diag::{Diagnostic, Sources};
+use crate::render::{FrameBuffer, RenderOptions, RenderStats, render};
+use crate::scene::load::{LoadError, LoadOptions, MeshCache, load_scene_cached};
+
+/// A scene file that loaded and rendered.
+#[derive(Debug, Clone)]
+pub struct RenderedScene {
+    pub framebuffer: FrameBuffer,
+    pub stats: RenderStats,
+    /// Reading, parsing, checking and mesh loading.
+    pub load_time: Duration,
+    pub warnings: Vec<Diagnostic>,
+    pub sources: Sources,
+    /// Every file the scene read (scene, includes, meshes and what they reference).
+    pub files_read: Vec<PathBuf>,
+}
+
+/// Loads `path` (reusing unchanged meshes from `cache`) and renders it.
+pub fn render_scene_file(
+    path: &Path,
+    load_options: &LoadOptions,
+    render_options: &RenderOptions,
+    cache: &mut MeshCache,
+) -> Result<RenderedScene, LoadError> {
+    let started = Instant::now();
+    let loaded = load_scene_cached(path, load_options, cache)?;
+    let load_time = started.elapsed();
+    let (framebuffer, stats) = render(&loaded.scene, render_options);
+    Ok(RenderedScene {
+        framebuffer,
+        stats,
+        load_time,
+        warnings: loaded.warnings,
+        sources: loaded.sources,
+        files_read: loaded.files_read,
+    })
+}
