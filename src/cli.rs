@@ -191,17 +191,33 @@ fn render_one(
     render_options: &RenderOptions,
     quiet: bool,
 ) -> Result<(), RenderFailure> {
-    let rendered = match render_scene_file(scene_path, load_options, render_options, &mut MeshCache::default()) {
+    let rendered = match render_scene_file(
+        scene_path,
+        load_options,
+        render_options,
+        &mut MeshCache::default(),
+    ) {
         Ok(rendered) => rendered,
         Err(error) => {
-            eprint!("{}", render_diagnostics(&error.diagnostics, &error.sources, use_color()));
+            eprint!(
+                "{}",
+                render_diagnostics(&error.diagnostics, &error.sources, use_color())
+            );
             return Err(RenderFailure::BadInput);
         }
     };
     if !rendered.warnings.is_empty() && !quiet {
-        eprint!("{}", render_diagnostics(&rendered.warnings, &rendered.sources, use_color()));
+        eprint!(
+            "{}",
+            render_diagnostics(&rendered.warnings, &rendered.sources, use_color())
+        );
     }
-    let RenderedScene { framebuffer, stats, load_time, .. } = rendered;
+    let RenderedScene {
+        framebuffer,
+        stats,
+        load_time,
+        ..
+    } = rendered;
 
     let started = Instant::now();
     let image = output::to_rgb8(&framebuffer);

@@ -85,16 +85,12 @@ pub fn illuminate(
         emission: material.emission,
         ..LightingTerms::default()
     };
-    let specular_model = match material.model {
-        LightingModel::Unlit => {
-            terms.diffuse = material.diffuse;
-            return terms;
-        }
-        LightingModel::Lambert => None,
-        LightingModel::Phong | LightingModel::BlinnPhong if material.specular == Vec3::ZERO => None,
-        model => Some(model),
-    };
+    if material.model == LightingModel::Unlit {
+        terms.diffuse = material.diffuse;
+        return terms;
+    }
     terms.ambient = material.ambient * ambient_light;
+    let has_specular = material.specular != Vec3::ZERO;
     for light in lights {
         let Some((to_light, strength)) = incidence(light, position) else {
             continue;
@@ -103,17 +99,100 @@ pub fn illuminate(
         if n_dot_l <= 0.0 || strength <= 0.0 {
             continue;
         }
-        let intensity = light.color * strength;
-        terms.diffuse += material.diffuse * intensity * n_dot_l;
-        if let Some(model) = specular_model {
-            let cosine = match model {
-                LightingModel::BlinnPhong => normal.dot((to_light + to_viewer).normalize_or_zero()),
-                _ => reflect(to_light, normal).dot(to_viewer),
-            };
-            terms.specular += material.specular * intensity * specular_power(cosine, material.shininess);
+        let irradiance = light.color * strength * n_dot_l;
+        match material.model {
+            LightingModel::Unlit => {}
+            LightingModel::Lambert => terms.diffuse += material.diffuse * irradiance,
+            LightingModel::Phong | LightingModel::BlinnPhong => {
+                terms.diffuse += material.diffuse * irradiance;
+                if has_specular {
+                    let cosine = if material.model == LightingModel::BlinnPhong {
+                        normal.dot((to_light + to_viewer).normalize_or_zero())
+                    } else {
+                        reflect(to_light, normal).dot(to_viewer)
+                    };
+                    // The seeds' specular term has no N·L factor: undo the one in `irradiance`.
+                    let intensity = light.color * strength;
+                    terms.specular +=
+                        material.specular * intensity * specular_power(cosine, material.shininess);
+                }
+            }
+            LightingModel::CookTorrance(surface) => {
+                let reflection = cook_torrance(&surface, normal, to_light, to_viewer);
+                terms.diffuse += material.diffuse * (Vec3::ONE - reflection.fresnel) * irradiance;
+                terms.specular += reflection.specular * irradiance;
+            }
         }
     }
     terms
+}
+
+/// What a Cook-Torrance surface reflects towards the viewer from one light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CookTorranceReflection {
+    /// `F`: the share of light reflected specularly at this angle; `1 − F` is left for diffuse.
+    pub fresnel: Vec3,
+    /// `π·F·D·G / (4(N·V)(N·L))`: multiplied by the light's `I·(N·L)` it is the specular term.
+    /// The π matches the Lambert term `k_d·I·(N·L)` used without its 1/π, so both terms share
+    /// units and a white, smooth, normal-incidence mirror returns `F0·I`.
+    pub specular: Vec3,
+}
+
+/// Cook-Torrance's microfacet BRDF (seed 002) for unit vectors `normal`, `to_light`,
+/// `to_viewer`, with `N·L > 0`:
+///
+/// ```text
+/// F = F0 + (1 − F0)(1 − V·H)^5                                  Schlick
+/// D = exp((cos²α − 1)/(m² cos²α)) / (π m² cos⁴α), cos α = N·H    Beckmann
+///   = α² / (π ((N·H)²(α² − 1) + 1)²)                             GGX
+/// G = min(1, 2(N·H)(N·V)/(V·H), 2(N·H)(N·L)/(V·H))               Cook-Torrance
+/// ```
+///
+/// `G / ((N·V)(N·L))` is evaluated as one minimum of three ratios, so grazing angles
+/// (N·V → 0 or N·L → 0) stay finite. A viewer below the surface (N·V ≤ 0) sees no highlight.
+pub fn cook_torrance(
+    surface: &crate::scene::Microfacet,
+    normal: Vec3,
+    to_light: Vec3,
+    to_viewer: Vec3,
+) -> CookTorranceReflection {
+    let half = (to_light + to_viewer).normalize_or_zero();
+    let v_dot_h = to_viewer.dot(half).max(0.0);
+    let fresnel = surface.fresnel + (Vec3::ONE - surface.fresnel) * (1.0 - v_dot_h).powi(5);
+    let n_dot_v = normal.dot(to_viewer);
+    let n_dot_l = normal.dot(to_light);
+    let n_dot_h = normal.dot(half);
+    if n_dot_v <= 0.0 || n_dot_l <= 0.0 || n_dot_h <= 0.0 || v_dot_h <= 0.0 {
+        return CookTorranceReflection {
+            fresnel,
+            specular: Vec3::ZERO,
+        };
+    }
+    let distribution = microfacet_distribution(surface, n_dot_h);
+    let g_over_nv_nl = (1.0 / (n_dot_v * n_dot_l))
+        .min(2.0 * n_dot_h / (v_dot_h * n_dot_l))
+        .min(2.0 * n_dot_h / (v_dot_h * n_dot_v));
+    let specular = fresnel * (std::f32::consts::PI * distribution * g_over_nv_nl / 4.0);
+    CookTorranceReflection { fresnel, specular }
+}
+
+/// `D(N·H)` of the surface's distribution.
+pub fn microfacet_distribution(surface: &crate::scene::Microfacet, n_dot_h: f32) -> f32 {
+    use std::f32::consts::PI;
+    let m2 = surface.roughness * surface.roughness;
+    let cos2 = n_dot_h * n_dot_h;
+    match surface.distribution {
+        crate::scene::MicrofacetDistribution::Beckmann => {
+            if cos2 <= 0.0 {
+                return 0.0;
+            }
+            ((cos2 - 1.0) / (m2 * cos2)).exp() / (PI * m2 * cos2 * cos2)
+        }
+        crate::scene::MicrofacetDistribution::Ggx => {
+            let d = cos2 * (m2 - 1.0) + 1.0;
+            m2 / (PI * d * d)
+        }
+    }
 }
 
 /// `R = 2(N·L)N − L`: the direction `to_light` mirrors into about `normal` (seed 000).
@@ -392,5 +471,110 @@ mod tests {
             Vec3::Z,
         );
         check(terms.total(), Vec3::new(0.1, 0.7, 0.1));
+    }
+}
+
+#[cfg(test)]
+mod cook_torrance_tests {
+    use super::*;
+    use crate::scene::{Microfacet, MicrofacetDistribution};
+
+    fn surface(roughness: f32, distribution: MicrofacetDistribution) -> Microfacet {
+        Microfacet {
+            roughness,
+            fresnel: Vec3::splat(0.04),
+            distribution,
+        }
+    }
+
+    fn check(got: f32, expected: f32) {
+        assert!(
+            (got - expected).abs() < 1e-5 * expected.abs().max(1.0),
+            "got {got}, expected {expected}"
+        );
+    }
+
+    /// N = L = V: H = N, F = F0, G = 1, D = 1/(π m²) for both distributions, so the specular
+    /// factor is F0·π·D/4 = F0/(4m²): with m = 0.5 exactly F0.
+    #[test]
+    fn normal_incidence_by_hand() {
+        for distribution in [MicrofacetDistribution::Beckmann, MicrofacetDistribution::Ggx] {
+            let r = cook_torrance(&surface(0.5, distribution), Vec3::Z, Vec3::Z, Vec3::Z);
+            check(r.fresnel.x, 0.04);
+            check(r.specular.x, 0.04);
+            check(
+                microfacet_distribution(&surface(0.5, distribution), 1.0),
+                1.0 / (std::f32::consts::PI * 0.25),
+            );
+        }
+    }
+
+    /// L and V 30° either side of N: H = N still, V·H = cos 30°.
+    /// F = 0.04 + 0.96(1 − cos 30°)^5, G = 1, spec = F·π·D/(4 cos² 30°) with π·D = 1/m² = 4.
+    #[test]
+    fn symmetric_reflection_by_hand() {
+        let (s, c) = (30f32.to_radians().sin(), 30f32.to_radians().cos());
+        let (l, v) = (Vec3::new(s, 0.0, c), Vec3::new(-s, 0.0, c));
+        let r = cook_torrance(&surface(0.5, MicrofacetDistribution::Beckmann), Vec3::Z, l, v);
+        let fresnel = 0.04 + 0.96 * (1.0 - c).powi(5);
+        check(r.fresnel.x, fresnel);
+        check(r.specular.x, fresnel * 4.0 / (4.0 * c * c));
+    }
+
+    /// Off the peak, Beckmann by hand: N·H = cos 20° gives D = exp(−tan² 20°/m²)/(π m² cos⁴ 20°).
+    #[test]
+    fn beckmann_off_peak_by_hand() {
+        let m = 0.3f32;
+        let cos = 20f32.to_radians().cos();
+        let tan2 = 20f32.to_radians().tan().powi(2);
+        let expected = (-tan2 / (m * m)).exp() / (std::f32::consts::PI * m * m * cos.powi(4));
+        check(
+            microfacet_distribution(&surface(m, MicrofacetDistribution::Beckmann), cos),
+            expected,
+        );
+    }
+
+    #[test]
+    fn grazing_angles_stay_finite() {
+        for distribution in [MicrofacetDistribution::Beckmann, MicrofacetDistribution::Ggx] {
+            for roughness in [1e-3, 0.05, 0.5, 1.0] {
+                for grazing in [0.0, 1e-7, 1e-4, 1e-2] {
+                    let tilted = Vec3::new((1.0f32 - grazing * grazing).sqrt(), 0.0, grazing);
+                    let opposite = Vec3::new(-tilted.x, 0.0, tilted.z);
+                    for (l, v) in [
+                        (tilted, Vec3::Z),
+                        (Vec3::Z, tilted),
+                        (tilted, opposite),
+                        (tilted, tilted),
+                    ] {
+                        let r = cook_torrance(&surface(roughness, distribution), Vec3::Z, l, v);
+                        assert!(
+                            r.specular.is_finite() && r.fresnel.is_finite(),
+                            "{distribution:?} m={roughness} {l} {v}: {r:?}"
+                        );
+                        assert!(r.specular.min_element() >= 0.0);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn energy_not_reflected_specularly_is_left_for_diffuse() {
+        let material = Material {
+            ambient: Vec3::ZERO,
+            diffuse: Vec3::ONE,
+            specular: Vec3::ZERO,
+            shininess: 1.0,
+            emission: Vec3::ZERO,
+            model: LightingModel::CookTorrance(surface(0.5, MicrofacetDistribution::Beckmann)),
+        };
+        let light = ShadingLight {
+            color: Vec3::ONE,
+            kind: ShadingLightKind::Directional { to_light: Vec3::Z },
+        };
+        let terms = illuminate(&material, &[light], Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z);
+        check(terms.diffuse.x, 1.0 - 0.04);
+        check(terms.specular.x, 0.04);
     }
 }

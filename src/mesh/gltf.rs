@@ -31,17 +31,17 @@
 //!
 //! # Metallic-roughness to [`Material`]
 //!
-//! The renderer's Blinn-Phong model gets the closest equivalent of glTF's
-//! `pbrMetallicRoughness`:
+//! glTF's `pbrMetallicRoughness` maps onto the Cook-Torrance model with the GGX distribution
+//! (the BRDF the glTF specification describes), not onto a Phong approximation:
 //!
-//! * diffuse = ambient = `baseColorFactor.rgb` (ambient equal to diffuse, as for OBJ);
-//! * specular = `lerp(0.04, baseColor, metallic)`: the metallic-roughness model's
-//!   reflectance at normal incidence (F0), 4 % for dielectrics, the base colour for metals;
-//! * shininess from the roughness `r` by [`blinn_phong_exponent`]: GGX's `α = r²` and the
-//!   Blinn-Phong exponent with the same highlight width as a Beckmann lobe of that `α`,
-//!   `n = 2/α² − 2`, clamped to [1, 1000];
-//! * emission = `emissiveFactor` × `KHR_materials_emissive_strength` (default 1);
-//! * model [`LightingModel::BlinnPhong`].
+//! * roughness `α = r²` from the perceptual roughness `r` (floored at 10⁻³: a perfect mirror
+//!   has no finite distribution);
+//! * `F0 = lerp(0.04, baseColor, metallic)`: 4 % for dielectrics, the base colour for metals;
+//! * diffuse = `baseColor·(1 − metallic)` (metals have no diffuse term), further weighted by
+//!   `1 − F` when lit (the seed's energy conservation `k_s + k_d = 1`);
+//! * ambient = `baseColor`, specular (used only by the debug views of other models) = `F0`;
+//! * shininess = [`blinn_phong_exponent`] (used if the scene switches the model to Phong);
+//! * emission = `emissiveFactor` × `KHR_materials_emissive_strength` (default 1).
 //!
 //! Textures are not sampled (a warning says so). Factors then stand for the whole
 //! material, except one case: with a `metallicRoughnessTexture`, `metallicFactor` only
@@ -58,7 +58,7 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
 use super::{LoadedMesh, Mesh, MeshError, MeshOptions, io_error_text, normals};
-use crate::scene::{LightingModel, Material};
+use crate::scene::{LightingModel, Material, Microfacet, MicrofacetDistribution};
 
 /// Required extensions a file may list and still load: both are understood by the `gltf`
 /// crate as built here, and neither changes the geometry (`KHR_lights_punctual` adds lights,
@@ -92,17 +92,27 @@ pub fn material_from_factors(base_color: Vec3, metallic: f32, roughness: f32, em
     } else {
         1.0
     };
+    let roughness = if roughness.is_finite() {
+        roughness.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
+    let fresnel = Vec3::splat(0.04).lerp(base_color, metallic);
     Material {
         ambient: base_color,
-        diffuse: base_color,
-        specular: Vec3::splat(0.04).lerp(base_color, metallic),
+        diffuse: base_color * (1.0 - metallic),
+        specular: fresnel,
         shininess: blinn_phong_exponent(roughness),
         emission: if emission.is_finite() {
             emission
         } else {
             Vec3::ZERO
         },
-        model: LightingModel::BlinnPhong,
+        model: LightingModel::CookTorrance(Microfacet {
+            roughness: (roughness * roughness).max(1e-3),
+            fresnel,
+            distribution: MicrofacetDistribution::Ggx,
+        }),
     }
 }
 
@@ -705,7 +715,12 @@ mod tests {
             (Vec3::new(0.8, 0.0, 0.0), Vec3::new(0.8, 0.0, 0.0))
         );
         assert!(red.specular.distance(Vec3::splat(0.04)) < 1e-7);
-        assert_eq!((red.shininess, red.model), (1.0, LightingModel::BlinnPhong));
+        let expected = Microfacet {
+            roughness: 1.0,
+            fresnel: Vec3::splat(0.04),
+            distribution: MicrofacetDistribution::Ggx,
+        };
+        assert_eq!(red.model, LightingModel::CookTorrance(expected));
         assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     }
 
@@ -714,9 +729,10 @@ mod tests {
         let loaded = check_asset("Triangle/glTF/Triangle.gltf", 1);
         assert_eq!(loaded.mesh.materials, vec![default_material()]);
         let white_metal = default_material();
+        // A metal: no diffuse term, F0 = the base colour.
         assert_eq!(
-            (white_metal.diffuse, white_metal.specular, white_metal.shininess),
-            (Vec3::ONE, Vec3::ONE, 1.0)
+            (white_metal.diffuse, white_metal.specular, white_metal.ambient),
+            (Vec3::ZERO, Vec3::ONE, Vec3::ONE)
         );
     }
 

@@ -20,7 +20,10 @@ use crate::render::DebugView;
 use crate::render::clip::{Clipped, clip_triangle};
 use crate::render::raster::{GUARD_BAND_PIXELS, RasterTriangle, ScreenVertex, setup_triangle};
 use crate::scene::presets::default_material;
-use crate::scene::{BackFaces, Camera, Light, Material, Object, Projection, Scene, Shading};
+use crate::scene::{
+    BackFaces, Camera, Light, LightingComponent, Material, NormalInterpolation, Object, Projection, Scene,
+    Shading,
+};
 
 /// Triangles per parallel work item: large enough to amortise scheduling, small enough to
 /// balance two to a few dozen cores. Fixed, so that output order never depends on threads.
@@ -34,6 +37,8 @@ pub struct Frame {
     pub triangles: Vec<FrameTriangle>,
     pub raster: Vec<RasterTriangle>,
     pub materials: Vec<Material>,
+    /// One per scene object; `FrameTriangle::object` indexes this.
+    pub objects: Vec<ObjectStyle>,
     pub lights: Vec<ShadingLight>,
     pub ambient_light: Vec3,
     pub viewer: Viewer,
@@ -57,11 +62,42 @@ pub struct FrameTriangle {
     /// Indices into `Frame::vertices`, counter-clockwise from the front.
     pub vertices: [u32; 3],
     pub material: u32,
-    pub shading: Shading,
+    /// Index into `Frame::objects`.
+    pub object: u32,
     /// Unit geometric normal of the front side, zero for a degenerate triangle.
     pub face_normal: Vec3,
-    /// Flat objects: the colour of the side that faces the camera.
+    /// Flat and constant objects: the colour of the side that faces the camera.
     pub flat_color: Vec3,
+}
+
+/// How an object is shaded: the settings the shading stage reads per pixel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectStyle {
+    pub shading: Shading,
+    pub back_faces: BackFaces,
+    pub component: LightingComponent,
+    pub normal_interpolation: NormalInterpolation,
+}
+
+impl ObjectStyle {
+    fn of(object: &Object) -> Self {
+        ObjectStyle {
+            shading: object.shading,
+            back_faces: object.back_faces,
+            component: object.component,
+            normal_interpolation: object.normal_interpolation,
+        }
+    }
+
+    /// The normal lighting uses on the side being shaded: flipped towards the viewer for back
+    /// faces of `ReverseLit` objects, as it is otherwise.
+    pub fn side_normal(&self, normal: Vec3, back_facing: bool) -> Vec3 {
+        if back_facing && matches!(self.back_faces, BackFaces::ReverseLit | BackFaces::Cull) {
+            -normal
+        } else {
+            normal
+        }
+    }
 }
 
 /// Where the viewer is, for the view vector `V`.
@@ -83,27 +119,47 @@ impl Viewer {
 }
 
 impl Frame {
-    /// Lights the surface point and returns the colour the frame's view asks for.
-    pub fn light(&self, material: u32, position: Vec3, normal: Vec3) -> Vec3 {
+    /// Lights a surface point of an object with `style`, on its front or back side, and returns
+    /// the colour the frame's view and the object's component ask for. `normal` is the surface's
+    /// own (front) normal; the back-face mode decides what the back side uses.
+    pub fn light(
+        &self,
+        material: u32,
+        style: &ObjectStyle,
+        position: Vec3,
+        normal: Vec3,
+        back_facing: bool,
+    ) -> Vec3 {
+        let unlit = back_facing && style.back_faces == BackFaces::Unlit;
         let terms = illuminate(
             &self.materials[material as usize],
-            &self.lights,
+            if unlit { &[] } else { &self.lights },
             self.ambient_light,
             position,
-            normal,
+            style.side_normal(normal, back_facing),
             self.viewer.to_viewer(position),
         );
-        select_view(self.debug_view, &terms)
+        select_component(self.debug_view, style.component, &terms)
     }
 }
 
-/// The part of the lighting a view shows (the whole colour unless a component view is asked).
-pub fn select_view(view: Option<DebugView>, terms: &LightingTerms) -> Vec3 {
-    match view {
-        Some(DebugView::Ambient) => terms.ambient,
-        Some(DebugView::Diffuse) => terms.diffuse,
-        Some(DebugView::Specular) => terms.specular,
-        None | Some(DebugView::Normals) | Some(DebugView::Depth) => terms.total(),
+/// The terms a pixel shows: the debug view's if one is asked, else the object's component.
+pub fn select_component(
+    view: Option<DebugView>,
+    component: LightingComponent,
+    terms: &LightingTerms,
+) -> Vec3 {
+    let component = match view {
+        Some(DebugView::Ambient) => LightingComponent::Ambient,
+        Some(DebugView::Diffuse) => LightingComponent::Diffuse,
+        Some(DebugView::Specular) => LightingComponent::Specular,
+        None | Some(DebugView::Normals) | Some(DebugView::Depth) => component,
+    };
+    match component {
+        LightingComponent::All => terms.total(),
+        LightingComponent::Ambient => terms.ambient,
+        LightingComponent::Diffuse => terms.diffuse,
+        LightingComponent::Specular => terms.specular,
     }
 }
 
@@ -116,6 +172,7 @@ pub fn build_frame(scene: &Scene, debug_view: Option<DebugView>) -> Frame {
         triangles: Vec::with_capacity(scene.triangle_count()),
         raster: Vec::new(),
         materials: Vec::new(),
+        objects: scene.objects.iter().map(ObjectStyle::of).collect(),
         lights: scene
             .lights
             .iter()
@@ -132,8 +189,8 @@ pub fn build_frame(scene: &Scene, debug_view: Option<DebugView>) -> Frame {
         guard_x: GUARD_BAND_PIXELS / width as f32,
         guard_y: GUARD_BAND_PIXELS / height as f32,
     };
-    for object in &scene.objects {
-        add_object(&mut frame, object, &camera, &viewport);
+    for (index, object) in scene.objects.iter().enumerate() {
+        add_object(&mut frame, index as u32, object, &camera, &viewport);
     }
     frame
 }
@@ -294,9 +351,16 @@ impl ObjectTransforms {
     }
 }
 
-fn add_object(frame: &mut Frame, object: &Object, camera: &CameraSetup, viewport: &Viewport) {
+fn add_object(
+    frame: &mut Frame,
+    object_index: u32,
+    object: &Object,
+    camera: &CameraSetup,
+    viewport: &Viewport,
+) {
     let mesh = &*object.mesh;
     let transforms = ObjectTransforms::new(object, camera);
+    let style = frame.objects[object_index as usize];
 
     // Materials: the object's own, else the mesh's, else the default.
     let material_base = frame.materials.len() as u32;
@@ -305,6 +369,7 @@ fn add_object(frame: &mut Frame, object: &Object, camera: &CameraSetup, viewport
         (None, true) => frame.materials.push(default_material()),
         (None, false) => frame.materials.extend_from_slice(&mesh.materials),
     }
+    let material_count = frame.materials.len() as u32 - material_base;
     let uses_mesh_materials = object.material.is_none() && !mesh.materials.is_empty();
     let triangle_material = |t: usize| -> u32 {
         if uses_mesh_materials {
@@ -332,7 +397,6 @@ fn add_object(frame: &mut Frame, object: &Object, camera: &CameraSetup, viewport
         .par_iter()
         .map(|&p| transforms.clip_from_model * p.extend(1.0))
         .collect();
-    let shading = object.shading;
     let new_vertices: Vec<FrameVertex> = mesh
         .positions
         .par_iter()
@@ -341,8 +405,8 @@ fn add_object(frame: &mut Frame, object: &Object, camera: &CameraSetup, viewport
         .map(|(v, (&p, &n))| {
             let position = transforms.world_from_model.transform_point3(p);
             let normal = (transforms.normal_matrix * n).normalize_or_zero();
-            let color = if shading == Shading::Gouraud {
-                frame.light(vertex_materials[v], position, normal)
+            let color = if style.shading == Shading::Gouraud {
+                frame.light(vertex_materials[v], &style, position, normal, false)
             } else {
                 Vec3::ZERO
             };
@@ -354,6 +418,19 @@ fn add_object(frame: &mut Frame, object: &Object, camera: &CameraSetup, viewport
         })
         .collect();
     frame.vertices.extend(new_vertices);
+
+    // Constant shading: one colour per material for the whole object, lit at the centre of its
+    // bounds with the normal facing the viewer.
+    let constant_colors: Vec<Vec3> = if style.shading == Shading::Constant {
+        let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+        let center = transforms.world_from_model.transform_point3((lo + hi) / 2.0);
+        let normal = frame.viewer.to_viewer(center);
+        (material_base..material_base + material_count)
+            .map(|material| frame.light(material, &style, center, normal, false))
+            .collect()
+    } else {
+        Vec::new()
+    };
 
     // Triangles, in fixed-size chunks.
     let triangle_base = frame.triangles.len();
@@ -373,12 +450,13 @@ fn add_object(frame: &mut Frame, object: &Object, camera: &CameraSetup, viewport
                     corners
                 };
                 let source = (triangle_base + t) as u32;
+                let material = triangle_material(t);
                 let triangle = FrameTriangleInput {
                     corners,
                     vertex_base,
-                    material: triangle_material(t),
-                    shading,
-                    back_faces: object.back_faces,
+                    material,
+                    object: object_index,
+                    constant_color: constant_colors.get((material - material_base) as usize).copied(),
                     source,
                 };
                 frame_triangles.push(process_triangle(
@@ -403,8 +481,9 @@ struct FrameTriangleInput {
     corners: [u32; 3],
     vertex_base: u32,
     material: u32,
-    shading: Shading,
-    back_faces: BackFaces,
+    object: u32,
+    /// Constant-shaded objects: the object's colour for this material.
+    constant_color: Option<Vec3>,
     source: u32,
 }
 
@@ -420,23 +499,23 @@ fn process_triangle(
     let [p0, p1, p2] = vertices.map(|v| frame.vertices[v as usize].position);
     let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
     let clip = input.corners.map(|v| clip_positions[v as usize]);
+    let style = &frame.objects[input.object as usize];
     let mut triangle = FrameTriangle {
         vertices,
         material: input.material,
-        shading: input.shading,
+        object: input.object,
         face_normal,
-        flat_color: Vec3::ZERO,
+        flat_color: input.constant_color.unwrap_or(Vec3::ZERO),
     };
 
     let facing = homogeneous_facing(clip);
     let back_facing = facing < 0.0;
-    if !(facing != 0.0) || (back_facing && input.back_faces == BackFaces::Cull) {
+    if facing == 0.0 || facing.is_nan() || (back_facing && style.back_faces == BackFaces::Cull) {
         return triangle; // edge-on, degenerate, non-finite, or culled
     }
-    if input.shading == Shading::Flat {
+    if style.shading == Shading::Flat {
         let centroid = (p0 + p1 + p2) / 3.0;
-        let normal = if back_facing { -face_normal } else { face_normal };
-        triangle.flat_color = frame.light(input.material, centroid, normal);
+        triangle.flat_color = frame.light(input.material, style, centroid, face_normal, back_facing);
     }
 
     let (width, height) = (viewport.width, viewport.height);

@@ -14,9 +14,9 @@
 use glam::Vec3;
 
 use crate::render::DebugView;
-use crate::render::geometry::{Frame, FrameTriangle};
+use crate::render::geometry::Frame;
 use crate::render::raster::{NO_TRIANGLE, RasterTriangle, Visibility, edge_values};
-use crate::scene::Shading;
+use crate::scene::{NormalInterpolation, Shading};
 
 /// The shaded pixels of one tile, row-major.
 #[derive(Debug, Clone, PartialEq)]
@@ -67,53 +67,162 @@ fn shade_pixel(
 ) -> Vec3 {
     let weights = source_weights(raster, px, py);
     let triangle = &frame.triangles[raster.source as usize];
+    let style = &frame.objects[triangle.object as usize];
     let [a, b, c] = triangle.vertices.map(|v| &frame.vertices[v as usize]);
     let interpolate = |x: Vec3, y: Vec3, z: Vec3| x * weights.x + y * weights.y + z * weights.z;
-    let side = if raster.back_facing { -1.0 } else { 1.0 };
+    let back = raster.back_facing;
     let position = interpolate(a.position, b.position, c.position);
+    let smooth_normal = || {
+        let interpolated = match style.normal_interpolation {
+            NormalInterpolation::Nlerp => interpolate(a.normal, b.normal, c.normal),
+            NormalInterpolation::Slerp => slerp_triangle([a.normal, b.normal, c.normal], weights),
+        };
+        renormalize_or(interpolated, triangle.face_normal)
+    };
 
     match frame.debug_view {
         Some(DebugView::Depth) => return Vec3::splat(position.dot(frame.forward)),
         Some(DebugView::Normals) => {
-            let normal = match triangle.shading {
-                Shading::Flat => triangle.face_normal,
-                Shading::Gouraud | Shading::Phong => {
-                    smooth_normal(triangle, interpolate(a.normal, b.normal, c.normal))
-                }
+            let normal = match style.shading {
+                Shading::Flat | Shading::Constant => triangle.face_normal,
+                Shading::Gouraud | Shading::Phong => smooth_normal(),
             };
-            return side * normal * 0.5 + 0.5;
+            return style.side_normal(normal, back) * 0.5 + 0.5;
         }
         _ => {}
     }
 
-    match triangle.shading {
-        Shading::Flat => triangle.flat_color,
-        Shading::Gouraud if !raster.back_facing => interpolate(a.color, b.color, c.color),
+    match style.shading {
+        Shading::Flat | Shading::Constant => triangle.flat_color,
+        Shading::Gouraud if !back => interpolate(a.color, b.color, c.color),
         Shading::Gouraud => {
             let colors = match *back_colors {
                 Some((source, colors)) if source == raster.source => colors,
                 _ => {
-                    let colors = [a, b, c].map(|v| frame.light(triangle.material, v.position, -v.normal));
+                    let colors =
+                        [a, b, c].map(|v| frame.light(triangle.material, style, v.position, v.normal, true));
                     *back_colors = Some((raster.source, colors));
                     colors
                 }
             };
             interpolate(colors[0], colors[1], colors[2])
         }
-        Shading::Phong => {
-            let normal = side * smooth_normal(triangle, interpolate(a.normal, b.normal, c.normal));
-            frame.light(triangle.material, position, normal)
-        }
+        Shading::Phong => frame.light(triangle.material, style, position, smooth_normal(), back),
     }
 }
 
-/// The interpolated normal renormalised; where the vertex normals cancel out (opposite normals
-/// on one edge), the face normal.
-fn smooth_normal(triangle: &FrameTriangle, interpolated: Vec3) -> Vec3 {
-    let length_squared = interpolated.length_squared();
+/// `v` scaled to unit length; where it has (almost) none, as when the vertex normals of an
+/// edge point in opposite directions, `fallback` (the face normal).
+fn renormalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
+    let length_squared = v.length_squared();
     if length_squared > 1e-12 {
-        interpolated / length_squared.sqrt()
+        v / length_squared.sqrt()
     } else {
-        triangle.face_normal
+        fallback
+    }
+}
+
+/// Spherical interpolation of three unit normals with barycentric `weights` (seed 000's SLERP,
+/// generalised to a triangle): first between the first two in the ratio of their weights, then
+/// from that towards the third by its weight. On an edge it is exactly the seed's two-point
+/// SLERP; inside it keeps unit length and equal angles per step along each of those arcs.
+pub fn slerp_triangle(normals: [Vec3; 3], weights: Vec3) -> Vec3 {
+    let first_two = weights.x + weights.y;
+    let edge = if first_two > 0.0 {
+        slerp(normals[0], normals[1], weights.y / first_two)
+    } else {
+        normals[0]
+    };
+    slerp(edge, normals[2], weights.z)
+}
+
+/// Seed 000's `n(t) = (sin((1 − t)θ)·n₀ + sin(tθ)·n₁) / sin θ`, evaluated in the equivalent
+/// form `n(t) = cos(tθ)·n₀ + sin(tθ)·u`, with `u` the unit vector perpendicular to `n₀` in the
+/// plane of the two, towards `n₁`. Dividing by `sin θ` loses all precision as θ nears π (θ
+/// itself is accurate, from `atan2(|n₀×n₁|, n₀·n₁)`, but `sin θ` then carries the rounding of π);
+/// this form stays unit length and exact at t = 0 for every θ. Near θ = 0 the chord is the arc:
+/// linear interpolation, renormalised. At θ = π every great circle joins the two: the arc turns
+/// about an axis perpendicular to `n₀`, chosen from `n₀` alone so the result is deterministic.
+/// A zero input gives a linear interpolation.
+pub fn slerp(n0: Vec3, n1: Vec3, t: f32) -> Vec3 {
+    const SMALL_SINE: f32 = 1e-6;
+    let cos = n0.dot(n1);
+    let cross = n0.cross(n1);
+    let sin = cross.length();
+    if n0 == Vec3::ZERO || n1 == Vec3::ZERO || (sin < SMALL_SINE && cos > 0.0) {
+        return n0.lerp(n1, t).normalize_or_zero();
+    }
+    let (theta, towards) = if sin < SMALL_SINE {
+        (std::f32::consts::PI, n0.any_orthonormal_vector())
+    } else {
+        (sin.atan2(cos), (cross / sin).cross(n0))
+    };
+    let (sin_t, cos_t) = (t * theta).sin_cos();
+    n0 * cos_t + towards * sin_t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn angle(a: Vec3, b: Vec3) -> f32 {
+        a.cross(b).length().atan2(a.dot(b))
+    }
+
+    #[test]
+    fn slerp_takes_equal_angle_steps_where_nlerp_does_not() {
+        let (n0, n1) = (Vec3::X, Vec3::Y);
+        let quarter = slerp(n0, n1, 0.25);
+        assert!((angle(n0, quarter) - std::f32::consts::FRAC_PI_8).abs() < 1e-6);
+        let nlerp = n0.lerp(n1, 0.25).normalize();
+        // Nlerp at t = 1/4 is only 18.4° along, not 22.5°.
+        assert!((angle(n0, nlerp) - (0.25f32 / 0.75).atan()).abs() < 1e-6);
+        assert!((angle(quarter, nlerp)).abs() > 0.06);
+    }
+
+    #[test]
+    fn slerp_ends_and_unit_length() {
+        let (n0, n1) = (Vec3::new(0.6, 0.8, 0.0), Vec3::new(0.0, 0.6, 0.8));
+        assert!((slerp(n0, n1, 0.0) - n0).length() < 1e-6);
+        assert!((slerp(n0, n1, 1.0) - n1).length() < 1e-6);
+        for k in 0..=10 {
+            assert!((slerp(n0, n1, k as f32 / 10.0).length() - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn slerp_is_stable_near_zero_and_pi() {
+        let n0 = Vec3::Z;
+        for tiny in [0.0, 1e-9, 1e-6, 1e-4] {
+            let near = Vec3::new(tiny, 0.0, 1.0).normalize();
+            let opposite = Vec3::new(tiny, 0.0, -1.0).normalize();
+            for t in [0.0, 0.3, 0.5, 1.0] {
+                for n1 in [near, opposite] {
+                    let n = slerp(n0, n1, t);
+                    assert!(
+                        n.is_finite() && (n.length() - 1.0).abs() < 1e-5,
+                        "θ≈{tiny} t={t}: {n}"
+                    );
+                }
+            }
+            // Halfway between opposite normals is a quarter turn from both.
+            let half = slerp(n0, opposite, 0.5);
+            assert!((angle(n0, half) - std::f32::consts::FRAC_PI_2).abs() < 1e-3);
+        }
+        assert!(slerp(Vec3::ZERO, Vec3::Z, 0.5).is_finite());
+    }
+
+    #[test]
+    fn triangle_slerp_matches_edges_and_corners() {
+        let normals = [Vec3::X, Vec3::Y, Vec3::Z];
+        for (i, corner) in normals.iter().enumerate() {
+            let mut w = Vec3::ZERO;
+            w[i] = 1.0;
+            assert!((slerp_triangle(normals, w) - *corner).length() < 1e-6);
+        }
+        let edge = slerp_triangle(normals, Vec3::new(0.5, 0.5, 0.0));
+        assert!((edge - slerp(Vec3::X, Vec3::Y, 0.5)).length() < 1e-6);
+        let center = slerp_triangle(normals, Vec3::splat(1.0 / 3.0));
+        assert!(center.is_finite() && (center.length() - 1.0).abs() < 1e-6);
     }
 }

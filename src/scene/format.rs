@@ -90,6 +90,14 @@ pub enum LightingModelFile {
     BlinnPhong,
     Lambert,
     Unlit,
+    CookTorrance,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename = "Distribution", deny_unknown_fields)]
+pub enum DistributionFile {
+    Beckmann,
+    Ggx,
 }
 
 /// A material, in either of two styles that may be mixed: OpenGL's explicit coefficients
@@ -110,6 +118,14 @@ pub struct MaterialFile {
     pub shininess: Option<f32>,
     pub emission: Option<RgbFile>,
     pub model: Option<LightingModelFile>,
+    /// Cook-Torrance: microfacet roughness.
+    pub roughness: Option<f32>,
+    /// Cook-Torrance: 0 dielectric … 1 metal.
+    pub metallic: Option<f32>,
+    /// Cook-Torrance: Fresnel reflectance at normal incidence, `F0`.
+    pub fresnel: Option<RgbFile>,
+    /// Cook-Torrance: the microfacet distribution.
+    pub distribution: Option<DistributionFile>,
 }
 
 /// `(constant: 1, linear: 0, quadratic: 0)`.
@@ -167,6 +183,7 @@ pub enum MeshFile {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename = "Shading", deny_unknown_fields)]
 pub enum ShadingFile {
+    Constant,
     Flat,
     Gouraud,
     Phong,
@@ -175,10 +192,26 @@ pub enum ShadingFile {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename = "BackFaces", deny_unknown_fields)]
 pub enum BackFacesFile {
-    /// Lit as seen from behind: the normal is flipped (two-sided lighting).
+    ReverseLit,
     Lit,
-    /// Not drawn.
+    Unlit,
     Cull,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename = "Component", deny_unknown_fields)]
+pub enum ComponentFile {
+    All,
+    Ambient,
+    Diffuse,
+    Specular,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename = "NormalInterpolation", deny_unknown_fields)]
+pub enum NormalInterpolationFile {
+    Nlerp,
+    Slerp,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -195,6 +228,8 @@ pub struct ObjectFile {
     /// Degrees; used when normals are computed for a mesh file without them.
     pub crease_angle: Option<f32>,
     pub back_faces: Option<BackFacesFile>,
+    pub component: Option<ComponentFile>,
+    pub normal_interpolation: Option<NormalInterpolationFile>,
 }
 
 /// `scale: 2` or `scale: (1, 2, 1)`.

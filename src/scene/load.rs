@@ -21,13 +21,15 @@ use crate::diag::{Diagnostic, SourceId, Sources, from_ron_error};
 use crate::mesh::{LoadedMesh, Mesh, MeshError, MeshOptions, gltf::load_gltf, obj::load_obj, primitives};
 use crate::ron_path;
 use crate::scene::format::{
-    self, AttenuationFile, BackFacesFile, CameraFile, LightFile, LightingModelFile, MaterialFile,
-    MaterialLibraryFile, MaterialRefFile, MeshFile, OrderedMap, ScaleFile, SceneFile, ShadingFile,
+    self, AttenuationFile, BackFacesFile, CameraFile, ComponentFile, DistributionFile, LightFile,
+    LightingModelFile, MaterialFile, MaterialLibraryFile, MaterialRefFile, MeshFile, NormalInterpolationFile,
+    OrderedMap, ScaleFile, SceneFile, ShadingFile,
 };
 use crate::scene::locate::{PathSegment, locate, locate_keys};
 use crate::scene::presets::{self, DEFAULT_RECIPE, MaterialRecipe};
 use crate::scene::{
-    Attenuation, BackFaces, Camera, ImageSettings, Light, LightingModel, Object, Projection, Scene, Shading,
+    Attenuation, BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Microfacet,
+    MicrofacetDistribution, NormalInterpolation, Object, Projection, Scene, Shading,
 };
 
 /// Image size when the scene gives none.
@@ -575,6 +577,22 @@ impl Loader<'_> {
             1.0,
         );
         let shininess = strength(self, material.shininess, "shininess", f64::INFINITY);
+        let metallic = strength(self, material.metallic, "metallic", 1.0);
+        let roughness = match material.roughness {
+            Some(value) => {
+                let at_path = field("roughness");
+                let checked = self.ranged(
+                    f64::from(value),
+                    1e-3,
+                    1.0,
+                    At::new(source, &at_path),
+                    "`roughness`",
+                );
+                ok &= checked.is_some();
+                checked.map(|v| v as f32)
+            }
+            None => None,
+        };
         let mut color_field = |loader: &mut Self, value: Option<[f32; 3]>, name: &str| -> Option<Vec3> {
             let value = value?;
             let at_path = field(name);
@@ -593,6 +611,7 @@ impl Loader<'_> {
         let diffuse = color_field(self, material.diffuse, "diffuse");
         let specular = color_field(self, material.specular, "specular");
         let emission = color_field(self, material.emission, "emission");
+        let fresnel = color_field(self, material.fresnel, "fresnel");
         if !ok {
             return None;
         }
@@ -635,6 +654,21 @@ impl Loader<'_> {
                 LightingModelFile::BlinnPhong => LightingModel::BlinnPhong,
                 LightingModelFile::Lambert => LightingModel::Lambert,
                 LightingModelFile::Unlit => LightingModel::Unlit,
+                // The parameters are filled in when the recipe is resolved.
+                LightingModelFile::CookTorrance => LightingModel::CookTorrance(Microfacet {
+                    roughness: 0.0,
+                    fresnel: Vec3::ZERO,
+                    distribution: MicrofacetDistribution::Beckmann,
+                }),
+            };
+        }
+        recipe.roughness = roughness.unwrap_or(recipe.roughness);
+        recipe.metallic = metallic.unwrap_or(recipe.metallic);
+        recipe.fresnel = fresnel.or(recipe.fresnel);
+        if let Some(distribution) = material.distribution {
+            recipe.distribution = match distribution {
+                DistributionFile::Beckmann => MicrofacetDistribution::Beckmann,
+                DistributionFile::Ggx => MicrofacetDistribution::Ggx,
             };
         }
         Some(recipe)
@@ -783,10 +817,23 @@ impl Loader<'_> {
             None | Some(ShadingFile::Phong) => Shading::Phong,
             Some(ShadingFile::Gouraud) => Shading::Gouraud,
             Some(ShadingFile::Flat) => Shading::Flat,
+            Some(ShadingFile::Constant) => Shading::Constant,
         });
         let back_faces = match object.back_faces {
-            None | Some(BackFacesFile::Lit) => BackFaces::Lit,
+            None | Some(BackFacesFile::ReverseLit) => BackFaces::ReverseLit,
+            Some(BackFacesFile::Lit) => BackFaces::Lit,
+            Some(BackFacesFile::Unlit) => BackFaces::Unlit,
             Some(BackFacesFile::Cull) => BackFaces::Cull,
+        };
+        let component = match object.component {
+            None | Some(ComponentFile::All) => LightingComponent::All,
+            Some(ComponentFile::Ambient) => LightingComponent::Ambient,
+            Some(ComponentFile::Diffuse) => LightingComponent::Diffuse,
+            Some(ComponentFile::Specular) => LightingComponent::Specular,
+        };
+        let normal_interpolation = match object.normal_interpolation {
+            None | Some(NormalInterpolationFile::Nlerp) => NormalInterpolation::Nlerp,
+            Some(NormalInterpolationFile::Slerp) => NormalInterpolation::Slerp,
         };
         let name = object.name.clone().unwrap_or_else(|| format!("object {index}"));
         Some(Object {
@@ -796,6 +843,8 @@ impl Loader<'_> {
             shading,
             material: material?,
             back_faces,
+            component,
+            normal_interpolation,
         })
     }
 

@@ -137,7 +137,7 @@ pub struct Material {
 }
 
 /// The specular term (and whether there is lighting at all).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LightingModel {
     /// `k_s·I_l·max(R·V, 0)^n`, the seeds' Phong model.
     Phong,
@@ -147,11 +147,36 @@ pub enum LightingModel {
     Lambert,
     /// No lighting: the diffuse colour plus emission.
     Unlit,
+    /// The microfacet model of seed 002: specular `F·D·G / (4(N·V)(N·L))`, diffuse weighted by
+    /// `1 − F` (the seed's `k_s + k_d = 1`). See [`crate::lighting`] for the exact terms.
+    CookTorrance(Microfacet),
+}
+
+/// The parameters of a Cook-Torrance surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Microfacet {
+    /// Roughness `m`, the RMS slope of the microfacets (Beckmann) or GGX's `α`, in (0, 1].
+    pub roughness: f32,
+    /// `F0`, the Fresnel reflectance at normal incidence (Schlick's approximation).
+    pub fresnel: Vec3,
+    pub distribution: MicrofacetDistribution,
+}
+
+/// The microfacet normal distribution `D`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum MicrofacetDistribution {
+    /// Beckmann's, as Cook and Torrance used (seed 002).
+    Beckmann,
+    /// Trowbridge-Reitz (GGX), as glTF's metallic-roughness model uses.
+    Ggx,
 }
 
 /// Where lighting is evaluated (seeds 000, 001, 002).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Shading {
+    /// Once per object (seed 001's constant shading): one colour for the whole object, lit at
+    /// the centre of its bounds with the normal facing the viewer.
+    Constant,
     /// Once per triangle, with the face normal at the centroid.
     Flat,
     /// Once per vertex with the vertex normals; colours interpolated.
@@ -173,13 +198,43 @@ pub struct Object {
     /// are used, and [`presets::default_material`] where the mesh has none.
     pub material: Option<Material>,
     pub back_faces: BackFaces,
+    /// Which terms of the lighting this object shows.
+    pub component: LightingComponent,
+    /// How Phong shading interpolates normals.
+    pub normal_interpolation: NormalInterpolation,
 }
 
-/// What happens to triangles seen from behind.
+/// What happens to triangles seen from behind (MATLAB's `BackFaceLighting`, seed 002, plus
+/// culling).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum BackFaces {
-    /// Drawn and lit as seen from behind: the normal is flipped (two-sided lighting).
+    /// Lit with the normal flipped towards the viewer: two-sided lighting, seed 001's
+    /// `BackColor` (MATLAB's default, `reverselit`).
+    ReverseLit,
+    /// Lit with the normal as it is, pointing away from the viewer (one-sided lighting, as
+    /// OpenGL without two-sided lighting): usually dark.
     Lit,
+    /// Not lit: ambient and emission only.
+    Unlit,
     /// Not drawn (back-face culling).
     Cull,
+}
+
+/// The terms of the lighting equation an object shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LightingComponent {
+    /// Everything: emission, ambient, diffuse and specular.
+    All,
+    Ambient,
+    Diffuse,
+    Specular,
+}
+
+/// How interpolated normals are formed (seed 000).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum NormalInterpolation {
+    /// Interpolate component by component, then renormalise.
+    Nlerp,
+    /// Spherical linear interpolation: equal angles for equal steps.
+    Slerp,
 }

@@ -16,7 +16,7 @@
 
 use glam::Vec3;
 
-use crate::scene::{LightingModel, Material};
+use crate::scene::{LightingModel, Material, Microfacet, MicrofacetDistribution};
 
 /// A material before its coefficients are computed: MATLAB-style colour and strengths, and
 /// OpenGL-style explicit coefficients that take precedence where present.
@@ -35,7 +35,18 @@ pub struct MaterialRecipe {
     pub shininess: f32,
     pub emission: Vec3,
     pub model: LightingModel,
+    /// Cook-Torrance only: roughness `m` (Beckmann) or `α` (GGX).
+    pub roughness: f32,
+    /// Cook-Torrance only: 0 = dielectric (F0 = 0.04), 1 = metal (F0 = the diffuse colour, no
+    /// diffuse term), in between a blend (glTF's metallic-roughness convention).
+    pub metallic: f32,
+    /// Cook-Torrance only: an explicit `F0`, instead of the one `metallic` implies.
+    pub fresnel: Option<Vec3>,
+    pub distribution: MicrofacetDistribution,
 }
+
+/// `F0` of dielectrics (water, plastics, glass: about 4% reflected at normal incidence).
+pub const DIELECTRIC_FRESNEL: f32 = 0.04;
 
 impl MaterialRecipe {
     /// The coefficients of the lighting equation:
@@ -43,7 +54,7 @@ impl MaterialRecipe {
     /// each replaced by the explicit coefficient when one is set.
     pub fn resolve(&self) -> Material {
         let scr = self.specular_color_reflectance;
-        Material {
+        let mut material = Material {
             ambient: self.ambient.unwrap_or(self.ka * self.color),
             diffuse: self.diffuse.unwrap_or(self.kd * self.color),
             specular: self
@@ -52,7 +63,20 @@ impl MaterialRecipe {
             shininess: self.shininess,
             emission: self.emission,
             model: self.model,
+        };
+        if let LightingModel::CookTorrance(_) = self.model {
+            let base = material.diffuse;
+            let fresnel = self
+                .fresnel
+                .unwrap_or_else(|| Vec3::splat(DIELECTRIC_FRESNEL).lerp(base, self.metallic));
+            material.diffuse = base * (1.0 - self.metallic);
+            material.model = LightingModel::CookTorrance(Microfacet {
+                roughness: self.roughness,
+                fresnel,
+                distribution: self.distribution,
+            });
         }
+        material
     }
 
     /// True when `ambient`, `diffuse` and `specular` are all explicit, so `color` and the
@@ -76,6 +100,10 @@ pub const DEFAULT_RECIPE: MaterialRecipe = MaterialRecipe {
     shininess: 10.0,
     emission: Vec3::ZERO,
     model: LightingModel::Phong,
+    roughness: 0.3,
+    metallic: 0.0,
+    fresnel: None,
+    distribution: MicrofacetDistribution::Beckmann,
 };
 
 pub fn default_material() -> Material {

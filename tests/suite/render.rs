@@ -8,7 +8,8 @@ use lampshade::mesh::Mesh;
 use lampshade::render::raster::{PixelRect, for_each_covered_pixel};
 use lampshade::render::{RenderOptions, geometry::build_frame, render};
 use lampshade::scene::{
-    BackFaces, Camera, ImageSettings, Light, LightingModel, Material, Object, Projection, Scene, Shading,
+    BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Material, NormalInterpolation,
+    Object, Projection, Scene, Shading,
 };
 
 const UNLIT_WHITE: Material = Material {
@@ -27,7 +28,9 @@ fn object(mesh: Mesh, material: Material, shading: Shading) -> Object {
         transform: DMat4::IDENTITY,
         shading,
         material: Some(material),
-        back_faces: BackFaces::Lit,
+        back_faces: BackFaces::ReverseLit,
+        component: LightingComponent::All,
+        normal_interpolation: NormalInterpolation::Nlerp,
     }
 }
 
