@@ -61,6 +61,9 @@ pub struct RenderArgs {
     /// Image height in pixels, overriding the scene's.
     #[arg(long)]
     pub height: Option<u32>,
+    /// Samples per pixel (anti-aliasing: 1, 2, 4, 8 or 16), overriding the scene's.
+    #[arg(long)]
+    pub samples: Option<u32>,
     /// Worker threads (default: one per core). The image is identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
@@ -132,6 +135,7 @@ fn run_render(args: &RenderArgs) -> i32 {
     let load_options = LoadOptions {
         width: args.width,
         height: args.height,
+        samples: args.samples,
         shading: args.shading.map(|s| match s {
             ShadingArg::Flat => Shading::Flat,
             ShadingArg::Gouraud => Shading::Gouraud,

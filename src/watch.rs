@@ -1,10 +1,487 @@
-//! (being written)
+//! `lampshade watch`: re-render a scene whenever it, or any file it uses, changes, and keep going
+//! through mistakes.
+//!
+//! ```text
+//!          ┌─────────────────────────────────────────────────────────────────────┐
+//!          ▼                                                                     │
+//! notify events ──► wait_for_changes ──► build: pipeline::render_scene_file ──► write PNG ──► status line
+//! Ctrl-C            (quiet 50 ms)               (persistent MeshCache)          (atomic)      (+ preview)
+//!                                                      │                                     │
+//!                                                      └─► follow exactly the files read ───┘
+//! ```
+//!
+//! Design:
+//! - The build is the one `render` uses ([`render_scene_file`]), run in a loop with one
+//!   [`MeshCache`] kept across builds, so a mesh whose files have not changed is not read again:
+//!   editing a light in a scene with a million-triangle mesh costs the light, not the mesh.
+//! - The files followed are exactly those the last build read, whether it succeeded or failed,
+//!   missing ones included ([`files`]): an error in an include is fixed by editing the include,
+//!   and a file named before it exists is picked up when it is created.
+//! - Bursts of events are debounced by a quiet period ([`debounce`]); changes made during a render
+//!   are collected into the next one, which starts as soon as the current one ends.
+//! - A failed build prints its diagnostics, leaves the last good image untouched (the image is
+//!   only ever replaced by a complete new one, atomically) and waits for the next save. A panic
+//!   in a build is a bug, but it is caught here too: it is reported and the watch goes on with a
+//!   fresh mesh cache (the old one may hold whatever the panic interrupted).
+//! - One status line per build on stdout, numbered (`#3 ...`): what changed, the time per
+//!   stage, and the time from the first change seen to the image written. Diagnostics go to
+//!   stderr, like `render`'s.
+//! - Ctrl-C (or SIGTERM) stops the loop after the current build and exits with 0; a second
+//!   Ctrl-C exits at once.
+//! - `--serve` adds the browser preview ([`server`]).
+//!
+//! Rejected: re-running the whole `render` command per change (re-reads every mesh); a loop that
+//! polls modification times (latency or CPU, and misses a file replaced within one tick);
+//! rendering in a background thread that a new save cancels (the renderer has no cancellation
+//! points, and at the scene sizes hand-written files reach, finishing the current render and
+//! starting the next at once is as fast as abandoning it).
+
+mod debounce;
+mod files;
+mod server;
+
+use std::collections::BTreeSet;
+use std::panic::{self, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{self, Sender};
+use std::time::{Duration, Instant};
+
+use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, thousands, use_color};
+use crate::diag::render_diagnostics;
+use crate::output::{self, OutputError, PngCompression};
+use crate::pipeline::{RenderedScene, render_scene_file};
+use crate::render::RenderOptions;
+use crate::scene::load::{LoadError, LoadOptions, MeshCache};
+
+use debounce::{Changes, Debounce, Signal, wait_for_changes};
+use files::{FolderWatches, WatchedFiles};
+use server::PreviewServer;
+
+/// The debounce: long enough to cover the events of one save (a few milliseconds apart),
+/// short enough to stay well inside the 100 ms a change may take to show.
+const DEBOUNCE: Debounce = Debounce {
+    quiet: Duration::from_millis(50),
+    max_delay: Duration::from_millis(500),
+};
+
+/// The preview's port when `--port` is not given.
+pub const DEFAULT_PORT: u16 = 7800;
 
 /// Arguments of `lampshade watch`.
 #[derive(Debug, clap::Args)]
-pub struct WatchArgs {}
+pub struct WatchArgs {
+    /// The scene file (.ron) to render and follow.
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+    /// Output image. Default: the scene's path with `.png`.
+    #[arg(short, long, value_name = "OUT.png")]
+    pub output: Option<PathBuf>,
+    /// Image width in pixels, overriding the scene's.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels, overriding the scene's.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Worker threads (default: one per core). The image is identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+    /// Also serve a live preview page on http://127.0.0.1 (this machine only).
+    #[arg(long)]
+    pub serve: bool,
+    /// The preview's port; 0, or a port in use, picks a free one (the address is printed).
+    #[arg(long, default_value_t = DEFAULT_PORT, requires = "serve")]
+    pub port: u16,
+}
 
-pub fn run(_args: &WatchArgs) -> i32 {
-    eprintln!("error: `lampshade watch` is being written");
-    crate::cli::EXIT_BAD_INPUT
+/// Runs `lampshade watch` until Ctrl-C; returns the exit code.
+///
+/// Exit codes: `0` after Ctrl-C; `2` for arguments that cannot work (the output would replace
+/// the scene); `1` when watching or serving cannot start at all. Errors in the scene never end
+/// the watch.
+pub fn run(args: &WatchArgs) -> i32 {
+    let started = Instant::now();
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| args.scene.with_extension("png"));
+    if files::same_location(&args.scene, &output) {
+        eprintln!(
+            "error: the output `{}` would replace the scene; give another with `-o`",
+            output.display()
+        );
+        return EXIT_BAD_INPUT;
+    }
+
+    let (signal_sender, signals) = mpsc::channel();
+    let watches = {
+        let sender = signal_sender.clone();
+        FolderWatches::new(move |event| {
+            // The loop may be gone while notify still delivers: nothing left to tell.
+            let _ = sender.send(Signal::FileSystem {
+                event,
+                at: Instant::now(),
+            });
+        })
+    };
+    let watches = match watches {
+        Ok(watches) => watches,
+        Err(error) => {
+            eprintln!("error: cannot watch files: {error}");
+            return EXIT_OUTPUT_FAILED;
+        }
+    };
+    if let Err(error) = stop_on_ctrl_c(signal_sender) {
+        eprintln!("warning: cannot catch Ctrl-C ({error}); it will stop the watch abruptly");
+    }
+
+    let preview = if args.serve {
+        let scene_name = args.scene.file_name().map_or_else(
+            || args.scene.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        // An image from an earlier run is the last good image until the first build says otherwise.
+        let earlier_image = std::fs::read(&output).ok();
+        match PreviewServer::start(args.port, &scene_name, earlier_image) {
+            Ok(started) => {
+                if let Some(note) = started.port_note {
+                    eprintln!("note: {note}");
+                }
+                println!("preview at {}", started.server.url());
+                Some(started.server)
+            }
+            Err(error) => {
+                eprintln!("error: cannot serve the preview on 127.0.0.1: {error}");
+                return EXIT_OUTPUT_FAILED;
+            }
+        }
+    } else {
+        None
+    };
+
+    let mut session = WatchSession {
+        load_options: LoadOptions {
+            width: args.width,
+            height: args.height,
+            shading: None,
+        },
+        render_options: RenderOptions {
+            threads: args.threads.map(usize::from),
+            debug_view: None,
+        },
+        mesh_cache: MeshCache::default(),
+        files: WatchedFiles::new(&output),
+        watches,
+        preview,
+        builds: 0,
+        announced_files: Vec::new(),
+        announced_missing: Vec::new(),
+        color: use_color(),
+        scene: args.scene.clone(),
+        output,
+    };
+    // Follow the scene before reading it, so an edit made during the first build is not missed.
+    session.follow([args.scene.clone()]);
+    session.build(&Trigger::Start(started));
+    let mut report_watch_error = |error: notify::Error| eprintln!("warning: watching files: {error}");
+    while let Some(changes) = wait_for_changes(&signals, &session.files, DEBOUNCE, &mut report_watch_error) {
+        session.build(&Trigger::Changes(changes));
+    }
+    println!("stopped");
+    EXIT_OK
+}
+
+/// Sends [`Signal::Stop`] on the first Ctrl-C (or SIGTERM); exits at once on the second.
+fn stop_on_ctrl_c(signals: Sender<Signal>) -> Result<(), ctrlc::Error> {
+    let mut asked_already = false;
+    ctrlc::set_handler(move || {
+        if asked_already {
+            // 128 + SIGINT, the shell's convention for "interrupted".
+            std::process::exit(130);
+        }
+        asked_already = true;
+        eprintln!("stopping after the current render (Ctrl-C again to stop now)");
+        let _ = signals.send(Signal::Stop);
+    })
+}
+
+/// Why a build runs.
+enum Trigger {
+    /// The first build, with the time the watch started.
+    Start(Instant),
+    Changes(Changes),
+}
+
+impl Trigger {
+    /// When the change this build answers was first seen.
+    fn since(&self) -> Instant {
+        match self {
+            Trigger::Start(at) => *at,
+            Trigger::Changes(changes) => changes.first_seen,
+        }
+    }
+
+    /// "start", or the changed files: "scene.ron, mats.ron changed".
+    fn describe(&self) -> String {
+        match self {
+            Trigger::Start(_) => String::from("start"),
+            Trigger::Changes(changes) => format!("{} changed", list_paths(&changes.files)),
+        }
+    }
+}
+
+/// Up to three paths, then a count: "a.ron, b.ron, c.obj and 2 more".
+fn list_paths<'p>(paths: impl IntoIterator<Item = &'p PathBuf>) -> String {
+    const SHOWN: usize = 3;
+    let paths: Vec<String> = paths.into_iter().map(|p| p.display().to_string()).collect();
+    if paths.len() <= SHOWN {
+        return paths.join(", ");
+    }
+    format!("{} and {} more", paths[..SHOWN].join(", "), paths.len() - SHOWN)
+}
+
+/// Everything the loop keeps from one build to the next.
+struct WatchSession {
+    scene: PathBuf,
+    output: PathBuf,
+    load_options: LoadOptions,
+    render_options: RenderOptions,
+    mesh_cache: MeshCache,
+    files: WatchedFiles,
+    watches: FolderWatches,
+    preview: Option<PreviewServer>,
+    builds: u64,
+    /// The followed files and the missing ones, as last printed (printed again when they change).
+    announced_files: Vec<PathBuf>,
+    announced_missing: Vec<PathBuf>,
+    color: bool,
+}
+
+/// What one build did.
+enum BuildOutcome {
+    Written(WrittenImage),
+    BadInput(LoadError),
+    OutputFailed {
+        error: OutputError,
+        files_read: Vec<PathBuf>,
+    },
+}
+
+struct WrittenImage {
+    rendered: RenderedScene,
+    encode_time: Duration,
+    /// When the PNG was in place.
+    written_at: Instant,
+}
+
+impl WatchSession {
+    fn build(&mut self, trigger: &Trigger) {
+        self.builds += 1;
+        let outcome = {
+            let (scene, output) = (&self.scene, &self.output);
+            let (load_options, render_options) = (&self.load_options, &self.render_options);
+            let mesh_cache = &mut self.mesh_cache;
+            panic::catch_unwind(AssertUnwindSafe(|| {
+                build_once(scene, output, load_options, render_options, mesh_cache)
+            }))
+        };
+        match outcome {
+            Ok(BuildOutcome::Written(written)) => {
+                self.report_written(trigger, &written);
+                self.follow(written.rendered.files_read);
+            }
+            Ok(BuildOutcome::BadInput(error)) => {
+                let report = render_diagnostics(&error.diagnostics, &error.sources, self.color);
+                eprint!("{report}");
+                let errors = error.diagnostics.iter().filter(|d| d.is_error()).count();
+                let problem = format!("{errors} error{}", if errors == 1 { "" } else { "s" });
+                self.report_failure(trigger, &problem, || {
+                    render_diagnostics(&error.diagnostics, &error.sources, false)
+                });
+                self.follow(error.files_read);
+            }
+            Ok(BuildOutcome::OutputFailed { error, files_read }) => {
+                eprintln!("error: {error}");
+                self.report_failure(trigger, "the image could not be written", || error.to_string());
+                self.follow(files_read);
+            }
+            Err(payload) => {
+                // The panic hook has printed the message; say what happens next.
+                let message = panic_message(payload.as_ref());
+                eprintln!("error: the render failed with an internal error; still watching");
+                self.mesh_cache = MeshCache::default();
+                self.report_failure(trigger, "internal error", || {
+                    format!("internal error (a bug in lampshade, not in your files): {message}")
+                });
+                // What the build read is unknown: keep following what the last one did.
+            }
+        }
+    }
+
+    fn report_written(&self, trigger: &Trigger, written: &WrittenImage) {
+        let RenderedScene {
+            framebuffer,
+            stats,
+            load_time,
+            warnings,
+            sources,
+            ..
+        } = &written.rendered;
+        if !warnings.is_empty() {
+            eprint!("{}", render_diagnostics(warnings, sources, self.color));
+        }
+        let latency = written.written_at.saturating_duration_since(trigger.since());
+        let since = match trigger {
+            Trigger::Start(_) => "start",
+            Trigger::Changes(_) => "change",
+        };
+        println!(
+            "#{} {} → {}: {} triangles, {}×{} px | load {}, geometry {}, raster+shade {}, encode {} | {since} to image {}",
+            self.builds,
+            trigger.describe(),
+            self.output.display(),
+            thousands(stats.triangles),
+            framebuffer.width,
+            framebuffer.height,
+            milliseconds(*load_time),
+            milliseconds(stats.geometry),
+            milliseconds(stats.raster_shade),
+            milliseconds(written.encode_time),
+            milliseconds(latency),
+        );
+        if let Some(preview) = &self.preview {
+            match std::fs::read(&self.output) {
+                Ok(png) => {
+                    let render_time = *load_time + stats.geometry + stats.raster_shade + written.encode_time;
+                    let summary = format!(
+                        "#{} · {} triangles · {}×{} px · rendered in {} · {since} to image {}",
+                        self.builds,
+                        thousands(stats.triangles),
+                        framebuffer.width,
+                        framebuffer.height,
+                        milliseconds(render_time),
+                        milliseconds(latency),
+                    );
+                    preview.publish_image(png, summary);
+                }
+                Err(error) => eprintln!(
+                    "warning: preview: cannot read back `{}`: {error}",
+                    self.output.display()
+                ),
+            }
+        }
+    }
+
+    /// Reports a build that produced no image; `report` gives the preview's overlay text.
+    fn report_failure(&self, trigger: &Trigger, problem: &str, report: impl FnOnce() -> String) {
+        let kept = if self.output.exists() {
+            format!("{} left as it was", self.output.display())
+        } else {
+            String::from("no image yet")
+        };
+        println!(
+            "#{} {}: {problem} (see above); {kept}; waiting for the next save",
+            self.builds,
+            trigger.describe()
+        );
+        if let Some(preview) = &self.preview {
+            let summary = format!("#{}: {problem}; showing the last good image", self.builds);
+            preview.publish_error(report(), summary);
+        }
+    }
+
+    /// Follows `files_read` (and always the scene) from now on, and says so when that changes.
+    fn follow(&mut self, files_read: impl IntoIterator<Item = PathBuf>) {
+        let mut followed: Vec<PathBuf> = files_read.into_iter().collect();
+        followed.push(self.scene.clone());
+        self.files.follow(followed.iter().map(PathBuf::as_path));
+        for problem in self.watches.sync(self.files.folders()) {
+            eprintln!("warning: {problem}");
+        }
+        if self.builds == 0 {
+            return; // before the first build there is nothing to announce yet
+        }
+        let files: Vec<PathBuf> = self.files.files().into_iter().map(Path::to_path_buf).collect();
+        if files != self.announced_files {
+            println!("watching {} (Ctrl-C to stop)", list_paths(&files));
+            self.announced_files = files;
+        }
+        let missing: Vec<PathBuf> = self.files.missing().into_iter().map(Path::to_path_buf).collect();
+        let newly_missing: BTreeSet<&PathBuf> = missing
+            .iter()
+            .filter(|m| !self.announced_missing.contains(m))
+            .collect();
+        if !newly_missing.is_empty() {
+            println!(
+                "waiting for {} to be created",
+                list_paths(newly_missing.iter().copied())
+            );
+        }
+        self.announced_missing = missing;
+    }
+}
+
+/// Loads, renders and writes the image: the whole build, run under `catch_unwind`.
+fn build_once(
+    scene: &Path,
+    output_path: &Path,
+    load_options: &LoadOptions,
+    render_options: &RenderOptions,
+    mesh_cache: &mut MeshCache,
+) -> BuildOutcome {
+    let rendered = match render_scene_file(scene, load_options, render_options, mesh_cache) {
+        Ok(rendered) => rendered,
+        Err(error) => return BuildOutcome::BadInput(error),
+    };
+    let encode_started = Instant::now();
+    let image = output::to_rgb8(&rendered.framebuffer);
+    if let Err(error) = output::write_png(output_path, &image, PngCompression::Fast) {
+        return BuildOutcome::OutputFailed {
+            error,
+            files_read: rendered.files_read,
+        };
+    }
+    let written_at = Instant::now();
+    BuildOutcome::Written(WrittenImage {
+        rendered,
+        encode_time: written_at - encode_started,
+        written_at,
+    })
+}
+
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(message) = payload.downcast_ref::<&str>() {
+        (*message).to_owned()
+    } else if let Some(message) = payload.downcast_ref::<String>() {
+        message.clone()
+    } else {
+        String::from("(no message)")
+    }
+}
+
+fn milliseconds(duration: Duration) -> String {
+    format!("{:.1} ms", duration.as_secs_f64() * 1000.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_lists_of_paths_are_shortened() {
+        let paths: Vec<PathBuf> = ["a.ron", "b.ron", "c.obj", "d.mtl", "e.bin"]
+            .iter()
+            .map(PathBuf::from)
+            .collect();
+        assert_eq!(list_paths(&paths[..1]), "a.ron");
+        assert_eq!(list_paths(&paths[..3]), "a.ron, b.ron, c.obj");
+        assert_eq!(list_paths(&paths), "a.ron, b.ron, c.obj and 2 more");
+    }
+
+    #[test]
+    fn panic_messages_are_recovered_from_either_payload() {
+        let from_str = panic::catch_unwind(|| panic!("plain")).unwrap_err();
+        assert_eq!(panic_message(from_str.as_ref()), "plain");
+        let from_string = panic::catch_unwind(|| panic!("formatted {}", 42)).unwrap_err();
+        assert_eq!(panic_message(from_string.as_ref()), "formatted 42");
+    }
 }

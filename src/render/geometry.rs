@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate};
 use crate::render::DebugView;
 use crate::render::clip::{Clipped, clip_triangle};
-use crate::render::raster::{GUARD_BAND_PIXELS, RasterTriangle, ScreenVertex, setup_triangle};
+use crate::render::raster::{GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, setup_triangle};
 use crate::scene::presets::default_material;
 use crate::scene::{
     BackFaces, Camera, Light, LightingComponent, Material, NormalInterpolation, Object, Projection, Scene,
@@ -164,7 +164,7 @@ pub fn select_component(
 }
 
 /// Runs the geometry stage for the whole scene.
-pub fn build_frame(scene: &Scene, debug_view: Option<DebugView>) -> Frame {
+pub fn build_frame(scene: &Scene, pattern: SamplePattern, debug_view: Option<DebugView>) -> Frame {
     let (width, height) = (scene.image.width, scene.image.height);
     let camera = CameraSetup::new(&scene.camera, width as f64 / height as f64);
     let mut frame = Frame {
@@ -186,6 +186,7 @@ pub fn build_frame(scene: &Scene, debug_view: Option<DebugView>) -> Frame {
     let viewport = Viewport {
         width,
         height,
+        pattern,
         guard_x: GUARD_BAND_PIXELS / width as f32,
         guard_y: GUARD_BAND_PIXELS / height as f32,
     };
@@ -198,6 +199,7 @@ pub fn build_frame(scene: &Scene, debug_view: Option<DebugView>) -> Frame {
 struct Viewport {
     width: u32,
     height: u32,
+    pattern: SamplePattern,
     guard_x: f32,
     guard_y: f32,
 }
@@ -530,8 +532,16 @@ fn process_triangle(
             weights,
         }
     };
-    let setup =
-        |corners: [ScreenVertex; 3]| setup_triangle(corners, width, height, input.source, back_facing);
+    let setup = |corners: [ScreenVertex; 3]| {
+        setup_triangle(
+            corners,
+            width,
+            height,
+            viewport.pattern,
+            input.source,
+            back_facing,
+        )
+    };
     match clip_triangle(clip, viewport.guard_x, viewport.guard_y) {
         Clipped::Outside => {}
         Clipped::Inside => {

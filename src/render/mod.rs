@@ -100,7 +100,8 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderSta
 
 fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderStats) {
     let started = Instant::now();
-    let frame = geometry::build_frame(scene, options.debug_view);
+    let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
+    let frame = geometry::build_frame(scene, pattern, options.debug_view);
     let tiles = bin::TileGrid::new(scene.image.width, scene.image.height);
     let bins = bin::bin_triangles(&tiles, &frame.raster);
     let geometry_time = started.elapsed();
@@ -110,7 +111,7 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
         .into_par_iter()
         .map(|index| {
             let rect = tiles.rect(index);
-            let visibility = raster::rasterize_tile(rect, &frame.raster, &bins[index]);
+            let visibility = raster::rasterize_tile(rect, pattern, &frame.raster, &bins[index]);
             shade::shade_tile(&frame, &visibility, scene.image.background)
         })
         .collect();

@@ -114,6 +114,7 @@ pub fn setup_triangle(
     corners: [ScreenVertex; 3],
     width: u32,
     height: u32,
+    pattern: SamplePattern,
     source: u32,
     back_facing: bool,
 ) -> Option<RasterTriangle> {
@@ -131,7 +132,7 @@ pub fn setup_triangle(
         corners.swap(1, 2);
         area = -area;
     }
-    let bounds = pixel_bounds(x, y, width, height)?;
+    let bounds = pixel_bounds(x, y, width, height, pattern.reach())?;
     Some(RasterTriangle {
         x,
         y,
@@ -151,12 +152,14 @@ fn doubled_area(x: [i32; 3], y: [i32; 3]) -> i64 {
     (x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0)
 }
 
-/// Pixels whose centres lie within the fixed-point bounding box, clipped to the image.
-fn pixel_bounds(x: [i32; 3], y: [i32; 3], width: u32, height: u32) -> Option<PixelRect> {
-    // Pixel p's centre is p·256 + 128: the first centre ≥ lo is ceil((lo − 128) / 256),
-    // the last ≤ hi is floor((hi − 128) / 256).
-    let first = |lo: i32| -(SUBPIXEL_HALF - i64::from(lo)).div_euclid(SUBPIXEL_ONE);
-    let last = |hi: i32| (i64::from(hi) - SUBPIXEL_HALF).div_euclid(SUBPIXEL_ONE);
+/// Pixels with a sample within the fixed-point bounding box, clipped to the image. `reach` is how
+/// far (in 1/256 pixel) samples lie from their pixel's centre.
+fn pixel_bounds(x: [i32; 3], y: [i32; 3], width: u32, height: u32, reach: i64) -> Option<PixelRect> {
+    // Pixel p's centre is p·256 + 128 and its samples lie within ±reach of it: the first pixel
+    // with a sample ≥ lo is ceil((lo − 128 − reach) / 256), the last with one ≤ hi is
+    // floor((hi − 128 + reach) / 256).
+    let first = |lo: i32| -(SUBPIXEL_HALF + reach - i64::from(lo)).div_euclid(SUBPIXEL_ONE);
+    let last = |hi: i32| (i64::from(hi) - SUBPIXEL_HALF + reach).div_euclid(SUBPIXEL_ONE);
     let x0 = first(*x.iter().min()?).max(0);
     let y0 = first(*y.iter().min()?).max(0);
     let x1 = (last(*x.iter().max()?) + 1).min(i64::from(width));
@@ -172,8 +175,11 @@ fn pixel_bounds(x: [i32; 3], y: [i32; 3], width: u32, height: u32) -> Option<Pix
 /// One edge function, ready to evaluate and step.
 #[derive(Debug, Clone, Copy)]
 struct Edge {
-    /// Value at the first sample of the current row.
+    /// Value at the first pixel centre of the current row.
     row_start: i64,
+    /// Change per 1/256 pixel in x and y (for sample offsets).
+    along_x: i64,
+    along_y: i64,
     step_x: i64,
     step_y: i64,
     /// 0 for top-left edges (E = 0 is inside), 1 otherwise (E must be > 0).
@@ -190,6 +196,8 @@ impl Edge {
         let is_top_left = (dy == 0 && dx > 0) || dy < 0;
         Edge {
             row_start: dx * (sample_y - ay) - dy * (sample_x - ax),
+            along_x: -dy,
+            along_y: dx,
             step_x: -dy * SUBPIXEL_ONE,
             step_y: dx * SUBPIXEL_ONE,
             min_inside: if is_top_left { 0 } else { 1 },
@@ -197,45 +205,141 @@ impl Edge {
     }
 }
 
-/// The three edge functions of `triangle` at the centre of pixel `(px, py)`: `E₀` (edge v1→v2,
-/// opposite v0), `E₁` (v2→v0), `E₂` (v0→v1). Their sum is the doubled area.
-pub fn edge_values(triangle: &RasterTriangle, px: u32, py: u32) -> [i64; 3] {
-    let [x0, x1, x2] = triangle.x;
-    let [y0, y1, y2] = triangle.y;
-    [
-        Edge::new(x1, y1, x2, y2, px, py).row_start,
-        Edge::new(x2, y2, x0, y0, px, py).row_start,
-        Edge::new(x0, y0, x1, y1, px, py).row_start,
-    ]
+/// The three edge functions of `triangle` at the fixed-point point `(x, y)` (1/256 pixel):
+/// `E₀` (edge v1→v2, opposite v0), `E₁` (v2→v0), `E₂` (v0→v1). Their sum is the doubled area.
+pub fn edge_values(triangle: &RasterTriangle, x: i64, y: i64) -> [i64; 3] {
+    let [x0, x1, x2] = triangle.x.map(i64::from);
+    let [y0, y1, y2] = triangle.y.map(i64::from);
+    let edge = |ax: i64, ay: i64, bx: i64, by: i64| (bx - ax) * (y - ay) - (by - ay) * (x - ax);
+    [edge(x1, y1, x2, y2), edge(x2, y2, x0, y0), edge(x0, y0, x1, y1)]
+}
+
+/// Where a pixel is sampled: fixed offsets from its centre, in 1/256 pixel, the same for every
+/// pixel (so the image does not depend on anything but the scene). The positions are Direct3D's
+/// standard multisample patterns (scaled from 1/16 pixel): rotated grids that resolve
+/// near-horizontal and near-vertical edges with as many levels as there are samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SamplePattern {
+    offsets: &'static [(i32, i32)],
+}
+
+const fn scaled<const N: usize>(sixteenths: [(i32, i32); N]) -> [(i32, i32); N] {
+    let mut out = sixteenths;
+    let mut i = 0;
+    while i < N {
+        out[i] = (sixteenths[i].0 * 16, sixteenths[i].1 * 16);
+        i += 1;
+    }
+    out
+}
+
+const PATTERN_1: [(i32, i32); 1] = [(0, 0)];
+const PATTERN_2: [(i32, i32); 2] = scaled([(4, 4), (-4, -4)]);
+const PATTERN_4: [(i32, i32); 4] = scaled([(-2, -6), (6, -2), (-6, 2), (2, 6)]);
+const PATTERN_8: [(i32, i32); 8] = scaled([
+    (1, -3),
+    (-1, 3),
+    (5, 1),
+    (-3, -5),
+    (-5, 5),
+    (-7, -1),
+    (3, 7),
+    (7, -7),
+]);
+const PATTERN_16: [(i32, i32); 16] = scaled([
+    (1, 1),
+    (-1, -3),
+    (-3, 2),
+    (4, -1),
+    (-5, -2),
+    (2, 5),
+    (5, 3),
+    (3, -5),
+    (-2, 6),
+    (0, -7),
+    (-4, -6),
+    (-6, 4),
+    (-8, 0),
+    (7, -4),
+    (6, 7),
+    (-7, -8),
+]);
+
+impl SamplePattern {
+    /// One sample at the pixel centre: no anti-aliasing.
+    pub const SINGLE: SamplePattern = SamplePattern { offsets: &PATTERN_1 };
+
+    /// The pattern with `samples` samples per pixel: 1, 2, 4, 8 or 16.
+    pub fn new(samples: u32) -> Option<SamplePattern> {
+        let offsets: &'static [(i32, i32)] = match samples {
+            1 => &PATTERN_1,
+            2 => &PATTERN_2,
+            4 => &PATTERN_4,
+            8 => &PATTERN_8,
+            16 => &PATTERN_16,
+            _ => return None,
+        };
+        Some(SamplePattern { offsets })
+    }
+
+    pub fn len(&self) -> usize {
+        self.offsets.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.offsets.is_empty()
+    }
+
+    pub fn offsets(&self) -> &'static [(i32, i32)] {
+        self.offsets
+    }
+
+    /// The largest distance of a sample from its pixel's centre along x or y, in 1/256 pixel.
+    pub fn reach(&self) -> i64 {
+        self.offsets
+            .iter()
+            .map(|&(x, y)| i64::from(x.abs().max(y.abs())))
+            .max()
+            .unwrap_or(0)
+    }
 }
 
 /// Sentinel triangle id of a pixel no triangle covers.
 pub const NO_TRIANGLE: u32 = u32::MAX;
 
-/// The nearest triangle at each pixel of one tile.
+/// The nearest triangle at each sample of one tile.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Visibility {
     pub rect: PixelRect,
-    /// Reversed-Z depth of the nearest surface (−∞ where none).
+    pub pattern: SamplePattern,
+    /// Reversed-Z depth of the nearest surface (−∞ where none), `pattern.len()` per pixel.
     pub depth: Vec<f32>,
-    /// Index into the frame's raster triangles, or [`NO_TRIANGLE`].
+    /// Index into the frame's raster triangles, or [`NO_TRIANGLE`], `pattern.len()` per pixel.
     pub triangle: Vec<u32>,
 }
 
-/// Rasterizes the triangles `indices` (in order) into the tile `rect`, keeping the nearest.
-pub fn rasterize_tile(rect: PixelRect, triangles: &[RasterTriangle], indices: &[u32]) -> Visibility {
-    let pixel_count = (rect.width() * rect.height()) as usize;
+/// Rasterizes the triangles `indices` (in order) into the tile `rect`, keeping the nearest at
+/// every sample.
+pub fn rasterize_tile(
+    rect: PixelRect,
+    pattern: SamplePattern,
+    triangles: &[RasterTriangle],
+    indices: &[u32],
+) -> Visibility {
+    let samples = pattern.len();
+    let sample_count = (rect.width() * rect.height()) as usize * samples;
     let mut visibility = Visibility {
         rect,
-        depth: vec![f32::NEG_INFINITY; pixel_count],
-        triangle: vec![NO_TRIANGLE; pixel_count],
+        pattern,
+        depth: vec![f32::NEG_INFINITY; sample_count],
+        triangle: vec![NO_TRIANGLE; sample_count],
     };
     debug_assert!(rect.width() <= TILE_SIZE);
     let tile_width = rect.width() as usize;
     for &index in indices {
         let triangle = &triangles[index as usize];
-        for_each_covered_pixel(triangle, rect, |px, py, depth| {
-            let slot = (py - rect.y0) as usize * tile_width + (px - rect.x0) as usize;
+        for_each_covered_sample(triangle, rect, pattern, |px, py, sample, depth| {
+            let slot = ((py - rect.y0) as usize * tile_width + (px - rect.x0) as usize) * samples + sample;
             if depth > visibility.depth[slot] {
                 visibility.depth[slot] = depth;
                 visibility.triangle[slot] = index;
@@ -245,13 +349,26 @@ pub fn rasterize_tile(rect: PixelRect, triangles: &[RasterTriangle], indices: &[
     visibility
 }
 
-/// Calls `visit(px, py, depth)` for every pixel of `rect` whose centre `triangle` covers, row by
-/// row. This is the one coverage loop: the tile rasterizer and the coverage tests both use it.
-#[inline]
+/// Calls `visit(px, py, depth)` for every pixel of `rect` whose centre `triangle` covers.
 pub fn for_each_covered_pixel(
     triangle: &RasterTriangle,
     rect: PixelRect,
     mut visit: impl FnMut(u32, u32, f32),
+) {
+    for_each_covered_sample(triangle, rect, SamplePattern::SINGLE, |px, py, _, depth| {
+        visit(px, py, depth)
+    });
+}
+
+/// Calls `visit(px, py, sample, depth)` for every sample of every pixel of `rect` that
+/// `triangle` covers, row by row. This is the one coverage loop: the tile rasterizer and the
+/// coverage tests both use it.
+#[inline]
+pub fn for_each_covered_sample(
+    triangle: &RasterTriangle,
+    rect: PixelRect,
+    pattern: SamplePattern,
+    mut visit: impl FnMut(u32, u32, usize, f32),
 ) {
     let Some(area) = triangle.bounds.intersect(&rect) else {
         return;
@@ -265,16 +382,31 @@ pub fn for_each_covered_pixel(
     ];
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
+    // Each sample's offset turned into edge-function offsets, once per triangle.
+    let sample_offsets: Vec<[i64; 3]> = pattern
+        .offsets()
+        .iter()
+        .map(|&(ox, oy)| edges.map(|e| e.along_x * i64::from(ox) + e.along_y * i64::from(oy)))
+        .collect();
+    let min_inside = edges.map(|e| e.min_inside);
+    let inside = |e: [i64; 3]| e[0] >= min_inside[0] && e[1] >= min_inside[1] && e[2] >= min_inside[2];
     for py in area.y0..area.y1 {
-        let [mut e0, mut e1, mut e2] = edges.map(|e| e.row_start);
+        let mut centre = edges.map(|e| e.row_start);
         for px in area.x0..area.x1 {
-            if e0 >= edges[0].min_inside && e1 >= edges[1].min_inside && e2 >= edges[2].min_inside {
-                let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
-                visit(px, py, depth);
+            for (sample, offset) in sample_offsets.iter().enumerate() {
+                let e = [
+                    centre[0] + offset[0],
+                    centre[1] + offset[1],
+                    centre[2] + offset[2],
+                ];
+                if inside(e) {
+                    let depth = (e[0] as f32 * d0 + e[1] as f32 * d1 + e[2] as f32 * d2) * inv_area;
+                    visit(px, py, sample, depth);
+                }
             }
-            e0 += edges[0].step_x;
-            e1 += edges[1].step_x;
-            e2 += edges[2].step_x;
+            for (value, edge) in centre.iter_mut().zip(&edges) {
+                *value += edge.step_x;
+            }
         }
         for edge in &mut edges {
             edge.row_start += edge.step_y;
@@ -321,7 +453,7 @@ mod tests {
         );
         let triangles: Vec<_> = [[a, b, c], [a, c, d]]
             .into_iter()
-            .filter_map(|t| setup_triangle(t, 8, 8, 0, false))
+            .filter_map(|t| setup_triangle(t, 8, 8, SamplePattern::SINGLE, 0, false))
             .collect();
         assert!(coverage(&triangles, 8, 8).iter().all(|&n| n == 1));
     }
@@ -337,7 +469,7 @@ mod tests {
         );
         let triangles: Vec<_> = [[a, b, c], [a, c, d]]
             .into_iter()
-            .filter_map(|t| setup_triangle(t, 4, 4, 0, false))
+            .filter_map(|t| setup_triangle(t, 4, 4, SamplePattern::SINGLE, 0, false))
             .collect();
         let counts = coverage(&triangles, 4, 4);
         #[rustfmt::skip]
@@ -357,12 +489,13 @@ mod tests {
                 [vertex(0.0, 0.0), vertex(4.0, 4.0), vertex(8.0, 8.0)],
                 8,
                 8,
+                SamplePattern::SINGLE,
                 0,
                 false
             )
             .is_none()
         );
-        assert!(setup_triangle([vertex(1.0, 1.0); 3], 8, 8, 0, false).is_none());
+        assert!(setup_triangle([vertex(1.0, 1.0); 3], 8, 8, SamplePattern::SINGLE, 0, false).is_none());
     }
 
     #[test]
@@ -371,6 +504,7 @@ mod tests {
             [vertex(0.6, 0.6), vertex(3.4, 0.6), vertex(0.6, 3.4)],
             8,
             8,
+            SamplePattern::SINGLE,
             0,
             false,
         )
@@ -388,6 +522,7 @@ mod tests {
             [vertex(0.5, 0.5), vertex(3.5, 0.5), vertex(0.5, 3.5)],
             8,
             8,
+            SamplePattern::SINGLE,
             0,
             false,
         )
@@ -409,11 +544,12 @@ mod tests {
             [vertex(0.3, 0.2), vertex(7.1, 1.9), vertex(2.2, 6.6)],
             8,
             8,
+            SamplePattern::SINGLE,
             0,
             false,
         )
         .unwrap();
-        let [e0, e1, e2] = edge_values(&t, 3, 3);
+        let [e0, e1, e2] = edge_values(&t, 3 * 256 + 128, 3 * 256 + 128);
         assert!(((e0 + e1 + e2) as f32 * t.inv_area - 1.0).abs() < 1e-6);
     }
 }

@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use crate::render::DebugView;
 use crate::render::geometry::Frame;
-use crate::render::raster::{NO_TRIANGLE, RasterTriangle, Visibility, edge_values};
+use crate::render::raster::{NO_TRIANGLE, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_values};
 use crate::scene::{NormalInterpolation, Shading};
 
 /// The shaded pixels of one tile, row-major.
@@ -28,28 +28,76 @@ pub struct TileImage {
 /// The Gouraud colours of the back side of the last back-facing triangle shaded.
 type BackColorCache = Option<(u32, [Vec3; 3])>;
 
+/// Shades every pixel of a tile.
+///
+/// With several samples per pixel (multisampling), each distinct triangle seen by a pixel's
+/// samples is shaded once, at the mean position of the samples it covers (a convex combination
+/// of covered points, so inside the triangle: no extrapolated attributes), and the pixel is
+/// the average of its samples in linear light, background included. One sample per pixel is
+/// the same computation with the pixel centre.
 pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> TileImage {
     let rect = visibility.rect;
+    let pattern = visibility.pattern;
+    let samples = pattern.len();
+    let pixel_count = (rect.width() * rect.height()) as usize;
     let mut image = TileImage {
-        color: vec![background; visibility.triangle.len()],
-        covered: vec![false; visibility.triangle.len()],
+        color: vec![background; pixel_count],
+        covered: vec![false; pixel_count],
     };
     let mut back_colors: BackColorCache = None;
-    for (slot, &id) in visibility.triangle.iter().enumerate() {
-        if id == NO_TRIANGLE {
+    // Distinct triangles at the current pixel: id, samples covered, sum of their offsets.
+    let mut seen: Vec<(u32, u32, i64, i64)> = Vec::with_capacity(samples);
+    let depth_view = frame.debug_view == Some(DebugView::Depth);
+    for slot in 0..pixel_count {
+        let ids = &visibility.triangle[slot * samples..(slot + 1) * samples];
+        if ids.iter().all(|&id| id == NO_TRIANGLE) {
             continue;
+        }
+        seen.clear();
+        for (&id, &(ox, oy)) in ids.iter().zip(pattern.offsets()) {
+            if id == NO_TRIANGLE {
+                continue;
+            }
+            match seen.iter_mut().find(|entry| entry.0 == id) {
+                Some(entry) => {
+                    entry.1 += 1;
+                    entry.2 += i64::from(ox);
+                    entry.3 += i64::from(oy);
+                }
+                None => seen.push((id, 1, i64::from(ox), i64::from(oy))),
+            }
         }
         let px = rect.x0 + slot as u32 % rect.width();
         let py = rect.y0 + slot as u32 / rect.width();
-        image.color[slot] = shade_pixel(frame, &frame.raster[id as usize], px, py, &mut back_colors);
+        let centre_x = i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+        let centre_y = i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+        let mut sum = Vec3::ZERO;
+        let mut covered_samples = 0;
+        for &(id, count, offset_x, offset_y) in &seen {
+            let n = i64::from(count);
+            let at = (
+                centre_x + offset_x.div_euclid(n),
+                centre_y + offset_y.div_euclid(n),
+            );
+            let color = shade_sample(frame, &frame.raster[id as usize], at, &mut back_colors);
+            sum += color * count as f32;
+            covered_samples += count;
+        }
+        image.color[slot] = if depth_view {
+            // Distances are averaged over covered samples only: the background has none.
+            sum / covered_samples as f32
+        } else {
+            (sum + background * (samples as u32 - covered_samples) as f32) / samples as f32
+        };
         image.covered[slot] = true;
     }
     image
 }
 
-/// Perspective-correct barycentric weights of the source triangle's vertices at a pixel centre.
-pub fn source_weights(triangle: &RasterTriangle, px: u32, py: u32) -> Vec3 {
-    let [e0, e1, e2] = edge_values(triangle, px, py);
+/// Perspective-correct barycentric weights of the source triangle's vertices at the fixed-point
+/// point `at` (1/256 pixel).
+pub fn source_weights(triangle: &RasterTriangle, at: (i64, i64)) -> Vec3 {
+    let [e0, e1, e2] = edge_values(triangle, at.0, at.1);
     let screen = Vec3::new(e0 as f32, e1 as f32, e2 as f32) * triangle.inv_area;
     let [w0, w1, w2] = triangle.inv_w;
     let over_w = screen * Vec3::new(w0, w1, w2);
@@ -58,14 +106,13 @@ pub fn source_weights(triangle: &RasterTriangle, px: u32, py: u32) -> Vec3 {
     triangle.weights[0] * corner.x + triangle.weights[1] * corner.y + triangle.weights[2] * corner.z
 }
 
-fn shade_pixel(
+fn shade_sample(
     frame: &Frame,
     raster: &RasterTriangle,
-    px: u32,
-    py: u32,
+    at: (i64, i64),
     back_colors: &mut BackColorCache,
 ) -> Vec3 {
-    let weights = source_weights(raster, px, py);
+    let weights = source_weights(raster, at);
     let triangle = &frame.triangles[raster.source as usize];
     let style = &frame.objects[triangle.object as usize];
     let [a, b, c] = triangle.vertices.map(|v| &frame.vertices[v as usize]);

@@ -57,6 +57,8 @@ pub struct ImageFile {
     pub width: Option<u32>,
     pub height: Option<u32>,
     pub background: Option<RgbFile>,
+    /// Samples per pixel: 1 (no anti-aliasing), 2, 4, 8 or 16.
+    pub samples: Option<u32>,
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -19,6 +19,7 @@ use glam::{DMat4, DQuat, DVec3, EulerRot, Vec3};
 
 use crate::diag::{Diagnostic, SourceId, Sources, from_ron_error};
 use crate::mesh::{LoadedMesh, Mesh, MeshError, MeshOptions, gltf::load_gltf, obj::load_obj, primitives};
+use crate::render::raster::SamplePattern;
 use crate::ron_path;
 use crate::scene::format::{
     self, AttenuationFile, BackFacesFile, CameraFile, ComponentFile, DistributionFile, LightFile,
@@ -53,6 +54,8 @@ pub struct LoadOptions {
     pub height: Option<u32>,
     /// Replaces every object's shading mode.
     pub shading: Option<Shading>,
+    /// Replaces the scene's samples per pixel.
+    pub samples: Option<u32>,
 }
 
 /// A scene that loaded, with what it read and the warnings it produced.
@@ -741,10 +744,33 @@ impl Loader<'_> {
             ),
             None => Some(Vec3::ZERO),
         };
+        let samples = match (options.samples, file.image.samples) {
+            (Some(samples), _) => {
+                if SamplePattern::new(samples).is_none() {
+                    self.diagnostics.push(Diagnostic::error(
+                        &self.scene_path,
+                        format!("--samples must be 1, 2, 4, 8 or 16, not {samples}"),
+                    ));
+                    return None;
+                }
+                Some(samples)
+            }
+            (None, Some(samples)) if SamplePattern::new(samples).is_none() => {
+                self.error(
+                    At::new(source, &ron_path!["image", "samples"]),
+                    format!("`samples` must be 1, 2, 4, 8 or 16, not {samples}"),
+                    Some("no such sample pattern"),
+                    None,
+                );
+                None
+            }
+            (None, samples) => Some(samples.unwrap_or(1)),
+        };
         Some(ImageSettings {
             width: width?,
             height: height?,
             background: background?,
+            samples: samples?,
         })
     }
 

@@ -41,6 +41,8 @@ pub struct ImageSettings {
     pub height: u32,
     /// Linear RGB of pixels no geometry covers.
     pub background: Vec3,
+    /// Samples per pixel (anti-aliasing): 1, 2, 4, 8 or 16.
+    pub samples: u32,
 }
 
 /// A camera in world space. Positions are `f64` so that scenes far from the origin keep

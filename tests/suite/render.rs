@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec3, Vec3};
 use lampshade::mesh::Mesh;
-use lampshade::render::raster::{PixelRect, for_each_covered_pixel};
+use lampshade::render::raster::{PixelRect, SamplePattern, for_each_covered_pixel, for_each_covered_sample};
 use lampshade::render::{RenderOptions, geometry::build_frame, render};
 use lampshade::scene::{
     BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Material, NormalInterpolation,
@@ -43,6 +43,7 @@ fn pixel_aligned_scene(width: u32, height: u32, objects: Vec<Object>) -> Scene {
             width,
             height,
             background: Vec3::ZERO,
+            samples: 1,
         },
         camera: Camera {
             eye: center + DVec3::Z * 10.0,
@@ -63,7 +64,7 @@ fn pixel_aligned_scene(width: u32, height: u32, objects: Vec<Object>) -> Scene {
 /// How many triangles cover each pixel centre.
 fn coverage_counts(scene: &Scene) -> Vec<u32> {
     let (width, height) = (scene.image.width, scene.image.height);
-    let frame = build_frame(scene, None);
+    let frame = build_frame(scene, SamplePattern::SINGLE, None);
     let rect = PixelRect {
         x0: 0,
         y0: 0,
@@ -151,6 +152,58 @@ fn a_mesh_tiling_the_viewport_covers_every_pixel_exactly_once() {
 }
 
 #[test]
+fn every_sample_of_every_pattern_is_covered_exactly_once() {
+    for samples in [2, 4, 8, 16] {
+        let pattern = SamplePattern::new(samples).unwrap();
+        let mesh = jittered_grid(24, -3.0, 67.0, 0.2, samples);
+        let scene = pixel_aligned_scene(64, 48, vec![object(mesh, UNLIT_WHITE, Shading::Flat)]);
+        let frame = build_frame(&scene, pattern, None);
+        let rect = PixelRect {
+            x0: 0,
+            y0: 0,
+            x1: 64,
+            y1: 48,
+        };
+        let mut counts = vec![0u32; 64 * 48 * samples as usize];
+        for triangle in &frame.raster {
+            for_each_covered_sample(triangle, rect, pattern, |x, y, sample, _| {
+                counts[(y * 64 + x) as usize * samples as usize + sample] += 1
+            });
+        }
+        assert!(
+            counts.iter().all(|&c| c == 1),
+            "{samples} samples: {:?}",
+            counts.iter().max()
+        );
+    }
+}
+
+#[test]
+fn multisampling_averages_partly_covered_pixels() {
+    // A white square whose right edge runs down the middle of pixel column 10.
+    let positions = vec![
+        Vec3::new(-5.0, -5.0, 0.0),
+        Vec3::new(10.5, -5.0, 0.0),
+        Vec3::new(10.5, 40.0, 0.0),
+        Vec3::new(-5.0, 40.0, 0.0),
+    ];
+    let square = flat_mesh(positions, vec![[0, 1, 2], [0, 2, 3]]);
+    let mut scene = pixel_aligned_scene(20, 16, vec![object(square, UNLIT_WHITE, Shading::Flat)]);
+    scene.image.samples = 16;
+    let (image, _) = render(&scene, &RenderOptions::default());
+    for y in 0..16 {
+        let row = |x: usize| image.color[y * 20 + x].x;
+        assert_eq!(row(9), 1.0);
+        assert_eq!(row(11), 0.0);
+        // 8 of the 16 samples lie left of the centre, 1 on it, 7 right of it.
+        assert!((0.45..=0.6).contains(&row(10)), "row {y}: {}", row(10));
+    }
+    scene.image.samples = 1;
+    let (aliased, _) = render(&scene, &RenderOptions::default());
+    assert!(aliased.color.iter().all(|c| c.x == 0.0 || c.x == 1.0));
+}
+
+#[test]
 fn a_fan_of_thin_triangles_around_one_vertex_covers_its_disc_once() {
     // 10,000 slivers around the centre of the image: every pixel inside the fan's outer polygon
     // is covered once, none twice.
@@ -217,6 +270,7 @@ fn a_floor_passing_behind_the_camera_renders_only_its_visible_part() {
             width,
             height,
             background: Vec3::ZERO,
+            samples: 1,
         },
         camera: camera_at_origin(0.1),
         ambient_light: Vec3::ZERO,
@@ -263,6 +317,7 @@ fn attributes_are_interpolated_perspective_correctly() {
             width,
             height,
             background: Vec3::ZERO,
+            samples: 1,
         },
         camera: camera_at_origin(0.1),
         ambient_light: Vec3::ZERO,
@@ -332,6 +387,7 @@ fn busy_scene() -> Scene {
             width: 301,
             height: 197,
             background: Vec3::new(0.1, 0.1, 0.1),
+            samples: 1,
         },
         camera: Camera {
             eye: DVec3::new(0.5, 1.0, 5.0),
@@ -365,9 +421,16 @@ fn busy_scene() -> Scene {
 
 #[test]
 fn the_image_is_bit_identical_for_any_thread_count() {
-    let scene = busy_scene();
+    for samples in [1, 4] {
+        let mut scene = busy_scene();
+        scene.image.samples = samples;
+        check_thread_independence(&scene);
+    }
+}
+
+fn check_thread_independence(scene: &Scene) {
     let (reference, _) = render(
-        &scene,
+        scene,
         &RenderOptions {
             threads: Some(1),
             ..Default::default()
@@ -379,7 +442,7 @@ fn the_image_is_bit_identical_for_any_thread_count() {
     );
     for threads in [2, 3, 8] {
         let (image, stats) = render(
-            &scene,
+            scene,
             &RenderOptions {
                 threads: Some(threads),
                 ..Default::default()
