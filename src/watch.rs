@@ -158,29 +158,17 @@ pub fn run(args: &WatchArgs) -> i32 {
         None
     };
 
-    let mut session = WatchSession {
-        load_options: LoadOptions {
-            width: args.width,
-            height: args.height,
-            shading: None,
-        },
-        render_options: RenderOptions {
-            threads: args.threads.map(usize::from),
-            debug_view: None,
-        },
-        mesh_cache: MeshCache::default(),
-        files: WatchedFiles::new(&output),
-        watches,
-        preview,
-        builds: 0,
-        announced_files: Vec::new(),
-        announced_missing: Vec::new(),
-        color: use_color(),
-        scene: args.scene.clone(),
-        output,
+    let load_options = LoadOptions {
+        width: args.width,
+        height: args.height,
+        ..LoadOptions::default()
     };
-    // Follow the scene before reading it, so an edit made during the first build is not missed.
-    session.follow([args.scene.clone()]);
+    let render_options = RenderOptions {
+        threads: args.threads.map(usize::from),
+        ..RenderOptions::default()
+    };
+    let mut session = WatchSession::new(&args.scene, &output, load_options, render_options, watches);
+    session.preview = preview;
     session.build(&Trigger::Start(started));
     let mut report_watch_error = |error: notify::Error| eprintln!("warning: watching files: {error}");
     while let Some(changes) = wait_for_changes(&signals, &session.files, DEBOUNCE, &mut report_watch_error) {
@@ -239,8 +227,12 @@ fn list_paths<'p>(paths: impl IntoIterator<Item = &'p PathBuf>) -> String {
     format!("{} and {} more", paths[..SHOWN].join(", "), paths.len() - SHOWN)
 }
 
+/// One build: load, render and write the image (the seam tests use to make a build panic).
+type BuildFn = fn(&Path, &Path, &LoadOptions, &RenderOptions, &mut MeshCache) -> BuildOutcome;
+
 /// Everything the loop keeps from one build to the next.
 struct WatchSession {
+    build_once: BuildFn,
     scene: PathBuf,
     output: PathBuf,
     load_options: LoadOptions,
@@ -274,12 +266,40 @@ struct WrittenImage {
 }
 
 impl WatchSession {
+    /// A session that has built nothing yet but already follows the scene, so that an edit
+    /// made during the first build is not missed.
+    fn new(
+        scene: &Path,
+        output: &Path,
+        load_options: LoadOptions,
+        render_options: RenderOptions,
+        watches: FolderWatches,
+    ) -> Self {
+        let mut session = WatchSession {
+            build_once,
+            scene: scene.to_path_buf(),
+            output: output.to_path_buf(),
+            load_options,
+            render_options,
+            mesh_cache: MeshCache::default(),
+            files: WatchedFiles::new(output),
+            watches,
+            preview: None,
+            builds: 0,
+            announced_files: Vec::new(),
+            announced_missing: Vec::new(),
+            color: use_color(),
+        };
+        session.follow([]);
+        session
+    }
+
     fn build(&mut self, trigger: &Trigger) {
         self.builds += 1;
         let outcome = {
             let (scene, output) = (&self.scene, &self.output);
             let (load_options, render_options) = (&self.load_options, &self.render_options);
-            let mesh_cache = &mut self.mesh_cache;
+            let (mesh_cache, build_once) = (&mut self.mesh_cache, self.build_once);
             panic::catch_unwind(AssertUnwindSafe(|| {
                 build_once(scene, output, load_options, render_options, mesh_cache)
             }))
@@ -475,6 +495,49 @@ mod tests {
         assert_eq!(list_paths(&paths[..1]), "a.ron");
         assert_eq!(list_paths(&paths[..3]), "a.ron, b.ron, c.obj");
         assert_eq!(list_paths(&paths), "a.ron, b.ron, c.obj and 2 more");
+    }
+
+    fn panicking_build(
+        _: &Path,
+        _: &Path,
+        _: &LoadOptions,
+        _: &RenderOptions,
+        _: &mut MeshCache,
+    ) -> BuildOutcome {
+        panic!("simulated bug in the renderer");
+    }
+
+    #[test]
+    fn a_panicking_build_is_reported_and_the_next_build_recovers() {
+        let folder = tempfile::tempdir().unwrap();
+        let scene = folder.path().join("scene.ron");
+        let output = folder.path().join("scene.png");
+        std::fs::write(
+            &scene,
+            "(image: (width: 8, height: 6), objects: [(mesh: Sphere(segments: 4))])",
+        )
+        .unwrap();
+        let watches = FolderWatches::new(|_| {}).unwrap();
+        let mut session = WatchSession::new(
+            &scene,
+            &output,
+            LoadOptions::default(),
+            RenderOptions::default(),
+            watches,
+        );
+        session.build_once = panicking_build;
+        session.build(&Trigger::Start(Instant::now()));
+        assert!(!output.exists());
+        assert_eq!(
+            session.files.files(),
+            [scene.as_path()],
+            "still following the scene"
+        );
+
+        session.build_once = build_once;
+        session.build(&Trigger::Start(Instant::now()));
+        assert!(output.exists(), "the build after the panic writes the image");
+        assert_eq!(session.builds, 2);
     }
 
     #[test]

@@ -235,13 +235,7 @@ fn pixel_differences<'a>(expected: &'a RgbImage, actual: &'a RgbImage) -> impl I
         .as_raw()
         .chunks_exact(3)
         .zip(actual.as_raw().chunks_exact(3))
-        .map(|(e, a)| {
-            e.iter()
-                .zip(a)
-                .map(|(x, y)| x.abs_diff(*y))
-                .max()
-                .unwrap_or(0)
-        })
+        .map(|(e, a)| e.iter().zip(a).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0))
 }
 
 /// A picture of where `actual` differs from `expected` (same size; checked by the caller).
@@ -354,7 +348,10 @@ mod tests {
         // One pixel of 100 is 1 %, above the default 0.1 %.
         let violations = beyond.violations(&DEFAULT_TOLERANCE);
         assert_eq!(violations.len(), 1, "{violations:?}");
-        assert!(violations[0].starts_with("1.000% of pixels (1 of 100)"), "{violations:?}");
+        assert!(
+            violations[0].starts_with("1.000% of pixels (1 of 100)"),
+            "{violations:?}"
+        );
         assert!(violations[0].contains("within x 3–3, y 4–4"), "{violations:?}");
     }
 
@@ -426,7 +423,10 @@ mod tests {
         }
         let (changed, _) = flip(&a, &b).expect("flip is built");
         assert!(changed.mean > DEFAULT_TOLERANCE.max_flip_mean, "{changed:?}");
-        assert!(changed.percentile > DEFAULT_TOLERANCE.max_flip_percentile, "{changed:?}");
+        assert!(
+            changed.percentile > DEFAULT_TOLERANCE.max_flip_percentile,
+            "{changed:?}"
+        );
         let comparison = Comparison {
             flip: Some(changed),
             ..check(&a, &b)

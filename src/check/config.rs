@@ -98,7 +98,11 @@ impl SuiteConfig {
 
 /// Reads and checks the config at `path`, adding its text to `sources` and its problems to
 /// `diagnostics`; `None` when it has errors.
-pub fn load_config(path: &Path, sources: &mut Sources, diagnostics: &mut Vec<Diagnostic>) -> Option<SuiteConfig> {
+pub fn load_config(
+    path: &Path,
+    sources: &mut Sources,
+    diagnostics: &mut Vec<Diagnostic>,
+) -> Option<SuiteConfig> {
     let text = match std::fs::read(path) {
         Ok(bytes) => match String::from_utf8(bytes) {
             Ok(text) => text,
@@ -108,7 +112,10 @@ pub fn load_config(path: &Path, sources: &mut Sources, diagnostics: &mut Vec<Dia
             }
         },
         Err(error) => {
-            diagnostics.push(Diagnostic::error(path, format!("cannot read the suite config: {error}")));
+            diagnostics.push(Diagnostic::error(
+                path,
+                format!("cannot read the suite config: {error}"),
+            ));
             return None;
         }
     };
@@ -172,7 +179,12 @@ impl Checker<'_> {
         }
     }
 
-    fn check_limits(&self, limits: &ToleranceOverride, at: &[PathSegment], diagnostics: &mut Vec<Diagnostic>) {
+    fn check_limits(
+        &self,
+        limits: &ToleranceOverride,
+        at: &[PathSegment],
+        diagnostics: &mut Vec<Diagnostic>,
+    ) {
         for (field, value) in limits.unit_limits() {
             let Some(value) = value else { continue };
             if (0.0..=1.0).contains(&value) {
@@ -209,7 +221,9 @@ impl Checker<'_> {
         let relative_and_plain = !name.is_empty()
             && !name.starts_with('/')
             && !name.contains('\\')
-            && name.split('/').all(|part| !part.is_empty() && part != "." && part != "..");
+            && name
+                .split('/')
+                .all(|part| !part.is_empty() && part != "." && part != "..");
         if !relative_and_plain {
             return Some(
                 self.error_at(span, format!("`{name}` is not a scene name"))
@@ -224,7 +238,10 @@ impl Checker<'_> {
             return None;
         }
         let mut diagnostic = self
-            .error_at(span, format!("there is no scene `{name}.ron` in `{}`", folder.display()))
+            .error_at(
+                span,
+                format!("there is no scene `{name}.ron` in `{}`", folder.display()),
+            )
             .with_label("no such scene");
         diagnostic = match name.strip_suffix(".ron") {
             Some(stem) => diagnostic.with_hint(format!("leave out `.ron`: `\"{stem}\"`")),
@@ -270,7 +287,10 @@ mod tests {
         .expect("a good config");
         let mut tolerance = DEFAULT_TOLERANCE;
         config.tolerance.apply_to(&mut tolerance);
-        config.scene("a").expect("an entry for a").apply_to(&mut tolerance);
+        config
+            .scene("a")
+            .expect("an entry for a")
+            .apply_to(&mut tolerance);
         assert_eq!(
             tolerance,
             Tolerance {
@@ -293,7 +313,10 @@ mod tests {
     fn expect_error(text: &str, expected: &[&str]) {
         let rendered = load(text).expect_err("the config is bad");
         for fragment in expected {
-            assert!(rendered.contains(fragment), "expected `{fragment}` in\n{rendered}");
+            assert!(
+                rendered.contains(fragment),
+                "expected `{fragment}` in\n{rendered}"
+            );
         }
     }
 
@@ -301,7 +324,10 @@ mod tests {
     fn problems_are_located() {
         expect_error(
             "(\n  tolerance: (max_chanel_difference: 3),\n)",
-            &["unknown field `max_chanel_difference`", "lampshade-check.ron:2:15"],
+            &[
+                "unknown field `max_chanel_difference`",
+                "lampshade-check.ron:2:15",
+            ],
         );
         expect_error(
             "(tolerance: (max_channel_difference: 300))",
@@ -316,7 +342,11 @@ mod tests {
         );
         expect_error(
             "(scenes: {\n  \"a\": (),\n  \"a\": (max_channel_difference: 1),\n})",
-            &["scene `a` is given twice", "lampshade-check.ron:3:3", "entry at 2:3"],
+            &[
+                "scene `a` is given twice",
+                "lampshade-check.ron:3:3",
+                "entry at 2:3",
+            ],
         );
         expect_error(
             "(scenes: {\n  \"missing\": (),\n  \"a.ron\": (),\n  \"../a\": (),\n})",

@@ -13,9 +13,9 @@
 use std::fmt::Write as _;
 use std::time::Duration;
 
+use crate::check::escape;
 use crate::check::runner::{SceneError, SceneResult, SceneStatus, Tally};
 use crate::check::suite::SuiteScene;
-use crate::check::escape;
 use crate::diag::render_diagnostics;
 
 /// The JUnit XML document for `results` (one per scene, in `scenes` order).
@@ -86,7 +86,11 @@ fn write_test_case(xml: &mut String, scene: &SuiteScene, result: &SceneResult, s
             None,
             format!("blessed {}: {reason}", scene.reference.display()),
         ),
-        SceneStatus::NotRun => ("skipped", Some("not run: --fail-fast stopped the run".to_owned()), String::new()),
+        SceneStatus::NotRun => (
+            "skipped",
+            Some("not run: --fail-fast stopped the run".to_owned()),
+            String::new(),
+        ),
         SceneStatus::Failed(failure) => {
             let message = failure.describe(scene);
             let body = format!(

@@ -202,7 +202,10 @@ impl Failure {
                 scene.reference.display()
             ),
             Failure::UnreadableReference(error) => {
-                format!("cannot read the reference `{}`: {error}", scene.reference.display())
+                format!(
+                    "cannot read the reference `{}`: {error}",
+                    scene.reference.display()
+                )
             }
             Failure::SizeMismatch(mismatch) => mismatch.to_string(),
             Failure::Mismatch { violations, .. } => violations.join("; "),
@@ -262,7 +265,11 @@ pub fn check_scene(scene: &SuiteScene, index: usize, options: &RunOptions) -> Sc
     let (compared, flip_map) = match &reference {
         Ok((_, expected)) => match compare::compare_pixels(expected, &actual, &scene.tolerance) {
             Ok(mut comparison) => {
-                let flip = if options.flip { compare::flip(expected, &actual) } else { None };
+                let flip = if options.flip {
+                    compare::flip(expected, &actual)
+                } else {
+                    None
+                };
                 comparison.flip = flip.as_ref().map(|(score, _)| *score);
                 (Ok(comparison), flip.map(|(_, map)| map))
             }
@@ -297,7 +304,9 @@ pub fn check_scene(scene: &SuiteScene, index: usize, options: &RunOptions) -> Sc
         let expected = reference.as_ref().ok();
         let difference = expected
             .filter(|(_, expected)| expected.dimensions() == actual.dimensions())
-            .map(|(_, expected)| compare::heat_map(expected, &actual, scene.tolerance.max_channel_difference));
+            .map(|(_, expected)| {
+                compare::heat_map(expected, &actual, scene.tolerance.max_channel_difference)
+            });
         let pictures = PicturesToWrite {
             expected: expected.map(|(bytes, _)| bytes),
             actual: &actual,
@@ -375,10 +384,22 @@ struct PicturesToWrite<'a> {
 
 /// Writes the report pictures of a failing scene as `NNNN-NAME-KIND.png`: the number keeps
 /// names unique when two scenes' names differ only in characters a file name cannot hold.
-fn write_pictures(result: &mut SceneResult, folder: &Path, index: usize, name: &str, pictures: PicturesToWrite) {
+fn write_pictures(
+    result: &mut SceneResult,
+    folder: &Path,
+    index: usize,
+    name: &str,
+    pictures: PicturesToWrite,
+) {
     let safe_name: String = name
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '-' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '-'
+            }
+        })
         .collect();
     let file_name = |kind: &str| format!("{index:04}-{safe_name}-{kind}.png");
     let mut errors = Vec::new();
@@ -402,9 +423,13 @@ fn write_pictures(result: &mut SceneResult, folder: &Path, index: usize, name: &
             })
         });
     }
-    result.pictures.actual = write("actual", &|path| write_png(path, pictures.actual, PngCompression::Fast));
+    result.pictures.actual = write("actual", &|path| {
+        write_png(path, pictures.actual, PngCompression::Fast)
+    });
     if let Some(difference) = pictures.difference {
-        result.pictures.difference = write("difference", &|path| write_png(path, difference, PngCompression::Fast));
+        result.pictures.difference = write("difference", &|path| {
+            write_png(path, difference, PngCompression::Fast)
+        });
     }
     if let Some(flip) = pictures.flip {
         result.pictures.flip = write("flip", &|path| write_png(path, flip, PngCompression::Fast));

@@ -226,7 +226,9 @@ mod tests {
         assert!(filter.matches("matlab-shiny", "scenes/matlab-shiny.ron"));
         assert!(filter.matches("light-spot", "scenes/light-spot.ron"));
         assert!(!filter.matches("matlab-metal", "scenes/matlab-metal.ron"));
-        assert!(NameFilter::new(&["scenes/matlab".to_owned()]).matches("matlab-metal", "scenes/matlab-metal.ron"));
+        assert!(
+            NameFilter::new(&["scenes/matlab".to_owned()]).matches("matlab-metal", "scenes/matlab-metal.ron")
+        );
         assert!(NameFilter::default().matches("anything", "anything.ron"));
     }
 }

@@ -81,7 +81,14 @@ pub fn discover(paths: &[PathBuf]) -> Result<Vec<SuiteScene>, SuiteProblems> {
     for path in paths {
         match std::fs::metadata(path) {
             Ok(metadata) if metadata.is_dir() => {
-                walk(path, path, &mut Vec::new(), &mut found, &mut config_paths, &mut problems);
+                walk(
+                    path,
+                    path,
+                    &mut Vec::new(),
+                    &mut found,
+                    &mut config_paths,
+                    &mut problems,
+                );
             }
             Ok(_) => {
                 let suite = match path.parent() {
@@ -123,7 +130,9 @@ pub fn discover(paths: &[PathBuf]) -> Result<Vec<SuiteScene>, SuiteProblems> {
     let mut seen = std::collections::HashSet::new();
     let scenes = found
         .into_iter()
-        .filter(|scene| seen.insert(std::fs::canonicalize(&scene.path).unwrap_or_else(|_| scene.path.clone())))
+        .filter(|scene| {
+            seen.insert(std::fs::canonicalize(&scene.path).unwrap_or_else(|_| scene.path.clone()))
+        })
         .map(|scene| SuiteScene {
             tolerance: resolve_tolerance(&scene, &configs),
             name: scene_name(&scene.components),
@@ -161,7 +170,8 @@ fn walk(
     config_paths: &mut BTreeMap<PathBuf, PathBuf>,
     problems: &mut SuiteProblems,
 ) {
-    let cannot_list = |error: std::io::Error| Diagnostic::error(folder, format!("cannot list the folder: {error}"));
+    let cannot_list =
+        |error: std::io::Error| Diagnostic::error(folder, format!("cannot list the folder: {error}"));
     let entries = match std::fs::read_dir(folder) {
         Ok(entries) => entries,
         Err(error) => {
@@ -253,7 +263,10 @@ pub fn is_material_library(text: &[u8]) -> bool {
 /// `text` after any leading whitespace, comments (`//`, nested `/* */`) and `#![...]`.
 fn skip_trivia(mut text: &[u8]) -> &[u8] {
     loop {
-        let start = text.iter().position(|b| !b.is_ascii_whitespace()).unwrap_or(text.len());
+        let start = text
+            .iter()
+            .position(|b| !b.is_ascii_whitespace())
+            .unwrap_or(text.len());
         text = &text[start..];
         if text.starts_with(b"//") {
             let end = text.iter().position(|&b| b == b'\n').unwrap_or(text.len());
@@ -303,7 +316,12 @@ mod tests {
         ];
         for text in libraries {
             let expected = !text.ends_with(b"broken");
-            assert_eq!(is_material_library(text), expected, "{}", String::from_utf8_lossy(text));
+            assert_eq!(
+                is_material_library(text),
+                expected,
+                "{}",
+                String::from_utf8_lossy(text)
+            );
         }
         let scenes: [&[u8]; 5] = [
             b"(objects: [])",
@@ -350,7 +368,11 @@ mod tests {
             CONFIG_FILE_NAME,
             "(tolerance: (max_channel_difference: 5), scenes: { \"lights/spot\": (max_differing_share: 0.5) })",
         );
-        write(root, "lights/lampshade-check.ron", "(tolerance: (max_differing_share: 0.25, max_channel_difference: 7))");
+        write(
+            root,
+            "lights/lampshade-check.ron",
+            "(tolerance: (max_differing_share: 0.25, max_channel_difference: 7))",
+        );
 
         let scenes = discover(&[root.to_path_buf(), root.join("a.ron")]).expect("a good suite");
         let names: Vec<&str> = scenes.iter().map(|s| s.name.as_str()).collect();
@@ -380,6 +402,10 @@ mod tests {
         write(folder.path(), "a.ron", "(objects: [])");
         write(folder.path(), CONFIG_FILE_NAME, "(tolerance: (bogus: 1))");
         let bad = discover(&[folder.path().to_path_buf()]).expect_err("a bad config");
-        assert!(bad.diagnostics[0].message.contains("bogus"), "{:?}", bad.diagnostics);
+        assert!(
+            bad.diagnostics[0].message.contains("bogus"),
+            "{:?}",
+            bad.diagnostics
+        );
     }
 }

@@ -84,6 +84,14 @@ fn locate(path: &Path) -> Option<Location> {
     }
 }
 
+/// Whether `a` and `b` name the same file, compared the way events are matched.
+pub fn same_location(a: &Path, b: &Path) -> bool {
+    match (locate(a), locate(b)) {
+        (Some(a), Some(b)) => a.key == b.key,
+        _ => false,
+    }
+}
+
 /// `path` with `.` removed and each `..` cancelling the component before it.
 fn normalize_lexically(path: &Path) -> PathBuf {
     let mut normalized = PathBuf::new();

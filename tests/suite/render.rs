@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::{DMat4, DVec3, Vec3};
 use lampshade::mesh::Mesh;
 use lampshade::render::raster::{PixelRect, SamplePattern, for_each_covered_pixel, for_each_covered_sample};
-use lampshade::render::{RenderOptions, geometry::build_frame, render};
+use lampshade::render::{FrameBuffer, RenderOptions, geometry::build_frame, render};
 use lampshade::scene::{
     BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Material, NormalInterpolation,
     Object, Projection, Scene, Shading,
@@ -459,5 +459,161 @@ fn check_thread_independence(scene: &Scene) {
             bits(&image) == bits(&reference),
             "{threads} threads differ from 1"
         );
+    }
+}
+
+/// One square at z = 0 facing +Z (counter-clockwise from +Z), seen from −Z: from behind.
+fn square_seen_from_behind(style: impl Fn(&mut Object)) -> FrameBuffer {
+    let positions = vec![
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
+    let mut square = object(
+        flat_mesh(positions, vec![[0, 1, 2], [0, 2, 3]]),
+        Material {
+            model: LightingModel::Lambert,
+            ambient: Vec3::splat(0.1),
+            ..UNLIT_WHITE
+        },
+        Shading::Phong,
+    );
+    style(&mut square);
+    let scene = Scene {
+        image: ImageSettings {
+            width: 8,
+            height: 8,
+            background: Vec3::new(0.0, 1.0, 0.0),
+            samples: 1,
+        },
+        camera: Camera {
+            eye: DVec3::new(0.0, 0.0, -5.0),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            projection: Projection::Perspective {
+                fov_y_degrees: 10.0,
+                near: 0.1,
+                far: 10.0,
+            },
+        },
+        ambient_light: Vec3::ONE,
+        lights: vec![
+            // Red from the viewer's side (−Z), blue from the other side (+Z).
+            Light::Directional {
+                direction: Vec3::Z,
+                color: Vec3::new(1.0, 0.0, 0.0),
+            },
+            Light::Directional {
+                direction: -Vec3::Z,
+                color: Vec3::new(0.0, 0.0, 1.0),
+            },
+        ],
+        objects: vec![square],
+    };
+    render(&scene, &RenderOptions::default()).0
+}
+
+#[test]
+fn back_face_modes_light_the_back_side_as_documented() {
+    let center = |mode: BackFaces| square_seen_from_behind(|o| o.back_faces = mode).color[4 * 8 + 4];
+    let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-4;
+    // Two-sided: the normal turns towards the viewer, so the red light on the viewer's side lights it.
+    assert!(
+        close(center(BackFaces::ReverseLit), Vec3::new(1.1, 0.1, 0.1)),
+        "{}",
+        center(BackFaces::ReverseLit)
+    );
+    // One-sided: the normal still points away, towards the blue light.
+    assert!(
+        close(center(BackFaces::Lit), Vec3::new(0.1, 0.1, 1.1)),
+        "{}",
+        center(BackFaces::Lit)
+    );
+    // Not lit: ambient only.
+    assert!(
+        close(center(BackFaces::Unlit), Vec3::splat(0.1)),
+        "{}",
+        center(BackFaces::Unlit)
+    );
+    // Culled: the background shows.
+    assert_eq!(center(BackFaces::Cull), Vec3::new(0.0, 1.0, 0.0));
+}
+
+#[test]
+fn constant_shading_gives_one_colour_per_object_and_components_select_terms() {
+    let sphere = lampshade::mesh::primitives::sphere(24);
+    let material = Material {
+        ambient: Vec3::new(0.2, 0.0, 0.0),
+        diffuse: Vec3::new(0.0, 0.7, 0.0),
+        specular: Vec3::new(0.0, 0.0, 0.5),
+        shininess: 10.0,
+        emission: Vec3::ZERO,
+        model: LightingModel::Phong,
+    };
+    let scene_with = |configure: &dyn Fn(&mut Object)| {
+        let mut o = object(sphere.clone(), material, Shading::Phong);
+        configure(&mut o);
+        Scene {
+            image: ImageSettings {
+                width: 40,
+                height: 40,
+                background: Vec3::ZERO,
+                samples: 1,
+            },
+            camera: Camera {
+                eye: DVec3::new(0.0, 0.0, 4.0),
+                target: DVec3::ZERO,
+                up: DVec3::Y,
+                projection: Projection::Perspective {
+                    fov_y_degrees: 40.0,
+                    near: 0.1,
+                    far: 10.0,
+                },
+            },
+            ambient_light: Vec3::ONE,
+            lights: vec![Light::Directional {
+                direction: Vec3::new(-0.3, -0.4, -1.0),
+                color: Vec3::ONE,
+            }],
+            objects: vec![o],
+        }
+    };
+    let constant = render(
+        &scene_with(&|o| o.shading = Shading::Constant),
+        &RenderOptions::default(),
+    )
+    .0;
+    let covered: Vec<Vec3> = constant
+        .color
+        .iter()
+        .zip(&constant.covered)
+        .filter(|(_, c)| **c)
+        .map(|(c, _)| *c)
+        .collect();
+    assert!(covered.len() > 300);
+    assert!(
+        covered.iter().all(|c| *c == covered[0]),
+        "constant shading must be one colour"
+    );
+
+    for (component, channel) in [
+        (LightingComponent::Ambient, 0),
+        (LightingComponent::Diffuse, 1),
+        (LightingComponent::Specular, 2),
+    ] {
+        let image = render(
+            &scene_with(&|o| o.component = component),
+            &RenderOptions::default(),
+        )
+        .0;
+        let total: Vec3 = image.color.iter().copied().sum();
+        for other in 0..3 {
+            if other == channel {
+                assert!(total[other] > 1.0, "{component:?} shows nothing");
+            } else {
+                assert_eq!(total[other], 0.0, "{component:?} leaks channel {other}");
+            }
+        }
     }
 }

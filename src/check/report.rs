@@ -1,0 +1,223 @@
+//! `--report DIR`: an HTML page for people, `DIR/index.html`, with the pictures of every
+//! failing scene in `DIR/images/`.
+//!
+//! Failures and errors come first (in suite order), each with its reason, its metrics and its
+//! pictures side by side: expected (the reference, copied byte for byte), actual (the new
+//! render), the difference heat map ([`crate::check::compare::heat_map`]) and, with `--flip`,
+//! FLIP's error map. Blessed, passed and skipped scenes follow in one table with their
+//! metrics, without pictures: a suite of a thousand passing scenes would otherwise write three
+//! thousand images nobody looks at. Images are pixelated when enlarged, since a reference
+//! test is about single pixels. The page has no scripts and no external resources, so it can
+//! be opened from a CI artifact as is.
+//!
+//! The pictures are written by the workers as scenes fail ([`crate::check::runner`]); this
+//! module writes only the page, atomically, once all results are in.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::check::compare::{percent, percentile_name};
+use crate::check::escape;
+use crate::check::runner::{Failure, PhaseTimes, SceneError, SceneResult, SceneStatus};
+use crate::check::suite::SuiteScene;
+use crate::cli::thousands;
+use crate::diag::render_diagnostics;
+use crate::output::{OutputError, write_atomically};
+
+/// The folder, inside the report folder, that holds the pictures.
+pub const PICTURE_FOLDER: &str = "images";
+
+/// Writes `DIR/index.html`; the pictures are already in `DIR/images/`.
+pub fn write_report(folder: &Path, html: &str) -> Result<(), OutputError> {
+    let path = folder.join("index.html");
+    write_atomically(&path, |writer| {
+        use std::io::Write as _;
+        writer
+            .write_all(html.as_bytes())
+            .map_err(|source| OutputError::Io {
+                path: path.clone(),
+                source,
+            })
+    })
+}
+
+/// The report page for `results` (one per scene, in `scenes` order), headed by `summary`.
+pub fn report_html(scenes: &[SuiteScene], results: &[SceneResult], summary: &str) -> String {
+    let mut html = String::new();
+    let _ = write!(
+        html,
+        "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
+         <title>lampshade check: {}</title>\n<style>{STYLE}</style>\n</head>\n<body>\n\
+         <h1>lampshade check</h1>\n<p class=\"summary\">{}</p>\n",
+        escape::text(summary),
+        escape::text(summary)
+    );
+    let pairs: Vec<(&SuiteScene, &SceneResult)> = scenes.iter().zip(results).collect();
+    let problems: Vec<_> = pairs.iter().filter(|(_, result)| result.is_problem()).collect();
+    if problems.is_empty() {
+        html.push_str("<p>No failures.</p>\n");
+    } else {
+        html.push_str(LEGEND);
+    }
+    for (scene, result) in problems {
+        write_problem(&mut html, scene, result);
+    }
+    let others: Vec<_> = pairs.iter().filter(|(_, result)| !result.is_problem()).collect();
+    if !others.is_empty() {
+        html.push_str(
+            "<h2>Other scenes</h2>\n<table class=\"others\">\n<tr><th>scene</th><th>result</th>\
+             <th>differing pixels</th><th>largest difference</th><th>FLIP mean</th><th>time</th></tr>\n",
+        );
+        for (scene, result) in others {
+            let (status, note) = match &result.status {
+                SceneStatus::Passed(_) => ("passed", String::new()),
+                SceneStatus::Blessed(reason) => ("blessed", format!(": {reason}")),
+                SceneStatus::NotRun => ("not run", String::new()),
+                // Problems are listed above.
+                SceneStatus::Failed(_) | SceneStatus::Errored(_) => continue,
+            };
+            let comparison = result.comparison();
+            let _ = writeln!(
+                html,
+                "<tr class=\"{}\"><td>{}</td><td>{}{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                status.replace(' ', "-"),
+                escape::text(&scene.path.display().to_string()),
+                status,
+                escape::text(&note),
+                comparison.map_or(String::new(), |c| thousands(c.differing_pixels)),
+                comparison.map_or(String::new(), |c| c.largest_difference.to_string()),
+                comparison
+                    .and_then(|c| c.flip)
+                    .map_or(String::new(), |flip| format!("{:.4}", flip.mean)),
+                milliseconds(result.times.total()),
+            );
+        }
+        html.push_str("</table>\n");
+    }
+    html.push_str("</body>\n</html>\n");
+    html
+}
+
+fn write_problem(html: &mut String, scene: &SuiteScene, result: &SceneResult) {
+    let (class, reason) = match &result.status {
+        SceneStatus::Failed(failure) => ("failed", failure.describe(scene)),
+        SceneStatus::Errored(error) => ("errored", error.describe()),
+        _ => return,
+    };
+    let _ = write!(
+        html,
+        "<section class=\"scene {class}\">\n<h2><span class=\"status\">{class}</span> {}</h2>\n\
+         <p class=\"reason\">{}</p>\n",
+        escape::text(&scene.path.display().to_string()),
+        escape::text(&reason)
+    );
+    if let SceneStatus::Errored(SceneError::Load(error)) = &result.status {
+        let diagnostics = render_diagnostics(&error.diagnostics, &error.sources, false);
+        let _ = writeln!(html, "<pre>{}</pre>", escape::text(&diagnostics));
+    }
+    html.push_str("<table class=\"metrics\">\n");
+    let mut row = |name: &str, value: String| {
+        let _ = writeln!(html, "<tr><th>{name}</th><td>{}</td></tr>", escape::text(&value));
+    };
+    row("reference", scene.reference.display().to_string());
+    let tolerance = scene.tolerance;
+    if let SceneStatus::Failed(Failure::Mismatch { comparison, .. }) = &result.status {
+        row(
+            "differing pixels",
+            format!(
+                "{} of {} ({}; allowed {}), more than {} levels off",
+                thousands(comparison.differing_pixels),
+                thousands(comparison.pixel_count()),
+                percent(comparison.differing_share()),
+                percent(tolerance.max_differing_share),
+                comparison.channel_threshold,
+            ),
+        );
+        row(
+            "largest difference",
+            format!("{} levels", comparison.largest_difference),
+        );
+        if let Some(region) = comparison.differing_region {
+            row(
+                "differing region",
+                format!(
+                    "x {}–{}, y {}–{}",
+                    region.x0,
+                    region.x1 - 1,
+                    region.y0,
+                    region.y1 - 1
+                ),
+            );
+        }
+        if let Some(flip) = comparison.flip {
+            row(
+                "FLIP mean",
+                format!("{:.4} (allowed {:.4})", flip.mean, tolerance.max_flip_mean),
+            );
+            row(
+                &format!("FLIP {}", percentile_name()),
+                format!(
+                    "{:.4} (allowed {:.4})",
+                    flip.percentile, tolerance.max_flip_percentile
+                ),
+            );
+        }
+    }
+    row("time", phase_times(&result.times));
+    html.push_str("</table>\n");
+
+    let pictures = [
+        ("expected", &result.pictures.expected),
+        ("actual", &result.pictures.actual),
+        ("difference", &result.pictures.difference),
+        ("FLIP error", &result.pictures.flip),
+    ];
+    if pictures.iter().any(|(_, file)| file.is_some()) {
+        html.push_str("<div class=\"pictures\">\n");
+        for (caption, file) in pictures {
+            if let Some(file) = file {
+                let source = escape::attribute(&format!("{PICTURE_FOLDER}/{file}"));
+                let _ = writeln!(
+                    html,
+                    "<figure><a href=\"{source}\"><img src=\"{source}\" alt=\"{caption}\"></a>\
+                     <figcaption>{caption}</figcaption></figure>"
+                );
+            }
+        }
+        html.push_str("</div>\n");
+    }
+    html.push_str("</section>\n");
+}
+
+fn milliseconds(duration: std::time::Duration) -> String {
+    format!("{:.1} ms", duration.as_secs_f64() * 1000.0)
+}
+
+fn phase_times(times: &PhaseTimes) -> String {
+    let phases: Vec<String> = times
+        .phases()
+        .iter()
+        .map(|(name, time)| format!("{name} {}", milliseconds(*time)))
+        .collect();
+    phases.join(", ")
+}
+
+const LEGEND: &str = "<p class=\"legend\">Difference: the reference in dim grey; \
+    <span style=\"color:#0000a0\">■</span> differs within the per-channel threshold; \
+    <span style=\"color:#ff0000\">■</span>→<span style=\"color:#ffff00\">■</span> differs by more \
+    (red just over, yellow 255 levels off). FLIP error: black where no difference is visible, \
+    through purple to yellow where it is most visible.</p>\n";
+
+const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:#222}\
+    h2{font-size:1.1em;margin:0 0 .4em}\
+    .scene{border:1px solid #ccc;border-left:6px solid #c33;padding:.8em;margin:1em 0}\
+    .scene.errored{border-left-color:#e80}\
+    .status{text-transform:uppercase;font-size:.8em;color:#fff;background:#c33;padding:.1em .4em;border-radius:3px}\
+    .errored .status{background:#e80}\
+    .reason{font-weight:600}\
+    pre{background:#f6f6f6;padding:.6em;overflow:auto}\
+    table{border-collapse:collapse}th,td{text-align:left;padding:.15em .8em .15em 0;vertical-align:top}\
+    .others td,.others th{border-bottom:1px solid #eee}\
+    .pictures{display:grid;grid-template-columns:repeat(auto-fill,minmax(260px,1fr));gap:.8em;margin-top:.8em}\
+    figure{margin:0}figure img{width:100%;image-rendering:pixelated;background:#888;display:block}\
+    figcaption{font-size:.9em;color:#555}";
