@@ -337,10 +337,16 @@ fn timings_table(
             time.as_secs_f64() / sum * 100.0
         ));
     }
-    out.push_str(&format!(
-        "  (scenes run in parallel, so the sum, {:.1} ms, exceeds the wall time)\n",
-        sum * 1000.0
-    ));
+    if workers > 1 {
+        // While a scene's render waits for its tiles, its thread may run another scene's work
+        // (rayon steals it), and that time counts in the waiting scene's phase too.
+        out.push_str(&format!(
+            "  (summed over scenes in parallel, {:.1} ms in all, more than the wall time; a thread \
+             waiting for tiles may run other scenes' work meanwhile, so use --jobs 1 for exact \
+             shares)\n",
+            sum * 1000.0
+        ));
+    }
     let mut slowest = ran.clone();
     slowest.sort_by_key(|(_, result)| std::cmp::Reverse(result.times.total()));
     let names: Vec<String> = slowest

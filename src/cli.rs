@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::diag::render_diagnostics;
-use crate::output::{self, PngCompression};
+use crate::output::{self, Encoding, OutputFormat, PngCompression};
 use crate::pipeline::{RenderedScene, render_scene_file};
 use crate::render::{DebugView, RenderOptions};
 use crate::scene::Shading;
@@ -52,9 +52,17 @@ pub struct RenderArgs {
     /// Scene files (.ron). Each is rendered in turn; a bad one is reported and the rest still render.
     #[arg(required = true, value_name = "SCENE")]
     pub scenes: Vec<PathBuf>,
-    /// Output image (only with a single scene). Default: the scene's path with `.png`.
+    /// Output image (only with a single scene). Default: the scene's path with the format's
+    /// extension (`.png` unless --format says otherwise).
     #[arg(short, long, value_name = "OUT.png")]
     pub output: Option<PathBuf>,
+    /// Output format: png (8-bit), exr or hdr (linear float, not clamped). Default: from the
+    /// output's extension, else png.
+    #[arg(long, value_enum)]
+    pub format: Option<FormatArg>,
+    /// How 8-bit PNG stores light: linear (as OpenGL writes a framebuffer) or srgb.
+    #[arg(long, value_enum, default_value = "linear")]
+    pub encoding: EncodingArg,
     /// Image width in pixels, overriding the scene's.
     #[arg(long)]
     pub width: Option<u32>,
@@ -76,6 +84,19 @@ pub struct RenderArgs {
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FormatArg {
+    Png,
+    Exr,
+    Hdr,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum EncodingArg {
+    Linear,
+    Srgb,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -152,14 +173,46 @@ fn run_render(args: &RenderArgs) -> i32 {
             DebugArg::Depth => DebugView::Depth,
         }),
     };
+    let format = match (args.format, args.output.as_deref()) {
+        (Some(format), _) => match format {
+            FormatArg::Png => OutputFormat::Png,
+            FormatArg::Exr => OutputFormat::Exr,
+            FormatArg::Hdr => OutputFormat::Hdr,
+        },
+        (None, Some(output)) => match OutputFormat::from_path(output) {
+            Some(format) => format,
+            None => {
+                eprintln!(
+                    "error: cannot tell the format of `{}` from its extension; use .png, .exr or .hdr, or --format",
+                    output.display()
+                );
+                return EXIT_BAD_INPUT;
+            }
+        },
+        (None, None) => OutputFormat::Png,
+    };
+    let output_settings = OutputSettings {
+        format,
+        encoding: match args.encoding {
+            EncodingArg::Linear => Encoding::Linear,
+            EncodingArg::Srgb => Encoding::Srgb,
+        },
+    };
     let mut bad_inputs = Vec::new();
     let mut failed_outputs = 0;
     for scene_path in &args.scenes {
         let output = args
             .output
             .clone()
-            .unwrap_or_else(|| scene_path.with_extension("png"));
-        match render_one(scene_path, &output, &load_options, &render_options, args.quiet) {
+            .unwrap_or_else(|| scene_path.with_extension(format.extension()));
+        match render_one(
+            scene_path,
+            &output,
+            &load_options,
+            &render_options,
+            output_settings,
+            args.quiet,
+        ) {
             Ok(()) => {}
             Err(RenderFailure::BadInput) => bad_inputs.push(scene_path),
             Err(RenderFailure::Output) => failed_outputs += 1,
@@ -188,11 +241,18 @@ enum RenderFailure {
     Output,
 }
 
+#[derive(Debug, Clone, Copy)]
+struct OutputSettings {
+    format: OutputFormat,
+    encoding: Encoding,
+}
+
 fn render_one(
     scene_path: &Path,
     output_path: &Path,
     load_options: &LoadOptions,
     render_options: &RenderOptions,
+    output_settings: OutputSettings,
     quiet: bool,
 ) -> Result<(), RenderFailure> {
     let rendered = match render_scene_file(
@@ -224,8 +284,14 @@ fn render_one(
     } = rendered;
 
     let started = Instant::now();
-    let image = output::to_rgb8(&framebuffer);
-    if let Err(error) = output::write_png(output_path, &image, PngCompression::Fast) {
+    let written = output::write_image(
+        output_path,
+        &framebuffer,
+        output_settings.format,
+        output_settings.encoding,
+        PngCompression::Fast,
+    );
+    if let Err(error) = written {
         eprintln!("error: {error}");
         return Err(RenderFailure::Output);
     }

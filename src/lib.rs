@@ -21,4 +21,5 @@ pub mod output;
 pub mod pipeline;
 pub mod render;
 pub mod scene;
+pub mod texture;
 pub mod watch;

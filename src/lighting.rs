@@ -81,6 +81,28 @@ pub fn illuminate(
     normal: Vec3,
     to_viewer: Vec3,
 ) -> LightingTerms {
+    illuminate_with_visibility(
+        material,
+        lights,
+        ambient_light,
+        position,
+        normal,
+        to_viewer,
+        |_, _| 1.0,
+    )
+}
+
+/// [`illuminate`] with the seeds' shadow term `S_i`: `visibility(i, L)` is the share of light
+/// `i` that reaches the point (1 lit, 0 in shadow), asked only for lights that face the surface.
+pub fn illuminate_with_visibility(
+    material: &Material,
+    lights: &[ShadingLight],
+    ambient_light: Vec3,
+    position: Vec3,
+    normal: Vec3,
+    to_viewer: Vec3,
+    visibility: impl Fn(usize, Vec3) -> f32,
+) -> LightingTerms {
     let mut terms = LightingTerms {
         emission: material.emission,
         ..LightingTerms::default()
@@ -91,12 +113,16 @@ pub fn illuminate(
     }
     terms.ambient = material.ambient * ambient_light;
     let has_specular = material.specular != Vec3::ZERO;
-    for light in lights {
+    for (index, light) in lights.iter().enumerate() {
         let Some((to_light, strength)) = incidence(light, position) else {
             continue;
         };
         let n_dot_l = normal.dot(to_light);
         if n_dot_l <= 0.0 || strength <= 0.0 {
+            continue;
+        }
+        let strength = strength * visibility(index, to_light);
+        if strength <= 0.0 {
             continue;
         }
         let irradiance = light.color * strength * n_dot_l;
@@ -265,6 +291,7 @@ mod tests {
             shininess: 5.0,
             emission: Vec3::ZERO,
             model,
+            textures: Default::default(),
         }
     }
 
@@ -568,6 +595,7 @@ mod cook_torrance_tests {
             shininess: 1.0,
             emission: Vec3::ZERO,
             model: LightingModel::CookTorrance(surface(0.5, MicrofacetDistribution::Beckmann)),
+            textures: Default::default(),
         };
         let light = ShadingLight {
             color: Vec3::ONE,

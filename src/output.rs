@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ImageEncoder, RgbImage};
 
+use glam::Vec3;
+
 use crate::render::FrameBuffer;
 
 /// A problem writing an output file (not the user's scene: the file system's).
@@ -42,13 +44,107 @@ pub fn quantize_channel(value: f32) -> u8 {
     (value.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
 }
 
+/// How 8-bit output stores light.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Encoding {
+    /// The linear values as they are, like an OpenGL framebuffer without sRGB conversion (the
+    /// reference images of the seeds' scenes assume it).
+    #[default]
+    Linear,
+    /// Through the sRGB transfer function first, as displays expect: mid-tones come out lighter
+    /// and gradients perceptually even.
+    Srgb,
+}
+
+/// The sRGB transfer function (IEC 61966-2-1), linear light in, encoded value out.
+pub fn linear_to_srgb(value: f32) -> f32 {
+    if value <= 0.003_130_8 {
+        12.92 * value
+    } else {
+        1.055 * value.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The frame as 8-bit RGB: clamped, encoded, rounded.
 pub fn to_rgb8(framebuffer: &FrameBuffer) -> RgbImage {
+    to_rgb8_encoded(framebuffer, Encoding::Linear)
+}
+
+pub fn to_rgb8_encoded(framebuffer: &FrameBuffer, encoding: Encoding) -> RgbImage {
     let mut bytes = Vec::with_capacity(framebuffer.color.len() * 3);
     for color in &framebuffer.color {
+        let color = match encoding {
+            Encoding::Linear => *color,
+            Encoding::Srgb => color.clamp(Vec3::ZERO, Vec3::ONE).map(linear_to_srgb),
+        };
         bytes.extend(color.to_array().map(quantize_channel));
     }
     RgbImage::from_raw(framebuffer.width, framebuffer.height, bytes)
         .expect("a frame buffer holds width × height pixels")
+}
+
+/// The file formats lampshade writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// 8-bit RGB PNG, clamped to [0, 1].
+    Png,
+    /// OpenEXR, 32-bit float RGB, linear and unclamped.
+    Exr,
+    /// Radiance HDR (RGBE), linear and unclamped.
+    Hdr,
+}
+
+impl OutputFormat {
+    /// The format a file name asks for, by its extension (case-insensitive).
+    pub fn from_path(path: &Path) -> Option<OutputFormat> {
+        let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+        match extension.as_str() {
+            "png" => Some(OutputFormat::Png),
+            "exr" => Some(OutputFormat::Exr),
+            "hdr" => Some(OutputFormat::Hdr),
+            _ => None,
+        }
+    }
+
+    pub fn extension(self) -> &'static str {
+        match self {
+            OutputFormat::Png => "png",
+            OutputFormat::Exr => "exr",
+            OutputFormat::Hdr => "hdr",
+        }
+    }
+}
+
+/// Writes `framebuffer` to `path` in `format`, atomically. PNG uses `encoding`; the float
+/// formats store linear light without clamping.
+pub fn write_image(
+    path: &Path,
+    framebuffer: &FrameBuffer,
+    format: OutputFormat,
+    encoding: Encoding,
+    compression: PngCompression,
+) -> Result<(), OutputError> {
+    match format {
+        OutputFormat::Png => write_png(path, &to_rgb8_encoded(framebuffer, encoding), compression),
+        OutputFormat::Exr | OutputFormat::Hdr => {
+            let floats: Vec<f32> = framebuffer.color.iter().flat_map(|c| c.to_array()).collect();
+            let image = image::Rgb32FImage::from_raw(framebuffer.width, framebuffer.height, floats)
+                .expect("a frame buffer holds width × height pixels");
+            let image_format = if format == OutputFormat::Exr {
+                image::ImageFormat::OpenExr
+            } else {
+                image::ImageFormat::Hdr
+            };
+            write_atomically(path, |writer| {
+                image::DynamicImage::ImageRgb32F(image)
+                    .write_to(writer, image_format)
+                    .map_err(|source| OutputError::Encode {
+                        path: path.to_path_buf(),
+                        source,
+                    })
+            })
+        }
+    }
 }
 
 /// PNG compression effort: `Fast` favours the edit-to-image loop, `Best` smaller files.
@@ -113,7 +209,51 @@ pub fn write_atomically(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
+
+    #[test]
+    fn srgb_transfer_function_by_hand() {
+        assert_eq!(linear_to_srgb(0.0), 0.0);
+        assert!((linear_to_srgb(1.0) - 1.0).abs() < 1e-6);
+        assert!((linear_to_srgb(0.002) - 0.02584).abs() < 1e-5);
+        // Mid-grey 0.5 linear is 188 in sRGB.
+        assert_eq!(quantize_channel(linear_to_srgb(0.5)), 188);
+    }
+
+    #[test]
+    fn float_formats_keep_values_above_one() {
+        let folder = tempfile::tempdir().unwrap();
+        let framebuffer = FrameBuffer {
+            width: 2,
+            height: 1,
+            color: vec![Vec3::new(4.0, 0.5, 0.0), Vec3::new(0.25, 1.5, 100.0)],
+            covered: vec![true, true],
+        };
+        for format in [OutputFormat::Exr, OutputFormat::Hdr] {
+            let path = folder.path().join(format!("out.{}", format.extension()));
+            write_image(
+                &path,
+                &framebuffer,
+                format,
+                Encoding::Linear,
+                PngCompression::Fast,
+            )
+            .unwrap();
+            let read = image::open(&path).unwrap().to_rgb32f();
+            for (got, expected) in read.as_raw().chunks(3).zip(&framebuffer.color) {
+                // RGBE shares one exponent per pixel: 8 bits of mantissa relative to the largest
+                // channel. EXR stores f32 exactly.
+                let tolerance = expected.max_element() / 128.0;
+                for (g, e) in got.iter().zip(expected.to_array()) {
+                    assert!((g - e).abs() <= tolerance, "{format:?}: {g} vs {e}");
+                }
+            }
+        }
+        assert_eq!(
+            OutputFormat::from_path(Path::new("a/b.EXR")),
+            Some(OutputFormat::Exr)
+        );
+        assert_eq!(OutputFormat::from_path(Path::new("a/b.jpg")), None);
+    }
 
     #[test]
     fn quantisation_rounds_and_clamps() {

@@ -251,7 +251,11 @@ struct WatchSession {
 /// What one build did.
 enum BuildOutcome {
     Written(WrittenImage),
-    BadInput(LoadError),
+    BadInput {
+        error: LoadError,
+        /// Reading and checking, until the problems were found.
+        load_time: Duration,
+    },
     OutputFailed {
         error: OutputError,
         files_read: Vec<PathBuf>,
@@ -309,19 +313,21 @@ impl WatchSession {
                 self.report_written(trigger, &written);
                 self.follow(written.rendered.files_read);
             }
-            Ok(BuildOutcome::BadInput(error)) => {
+            Ok(BuildOutcome::BadInput { error, load_time }) => {
                 let report = render_diagnostics(&error.diagnostics, &error.sources, self.color);
                 eprint!("{report}");
                 let errors = error.diagnostics.iter().filter(|d| d.is_error()).count();
                 let problem = format!("{errors} error{}", if errors == 1 { "" } else { "s" });
-                self.report_failure(trigger, &problem, || {
+                self.report_failure(trigger, &problem, Some(load_time), || {
                     render_diagnostics(&error.diagnostics, &error.sources, false)
                 });
                 self.follow(error.files_read);
             }
             Ok(BuildOutcome::OutputFailed { error, files_read }) => {
                 eprintln!("error: {error}");
-                self.report_failure(trigger, "the image could not be written", || error.to_string());
+                self.report_failure(trigger, "the image could not be written", None, || {
+                    error.to_string()
+                });
                 self.follow(files_read);
             }
             Err(payload) => {
@@ -329,7 +335,7 @@ impl WatchSession {
                 let message = panic_message(payload.as_ref());
                 eprintln!("error: the render failed with an internal error; still watching");
                 self.mesh_cache = MeshCache::default();
-                self.report_failure(trigger, "internal error", || {
+                self.report_failure(trigger, "internal error", None, || {
                     format!("internal error (a bug in lampshade, not in your files): {message}")
                 });
                 // What the build read is unknown: keep following what the last one did.
@@ -392,14 +398,21 @@ impl WatchSession {
     }
 
     /// Reports a build that produced no image; `report` gives the preview's overlay text.
-    fn report_failure(&self, trigger: &Trigger, problem: &str, report: impl FnOnce() -> String) {
+    fn report_failure(
+        &self,
+        trigger: &Trigger,
+        problem: &str,
+        load_time: Option<Duration>,
+        report: impl FnOnce() -> String,
+    ) {
         let kept = if self.output.exists() {
             format!("{} left as it was", self.output.display())
         } else {
             String::from("no image yet")
         };
+        let timing = load_time.map_or_else(String::new, |load| format!(" | load {}", milliseconds(load)));
         println!(
-            "#{} {}: {problem} (see above); {kept}; waiting for the next save",
+            "#{} {}: {problem} (see above); {kept}{timing} | waiting for the next save",
             self.builds,
             trigger.describe()
         );
@@ -448,9 +461,15 @@ fn build_once(
     render_options: &RenderOptions,
     mesh_cache: &mut MeshCache,
 ) -> BuildOutcome {
+    let started = Instant::now();
     let rendered = match render_scene_file(scene, load_options, render_options, mesh_cache) {
         Ok(rendered) => rendered,
-        Err(error) => return BuildOutcome::BadInput(error),
+        Err(error) => {
+            return BuildOutcome::BadInput {
+                error,
+                load_time: started.elapsed(),
+            };
+        }
     };
     let encode_started = Instant::now();
     let image = output::to_rgb8(&rendered.framebuffer);

@@ -37,13 +37,17 @@ pub struct Tolerance {
 }
 
 /// The defaults of every suite: the limits of the original golden-image test, and FLIP limits
-/// that a one-level change everywhere stays under while a light moved by a few degrees does
-/// not (measured on the bundled `matlab-shiny` scene: see the tests).
+/// set from measurements on the bundled scenes. FLIP's mean cannot tell an invisible change
+/// from a subtle visible one (every channel one level brighter scores 0.02–0.035, a light
+/// turned by 2.6° in `matlab-shiny` 0.025), so the mean limit only sits above what the pixel
+/// test allows (two levels everywhere: at most 0.058). The 99th percentile separates them:
+/// two levels everywhere scores at most 0.081, 0.1 % of the pixels 40 levels off at most 0.090,
+/// the turned light 0.197.
 pub const DEFAULT_TOLERANCE: Tolerance = Tolerance {
     max_channel_difference: 2,
     max_differing_share: 0.001,
-    max_flip_mean: 0.005,
-    max_flip_percentile: 0.05,
+    max_flip_mean: 0.07,
+    max_flip_percentile: 0.12,
 };
 
 impl Default for Tolerance {

@@ -337,7 +337,7 @@ mod tests {
             "(\n  scenes: {\n    \"a\": (max_differing_share: 2),\n  },\n)",
             &[
                 "`max_differing_share` must be between 0 and 1, not 2",
-                "lampshade-check.ron:3:33",
+                "lampshade-check.ron:3:32",
             ],
         );
         expect_error(

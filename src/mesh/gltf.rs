@@ -5,9 +5,10 @@
 //!
 //! * **Parsing.** `gltf::Gltf::from_slice` parses and validates the document; buffers are
 //!   then loaded one by one (the loop `gltf::import_buffers` runs, inlined so that each
-//!   external `.bin` file is recorded in `files_read` and named in errors). Images are never
-//!   decoded: `gltf::import` would decode every texture, which is slow and unused here.
-//!   A required extension the loader does not support is an error naming it.
+//!   external `.bin` file is recorded in `files_read` and named in errors). Only the images
+//!   that the drawn textures use are decoded (`gltf::import` would decode every one, and read
+//!   files without telling us which). A required extension the loader does not support is an
+//!   error naming it.
 //! * **No panics.** `gltf` can panic on malformed input (out-of-range accessors, bad
 //!   percent-encoding in a URI); every accessor is checked before it is read (component
 //!   type, element size, stride, count) and every index against the vertex count, and the
@@ -28,6 +29,37 @@
 //!   ([`normals::repair_normals`]), missing ones computed with the crease angle
 //!   ([`normals::compute_vertex_normals`]) after the transform, so the crease angle applies
 //!   to what is drawn.
+//! * **Other vertex attributes.** `TEXCOORD_0` → [`Mesh::uvs`], `TEXCOORD_1` →
+//!   [`Mesh::uvs1`] (float, or normalised unsigned byte or short; glTF's (0, 0) is already
+//!   the top-left of the image), `COLOR_0` → [`Mesh::colors`] (RGB or RGBA, float or
+//!   normalised unsigned byte or short; glTF vertex colours are linear, alpha 1 when absent),
+//!   `TANGENT` → [`Mesh::tangents`]: the direction by the node's linear part, like an edge
+//!   between positions, and `w` negated under a mirroring node (the bitangent `n × t` turns
+//!   with the winding), then made unit and perpendicular to the final normal
+//!   ([`tangents::orthonormalize_tangent`]). An attribute with a type glTF does not allow for
+//!   it, or the wrong count, is ignored with a warning: the mesh is still drawn. They all
+//!   follow their vertices through the normal computation. Primitives that lack an attribute
+//!   another one has get zeros for texture coordinates, white for colours (no effect) and
+//!   [`tangents::fallback_tangent`] for tangents, so every array has one entry per vertex;
+//!   a textured primitive that lacks its texture coordinates gets a warning.
+//! * **Tangents for normal maps.** When a primitive's material has a `normalTexture` and the
+//!   primitive has no `TANGENT`, tangents are computed from the final positions, normals and
+//!   the normal map's UV set ([`tangents::compute_tangents`]), as the glTF specification asks.
+//!
+//! # Textures
+//!
+//! `baseColorTexture` is decoded as sRGB and bound to `textures.diffuse`; `normalTexture` as
+//! linear data, bound to `textures.normal` with its `scale`. The binding takes the texture's
+//! `texCoord` (0 or 1; a higher set is not loaded, with a warning) and its sampler's `wrapS` /
+//! `wrapT` (default `REPEAT`); `minFilter` / `magFilter` are not used (every texture is
+//! filtered trilinearly, see [`crate::texture`]). Images come from external files (relative
+//! URIs, percent-decoded, read relative to the glTF file and recorded in `files_read` even
+//! when missing), `data:` URIs, or buffer views (GLB); PNG and JPEG are decoded
+//! ([`Texture::from_encoded`]), each image once per colour space however many textures and
+//! materials use it. An image that is missing or cannot be decoded is a warning naming it,
+//! and its materials are drawn without it. A texture whose UV set no primitive has is not
+//! bound (a warning says so). `metallicRoughnessTexture`, `occlusionTexture` and
+//! `emissiveTexture` are not sampled yet (a warning names them when a material has them).
 //!
 //! # Metallic-roughness to [`Material`]
 //!
@@ -43,22 +75,29 @@
 //! * shininess = [`blinn_phong_exponent`] (used if the scene switches the model to Phong);
 //! * emission = `emissiveFactor` × `KHR_materials_emissive_strength` (default 1).
 //!
-//! Textures are not sampled (a warning says so). Factors then stand for the whole
-//! material, except one case: with a `metallicRoughnessTexture`, `metallicFactor` only
+//! The metallic-roughness texture is not sampled yet, so the factors stand for metallic and
+//! roughness, except in one case: with a `metallicRoughnessTexture`, `metallicFactor` only
 //! scales the texture and its default of 1 would turn every textured model into a metal, so
-//! metallic is taken as 0 there. A primitive without a material uses the glTF default
+//! metallic is taken as 0 there (a warning says so). The base colour texture multiplies
+//! `baseColor` where it is used (diffuse and ambient, through `textures.diffuse`); `F0` keeps
+//! the factor. A primitive without a material uses the glTF default
 //! material (base colour 1, metallic 1, roughness 1: a white rough metal), appended after
 //! the file's materials when some primitive needs it.
 
+use std::borrow::Cow;
+use std::collections::HashMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
-use glam::{DMat3, DMat4, DVec3, Mat4, Vec3};
+use glam::{DMat3, DMat4, DVec3, Mat4, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
-use super::{LoadedMesh, Mesh, MeshError, MeshOptions, io_error_text, normals};
-use crate::scene::{LightingModel, Material, Microfacet, MicrofacetDistribution};
+use super::normals::VertexAttributes;
+use super::{LoadedMesh, Mesh, MeshError, MeshOptions, io_error_text, normals, tangents};
+use crate::scene::{LightingModel, Material, Microfacet, MicrofacetDistribution, TextureBinding};
+use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 
 /// Required extensions a file may list and still load: both are understood by the `gltf`
 /// crate as built here, and neither changes the geometry (`KHR_lights_punctual` adds lights,
@@ -113,6 +152,7 @@ pub fn material_from_factors(base_color: Vec3, metallic: f32, roughness: f32, em
             fresnel,
             distribution: MicrofacetDistribution::Ggx,
         }),
+        textures: Default::default(),
     }
 }
 
@@ -149,6 +189,7 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         mesh: Mesh::default(),
         skipped_primitives: Vec::new(),
         repaired_normals: 0,
+        missing_uv_sets: Vec::new(),
         warnings: Vec::new(),
     };
     for (node, world) in scene_instances(&document).map_err(fail)? {
@@ -168,6 +209,7 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         skipped_primitives,
         repaired_normals,
         default_material_index,
+        missing_uv_sets,
         ..
     } = baker;
     if !skipped_primitives.is_empty() {
@@ -187,25 +229,48 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         ));
     }
 
-    mesh.materials = document.materials().map(|m| material_from_gltf(&m)).collect();
+    // A primitive lacking the UV set its material reads is worth a warning only when the
+    // mesh has that set at all; otherwise the binding is dropped below, with its own warning.
+    for (here, set) in missing_uv_sets {
+        let has_set = if set == 0 { &mesh.uvs } else { &mesh.uvs1 };
+        if !has_set.is_empty() {
+            warnings.push(format!(
+                "{here}: its material's texture reads TEXCOORD_{set}, which the primitive lacks; it reads the texture's corner (0, 0)"
+            ));
+        }
+    }
+
+    let mut images = ImageLoader {
+        buffers: &buffers,
+        directory,
+        index_by_image: HashMap::new(),
+        textures: Vec::new(),
+        files_read: Vec::new(),
+        warnings: Vec::new(),
+    };
+    mesh.materials = document
+        .materials()
+        .map(|material| {
+            let mut lowered = material_from_gltf(&material);
+            bind_textures(&material, &mut lowered, &mesh, &mut images, &mut warnings);
+            lowered
+        })
+        .collect();
     if mesh.triangle_materials.contains(&default_material_index) {
         mesh.materials.push(default_material());
     }
-    let textured: Vec<String> = document
-        .materials()
-        .filter(|m| m.pbr_metallic_roughness().base_color_texture().is_some())
-        .map(|m| {
-            m.name().map_or_else(
-                || format!("#{}", m.index().unwrap_or_default()),
-                |n| format!("'{n}'"),
-            )
-        })
-        .collect();
-    if !textured.is_empty() {
-        warnings.push(format!(
-            "textures are not sampled; these materials use their base colour factor only: {}",
-            textured.join(", ")
-        ));
+    mesh.textures = images.textures;
+    files_read.extend(images.files_read);
+    warnings.extend(images.warnings);
+    // A normal-mapped material that no drawn primitive uses leaves the mesh without
+    // tangents; the invariant wants them, and any perpendicular unit vectors do.
+    let normal_mapped = mesh.materials.iter().any(|m| m.textures.normal.is_some());
+    if normal_mapped && mesh.tangents.is_empty() {
+        mesh.tangents = mesh
+            .normals
+            .iter()
+            .map(|&n| tangents::fallback_tangent(n))
+            .collect();
     }
 
     Ok(LoadedMesh {
@@ -366,6 +431,8 @@ struct Baker<'a> {
     /// (mesh, primitive) indices of point and line primitives.
     skipped_primitives: Vec<(usize, usize)>,
     repaired_normals: usize,
+    /// Primitives (named "mesh m primitive p") whose material reads a UV set they lack.
+    missing_uv_sets: Vec<(String, u32)>,
     warnings: Vec<String>,
 }
 
@@ -467,31 +534,253 @@ impl Baker<'_> {
             }
         };
 
-        let baked = match file_normals {
+        let uvs = self.read_uvs(primitive, &reader, 0, vertex_count, &here);
+        let uvs1 = self.read_uvs(primitive, &reader, 1, vertex_count, &here);
+        let colors = self.read_colors(primitive, &reader, vertex_count, &here);
+        let file_tangents = self
+            .read_tangents(primitive, &reader, vertex_count, &here)
+            .map(|tangents| {
+                // Directions transform like edges between positions, by the linear part.
+                let handedness = if mirrored { -1.0 } else { 1.0 };
+                tangents
+                    .into_iter()
+                    .map(|t| {
+                        let direction = (linear * t.truncate().as_dvec3()).as_vec3();
+                        let w = if t.w < 0.0 { -handedness } else { handedness };
+                        direction.extend(w)
+                    })
+                    .collect::<Vec<Vec4>>()
+            });
+        let material = primitive.material();
+        let normal_map_set = material.normal_texture().map(|normal| normal.tex_coord());
+        let used_sets = [
+            material
+                .pbr_metallic_roughness()
+                .base_color_texture()
+                .map(|info| info.tex_coord()),
+            normal_map_set,
+        ];
+        for set in used_sets.into_iter().flatten() {
+            let present = match set {
+                0 => uvs.is_some(),
+                1 => uvs1.is_some(),
+                _ => true, // not bound at all; the material reports it
+            };
+            if !present && !self.missing_uv_sets.contains(&(here.clone(), set)) {
+                self.missing_uv_sets.push((here.clone(), set));
+            }
+        }
+
+        let attributes = VertexAttributes {
+            uvs: uvs.as_deref().unwrap_or_default(),
+            uvs1: uvs1.as_deref().unwrap_or_default(),
+            colors: colors.as_deref().unwrap_or_default(),
+            tangents: file_tangents.as_deref().unwrap_or_default(),
+        };
+        let mut baked = match file_normals {
             Some(file_normals) => {
-                let repaired =
-                    normals::repair_normals(&positions, &file_normals, &triangles, self.crease_angle_degrees);
+                let repaired = normals::repair_normals(
+                    &positions,
+                    &file_normals,
+                    attributes,
+                    &triangles,
+                    self.crease_angle_degrees,
+                );
                 self.repaired_normals += repaired.replaced_count;
                 repaired.mesh
             }
-            None => normals::compute_vertex_normals(&positions, &triangles, self.crease_angle_degrees),
+            None => {
+                normals::compute_vertex_normals(&positions, attributes, &triangles, self.crease_angle_degrees)
+            }
         };
+        if !baked.tangents.is_empty() {
+            for (tangent, &normal) in baked.tangents.iter_mut().zip(&baked.normals) {
+                *tangent = tangents::orthonormalize_tangent(normal, *tangent);
+            }
+        } else if let Some(set) = normal_map_set {
+            let uvs = if set == 0 { &baked.uvs } else { &baked.uvs1 };
+            if !uvs.is_empty() {
+                baked.tangents =
+                    tangents::compute_tangents(&baked.positions, &baked.normals, uvs, &baked.triangles);
+            }
+        }
         self.append(
             baked,
-            primitive
-                .material()
-                .index()
-                .map_or(self.default_material_index, |i| i as u32),
+            material.index().map_or(self.default_material_index, |i| i as u32),
         )
     }
 
+    /// `TEXCOORD_<set>`, or `None` (with a warning when it exists but cannot be used).
+    fn read_uvs<'a, 's, F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>>(
+        &mut self,
+        primitive: &gltf::Primitive<'a>,
+        reader: &gltf::mesh::Reader<'a, 's, F>,
+        set: u32,
+        vertex_count: usize,
+        here: &str,
+    ) -> Option<Vec<Vec2>> {
+        let accessor = primitive.get(&gltf::Semantic::TexCoords(set))?;
+        let name = format!("TEXCOORD_{set}");
+        let allowed = accessor.dimensions() == Dimensions::Vec2
+            && match accessor.data_type() {
+                DataType::F32 => true,
+                DataType::U8 | DataType::U16 => accessor.normalized(),
+                _ => false,
+            };
+        if !allowed {
+            self.warn_attribute(
+                here,
+                &name,
+                &accessor,
+                "float or normalized unsigned byte/short VEC2",
+            );
+            return None;
+        }
+        let uvs: Vec<Vec2> = self.read_checked(here, &name, &accessor, || {
+            reader.read_tex_coords(set).map(|uvs| {
+                uvs.into_f32()
+                    .map(|uv| {
+                        let uv = Vec2::from(uv);
+                        Vec2::select(uv.is_finite_mask(), uv, Vec2::ZERO)
+                    })
+                    .collect()
+            })
+        })?;
+        self.check_count(here, &name, uvs, vertex_count)
+    }
+
+    /// `COLOR_0` as linear RGBA, or `None` (with a warning when it exists but cannot be used).
+    fn read_colors<'a, 's, F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>>(
+        &mut self,
+        primitive: &gltf::Primitive<'a>,
+        reader: &gltf::mesh::Reader<'a, 's, F>,
+        vertex_count: usize,
+        here: &str,
+    ) -> Option<Vec<Vec4>> {
+        let accessor = primitive.get(&gltf::Semantic::Colors(0))?;
+        let allowed = matches!(accessor.dimensions(), Dimensions::Vec3 | Dimensions::Vec4)
+            && match accessor.data_type() {
+                DataType::F32 => true,
+                DataType::U8 | DataType::U16 => accessor.normalized(),
+                _ => false,
+            };
+        if !allowed {
+            self.warn_attribute(
+                here,
+                "COLOR_0",
+                &accessor,
+                "float or normalized unsigned byte/short VEC3 or VEC4",
+            );
+            return None;
+        }
+        let colors: Vec<Vec4> = self.read_checked(here, "COLOR_0", &accessor, || {
+            reader.read_colors(0).map(|colors| {
+                colors
+                    .into_rgba_f32()
+                    .map(|rgba| finite_or(Vec4::from(rgba), Vec4::ONE))
+                    .collect()
+            })
+        })?;
+        self.check_count(here, "COLOR_0", colors, vertex_count)
+    }
+
+    /// `TANGENT` as stored (model space), or `None` (with a warning when it exists but
+    /// cannot be used).
+    fn read_tangents<'a, 's, F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>>(
+        &mut self,
+        primitive: &gltf::Primitive<'a>,
+        reader: &gltf::mesh::Reader<'a, 's, F>,
+        vertex_count: usize,
+        here: &str,
+    ) -> Option<Vec<Vec4>> {
+        let accessor = primitive.get(&gltf::Semantic::Tangents)?;
+        if accessor.dimensions() != Dimensions::Vec4 || accessor.data_type() != DataType::F32 {
+            self.warn_attribute(here, "TANGENT", &accessor, "float VEC4");
+            return None;
+        }
+        let tangents: Vec<Vec4> = self.read_checked(here, "TANGENT", &accessor, || {
+            reader
+                .read_tangents()
+                .map(|tangents| tangents.map(|t| finite_or(Vec4::from(t), Vec4::ZERO)).collect())
+        })?;
+        self.check_count(here, "TANGENT", tangents, vertex_count)
+    }
+
+    fn warn_attribute(&mut self, here: &str, name: &str, accessor: &gltf::Accessor, expected: &str) {
+        self.warnings.push(format!(
+            "{here}: {name} (accessor {}) holds {}{:?} {:?}, but glTF allows {expected}; it is ignored",
+            accessor.index(),
+            if accessor.normalized() { "normalized " } else { "" },
+            accessor.dimensions(),
+            accessor.data_type()
+        ));
+    }
+
+    /// Reads an optional attribute whose type was checked, after checking its layout; `None`
+    /// with a warning when the layout is wrong or the data lies outside its buffer.
+    fn read_checked<T>(
+        &mut self,
+        here: &str,
+        name: &str,
+        accessor: &gltf::Accessor,
+        read: impl FnOnce() -> Option<Vec<T>>,
+    ) -> Option<Vec<T>> {
+        if let Err(problem) = check_layout(accessor) {
+            self.warnings
+                .push(format!("{here}: {name} {problem}; it is ignored"));
+            return None;
+        }
+        let values = read();
+        if values.is_none() {
+            self.warnings.push(format!(
+                "{here}: {name} data lies outside its buffer; it is ignored"
+            ));
+        }
+        values
+    }
+
+    fn check_count<T>(
+        &mut self,
+        here: &str,
+        name: &str,
+        values: Vec<T>,
+        vertex_count: usize,
+    ) -> Option<Vec<T>> {
+        if values.len() == vertex_count {
+            Some(values)
+        } else {
+            self.warnings.push(format!(
+                "{here}: {name} has {} entries for {vertex_count} vertices; it is ignored",
+                values.len()
+            ));
+            None
+        }
+    }
+
+    /// Appends a baked primitive. Per-vertex arrays that only one side has are filled on the
+    /// other (module documentation) so that each stays one entry per vertex.
     fn append(&mut self, part: Mesh, material: u32) -> Result<(), String> {
         let offset = u32::try_from(self.mesh.positions.len())
             .ok()
             .filter(|offset| offset.checked_add(part.positions.len() as u32).is_some())
             .ok_or_else(|| "too many vertices (more than 2³²)".to_string())?;
+        let (before, added) = (self.mesh.positions.len(), part.positions.len());
         self.mesh.positions.extend(part.positions);
         self.mesh.normals.extend(part.normals);
+        let Mesh {
+            normals,
+            uvs,
+            uvs1,
+            colors,
+            tangents: merged_tangents,
+            ..
+        } = &mut self.mesh;
+        extend_attribute(uvs, part.uvs, before, added, |_| Vec2::ZERO);
+        extend_attribute(uvs1, part.uvs1, before, added, |_| Vec2::ZERO);
+        extend_attribute(colors, part.colors, before, added, |_| Vec4::ONE);
+        extend_attribute(merged_tangents, part.tangents, before, added, |vertex| {
+            tangents::fallback_tangent(normals[vertex])
+        });
         self.mesh
             .triangles
             .extend(part.triangles.iter().map(|triangle| triangle.map(|v| v + offset)));
@@ -500,6 +789,34 @@ impl Baker<'_> {
             .extend(std::iter::repeat_n(material, part.triangles.len()));
         Ok(())
     }
+}
+
+/// Appends a part's per-vertex array to the merged one, which had `before` vertices; the part
+/// has `added`. When only one side has the array, the other side's vertices get `fill(vertex)`
+/// (vertex numbered in the merged mesh).
+fn extend_attribute<T>(
+    merged: &mut Vec<T>,
+    part: Vec<T>,
+    before: usize,
+    added: usize,
+    fill: impl Fn(usize) -> T,
+) {
+    if merged.is_empty() && part.is_empty() {
+        return;
+    }
+    if merged.is_empty() {
+        merged.extend((0..before).map(&fill));
+    }
+    if part.is_empty() {
+        merged.extend((before..before + added).map(&fill));
+    } else {
+        merged.extend(part);
+    }
+}
+
+/// `value` where finite, `fallback`'s component elsewhere.
+fn finite_or(value: Vec4, fallback: Vec4) -> Vec4 {
+    Vec4::select(value.is_finite_mask(), value, fallback)
 }
 
 /// Triangles from a primitive's index list, in the glTF spec's vertex order: strip triangle
@@ -584,6 +901,208 @@ fn material_from_gltf(material: &gltf::Material) -> Material {
     material_from_factors(Vec3::new(r, g, b), metallic, pbr.roughness_factor(), emission)
 }
 
+/// How a material is named in warnings: `'name'`, or `#index` when it has none.
+fn material_label(material: &gltf::Material) -> String {
+    match material.name() {
+        Some(name) => format!("material '{name}'"),
+        None => format!("material #{}", material.index().unwrap_or_default()),
+    }
+}
+
+/// Binds the textures of one glTF material to its lowered [`Material`] (module
+/// documentation, "Textures"), loading the images through `images`, and warns about the
+/// textures that are not sampled. Materials no drawn triangle uses are left alone: their
+/// images are not even read.
+fn bind_textures(
+    material: &gltf::Material,
+    lowered: &mut Material,
+    mesh: &Mesh,
+    images: &mut ImageLoader,
+    warnings: &mut Vec<String>,
+) {
+    let Some(index) = material.index() else {
+        return;
+    };
+    if !mesh.triangle_materials.contains(&(index as u32)) {
+        return;
+    }
+    let label = material_label(material);
+    let pbr = material.pbr_metallic_roughness();
+    if let Some(info) = pbr.base_color_texture() {
+        let slot = TextureSlot {
+            name: "baseColorTexture",
+            tex_coord: info.tex_coord(),
+            scale: 1.0,
+            color_space: ColorSpace::Srgb,
+        };
+        lowered.textures.diffuse = bind_texture(&label, &slot, &info.texture(), mesh, images, warnings);
+    }
+    if let Some(normal) = material.normal_texture() {
+        let slot = TextureSlot {
+            name: "normalTexture",
+            tex_coord: normal.tex_coord(),
+            scale: normal.scale(),
+            color_space: ColorSpace::Linear,
+        };
+        lowered.textures.normal = bind_texture(&label, &slot, &normal.texture(), mesh, images, warnings);
+    }
+    if pbr.metallic_roughness_texture().is_some() {
+        warnings.push(format!(
+            "{label}: its metallicRoughnessTexture is not sampled yet; metallic is taken as 0 and roughness as roughnessFactor ({})",
+            pbr.roughness_factor()
+        ));
+    }
+    for (name, present) in [
+        ("occlusionTexture", material.occlusion_texture().is_some()),
+        ("emissiveTexture", material.emissive_texture().is_some()),
+    ] {
+        if present {
+            warnings.push(format!(
+                "{label}: its {name} is not sampled yet; it is drawn without it"
+            ));
+        }
+    }
+}
+
+/// What a material asks of one of its textures.
+struct TextureSlot {
+    /// The glTF property, for warnings.
+    name: &'static str,
+    tex_coord: u32,
+    scale: f32,
+    color_space: ColorSpace,
+}
+
+/// The binding of one texture of a material, or `None` (after a warning) when its UV set
+/// is not available or its image cannot be loaded.
+fn bind_texture(
+    label: &str,
+    slot: &TextureSlot,
+    texture: &gltf::Texture,
+    mesh: &Mesh,
+    images: &mut ImageLoader,
+    warnings: &mut Vec<String>,
+) -> Option<TextureBinding> {
+    let name = slot.name;
+    let set = slot.tex_coord;
+    let available = match set {
+        0 => !mesh.uvs.is_empty(),
+        1 => !mesh.uvs1.is_empty(),
+        _ => {
+            warnings.push(format!(
+                "{label}: {name} reads TEXCOORD_{set}, but only TEXCOORD_0 and TEXCOORD_1 are supported; it is not used"
+            ));
+            return None;
+        }
+    };
+    if !available {
+        warnings.push(format!(
+            "{label}: {name} reads TEXCOORD_{set}, which no drawn primitive has; it is not used"
+        ));
+        return None;
+    }
+    let index = images.texture_index(&texture.source(), slot.color_space)?;
+    let sampler = texture.sampler();
+    Some(TextureBinding {
+        texture: index,
+        uv_set: set as u8,
+        sampler: Sampler {
+            wrap_s: wrap_from_gltf(sampler.wrap_s()),
+            wrap_t: wrap_from_gltf(sampler.wrap_t()),
+        },
+        scale: if slot.scale.is_finite() { slot.scale } else { 1.0 },
+    })
+}
+
+fn wrap_from_gltf(mode: gltf::texture::WrappingMode) -> Wrap {
+    match mode {
+        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+    }
+}
+
+/// Decodes the images that textures use, each once per colour space, and records the files it
+/// read or looked for.
+struct ImageLoader<'a> {
+    buffers: &'a [Vec<u8>],
+    /// The glTF file's folder, which relative URIs start from.
+    directory: &'a Path,
+    /// For each (image, colour space) tried: its index in `textures`, or `None` when it
+    /// failed (and was reported).
+    index_by_image: HashMap<(usize, ColorSpace), Option<u32>>,
+    /// Becomes [`Mesh::textures`].
+    textures: Vec<Arc<Texture>>,
+    files_read: Vec<PathBuf>,
+    warnings: Vec<String>,
+}
+
+impl ImageLoader<'_> {
+    /// The index of `image` decoded in `color_space`, decoding it the first time; `None`
+    /// (after one warning naming the image) when it cannot be loaded.
+    fn texture_index(&mut self, image: &gltf::Image, color_space: ColorSpace) -> Option<u32> {
+        let key = (image.index(), color_space);
+        if let Some(&known) = self.index_by_image.get(&key) {
+            return known;
+        }
+        let index = match self.decode(image, color_space) {
+            Ok(texture) => {
+                self.textures.push(Arc::new(texture));
+                Some((self.textures.len() - 1) as u32)
+            }
+            Err(problem) => {
+                self.warnings
+                    .push(format!("{problem}; materials using it are drawn without it"));
+                None
+            }
+        };
+        self.index_by_image.insert(key, index);
+        index
+    }
+
+    /// Reads and decodes one image; the error names it (its file, or its index and source).
+    fn decode(&mut self, image: &gltf::Image, color_space: ColorSpace) -> Result<Texture, String> {
+        let label = match image.name() {
+            Some(name) => format!("image {} ('{name}')", image.index()),
+            None => format!("image {}", image.index()),
+        };
+        let (bytes, source): (Cow<[u8]>, String) = match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let source = format!("{label} (buffer view {})", view.index());
+                let bytes = self
+                    .buffers
+                    .get(view.buffer().index())
+                    .and_then(|buffer| buffer.get(view.offset()..view.offset().checked_add(view.length())?))
+                    .ok_or_else(|| format!("{source}: the view lies outside its buffer"))?;
+                (Cow::Borrowed(bytes), source)
+            }
+            gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+                let source = format!("{label} (data URI)");
+                let data = gltf::buffer::Data::from_source(gltf::buffer::Source::Uri(uri), None)
+                    .map_err(|error| format!("{source}: cannot decode its data URI: {error}"))?;
+                (Cow::Owned(data.0), source)
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                let relative =
+                    percent_decode(uri).ok_or_else(|| format!("{label}: malformed URI '{uri}'"))?;
+                if relative.contains(':') {
+                    return Err(format!(
+                        "{label}: unsupported URI '{uri}' (only relative paths and data: URIs)"
+                    ));
+                }
+                let file = self.directory.join(relative);
+                // Recorded even when missing, so that a watcher reloads when it appears.
+                if !self.files_read.contains(&file) {
+                    self.files_read.push(file.clone());
+                }
+                return Texture::load(&file, color_space)
+                    .map_err(|problem| format!("texture image {}: {problem}", file.display()));
+            }
+        };
+        Texture::from_encoded(&bytes, color_space).map_err(|problem| format!("{source}: {problem}"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -608,6 +1127,8 @@ mod tests {
     }
 
     fn check_invariant(mesh: &Mesh) {
+        mesh.check_invariant()
+            .unwrap_or_else(|e| panic!("invariant: {e}"));
         assert_eq!(mesh.positions.len(), mesh.normals.len());
         assert!(mesh.positions.iter().all(|p| p.is_finite()));
         assert!(
@@ -737,21 +1258,22 @@ mod tests {
     }
 
     #[test]
-    fn textured_materials_warn_and_are_not_metals() {
+    fn metallic_roughness_texture_warns_and_is_not_a_metal() {
         let loaded = check_asset("Avocado/glTF/Avocado.gltf", 682);
         let avocado = loaded.mesh.materials[0];
         assert!(
             avocado.specular.distance(Vec3::splat(0.04)) < 1e-7,
             "metallicRoughnessTexture: metallic 0"
         );
+        assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
         assert!(
-            loaded
-                .warnings
-                .iter()
-                .any(|w| w.contains("textures are not sampled")),
+            loaded.warnings[0].contains("metallicRoughnessTexture is not sampled"),
             "{:?}",
             loaded.warnings
         );
+        // Without that texture, no such warning.
+        let duck = check_asset("Duck/glTF/Duck.gltf", 4212);
+        assert!(duck.warnings.is_empty(), "{:?}", duck.warnings);
     }
 
     #[test]
@@ -828,9 +1350,26 @@ mod tests {
     }
 
     /// One accessor's data.
+    #[derive(Clone, Copy)]
     enum Block<'a> {
         Vec3(&'a [[f32; 3]]),
         Indices(&'a [u32]),
+        /// Floats of the given accessor type ("VEC2", "VEC4").
+        Floats(&'a [f32], &'static str),
+        /// Normalized unsigned bytes of the given accessor type.
+        Bytes(&'a [u8], &'static str),
+        /// Normalized unsigned shorts of the given accessor type.
+        Shorts(&'a [u16], &'static str),
+    }
+
+    /// Components per element of an accessor type.
+    fn components(kind: &str) -> usize {
+        match kind {
+            "SCALAR" => 1,
+            "VEC2" => 2,
+            "VEC3" => 3,
+            _ => 4,
+        }
     }
 
     /// Writes `fixture.gltf` and `fixture.bin`, each block in its own buffer view and
@@ -865,12 +1404,35 @@ mod tests {
                         indices.len()
                     )
                 }
+                Block::Floats(values, kind) => {
+                    bin.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+                    format!(
+                        r#"{{"bufferView": {index}, "componentType": 5126, "count": {}, "type": "{kind}"}}"#,
+                        values.len() / components(kind)
+                    )
+                }
+                Block::Bytes(values, kind) => {
+                    bin.extend(values.iter());
+                    format!(
+                        r#"{{"bufferView": {index}, "componentType": 5121, "normalized": true, "count": {}, "type": "{kind}"}}"#,
+                        values.len() / components(kind)
+                    )
+                }
+                Block::Shorts(values, kind) => {
+                    bin.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+                    format!(
+                        r#"{{"bufferView": {index}, "componentType": 5123, "normalized": true, "count": {}, "type": "{kind}"}}"#,
+                        values.len() / components(kind)
+                    )
+                }
             };
             views.push(format!(
                 r#"{{"buffer": 0, "byteOffset": {offset}, "byteLength": {}}}"#,
                 bin.len() - offset
             ));
             accessors.push(accessor);
+            // Every view starts 4-byte aligned, as glTF requires of vertex attributes.
+            bin.resize(bin.len().next_multiple_of(4), 0);
         }
         write(dir, "fixture.bin", &bin);
         let json = format!(
@@ -1070,5 +1632,447 @@ mod tests {
         assert_eq!(percent_decode("plain.bin").as_deref(), Some("plain.bin"));
         assert_eq!(percent_decode("bad%2").as_deref(), None);
         assert_eq!(percent_decode("bad%FF.bin").as_deref(), None, "not UTF-8");
+    }
+
+    // Vertex attributes and textures.
+
+    /// A 2×2 PNG written to `dir/name`: (188, 0, 0), green / blue, white. 188 tells the
+    /// colour spaces apart: about 0.5029 decoded as sRGB, 188/255 ≈ 0.737 as data.
+    fn write_png(dir: &Path, name: &str) {
+        let pixels = image::RgbImage::from_raw(2, 2, vec![188, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255])
+            .unwrap_or_else(|| panic!("pixel buffer size"));
+        pixels
+            .save(dir.join(name))
+            .unwrap_or_else(|e| panic!("cannot write {name}: {e}"));
+    }
+
+    /// Checks per-vertex arrays against positions and that the texture at `index` has the
+    /// given size and a full mip chain.
+    fn check_texture(mesh: &Mesh, index: u32, width: u32, height: u32) {
+        let texture = &mesh.textures[index as usize];
+        assert_eq!((texture.width(), texture.height()), (width, height));
+        let expected_levels = 1 + width.max(height).ilog2() as usize;
+        assert_eq!(texture.levels.len(), expected_levels);
+        let last = &texture.levels[expected_levels - 1];
+        assert_eq!((last.width, last.height), (1, 1));
+    }
+
+    #[test]
+    fn box_textured_binds_its_texture_from_a_file_and_from_the_glb() {
+        let external = check_asset("BoxTextured/glTF/BoxTextured.gltf", 12);
+        let binary = check_asset("BoxTextured/glTF-Binary/BoxTextured.glb", 12);
+        for loaded in [&external, &binary] {
+            let mesh = &loaded.mesh;
+            assert_eq!(mesh.uvs.len(), mesh.positions.len());
+            assert!(mesh.uvs1.is_empty() && mesh.colors.is_empty() && mesh.tangents.is_empty());
+            assert_eq!(mesh.textures.len(), 1);
+            // CesiumLogoFlat.png is 256×256: levels 256, 128, ..., 1.
+            check_texture(mesh, 0, 256, 256);
+            let binding = mesh.materials[0]
+                .textures
+                .diffuse
+                .unwrap_or_else(|| panic!("bound"));
+            // The file's sampler: wrapS = wrapT = 10497 (REPEAT).
+            assert_eq!((binding.texture, binding.uv_set), (0, 0));
+            assert_eq!(binding.sampler, Sampler::default());
+            assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        }
+        assert_eq!(
+            external.mesh.textures[0], binary.mesh.textures[0],
+            "same image, same texels"
+        );
+        assert_eq!(
+            external.files_read,
+            vec![
+                asset("BoxTextured/glTF/BoxTextured.gltf"),
+                asset("BoxTextured/glTF/BoxTextured0.bin"),
+                asset("BoxTextured/glTF/CesiumLogoFlat.png"),
+            ]
+        );
+        assert_eq!(
+            binary.files_read,
+            vec![asset("BoxTextured/glTF-Binary/BoxTextured.glb")]
+        );
+    }
+
+    #[test]
+    fn duck_base_color_texture_is_bound() {
+        for relative in ["Duck/glTF/Duck.gltf", "Duck/glTF-Binary/Duck.glb"] {
+            let loaded = check_asset(relative, 4212);
+            let mesh = &loaded.mesh;
+            assert_eq!(mesh.uvs.len(), mesh.positions.len(), "{relative}");
+            let binding = mesh.materials[0]
+                .textures
+                .diffuse
+                .unwrap_or_else(|| panic!("{relative}: bound"));
+            check_texture(mesh, binding.texture, 512, 512);
+            assert_eq!(mesh.materials[0].textures.normal, None);
+        }
+    }
+
+    #[test]
+    fn avocado_normal_map_is_bound_with_unit_perpendicular_tangents() {
+        let loaded = check_asset("Avocado/glTF/Avocado.gltf", 682);
+        let mesh = &loaded.mesh;
+        let textures = mesh.materials[0].textures;
+        let base = textures
+            .diffuse
+            .unwrap_or_else(|| panic!("baseColorTexture bound"));
+        let normal = textures.normal.unwrap_or_else(|| panic!("normalTexture bound"));
+        assert_ne!(base.texture, normal.texture);
+        assert_eq!((normal.uv_set, normal.scale), (0, 1.0));
+        check_texture(mesh, base.texture, 512, 512);
+        check_texture(mesh, normal.texture, 512, 512);
+        // The base colour is sRGB-decoded, the normal map kept linear: a flat normal map
+        // averages near (0.5, 0.5, 1), which sRGB decoding would pull down to about 0.21.
+        let normal_mean = mesh.textures[normal.texture as usize]
+            .levels
+            .last()
+            .map(|l| l.texels[0]);
+        let normal_mean = normal_mean.unwrap_or_default();
+        assert!(
+            normal_mean.x > 0.4 && normal_mean.y > 0.4 && normal_mean.z > 0.8,
+            "{normal_mean}"
+        );
+        assert_eq!(mesh.tangents.len(), mesh.positions.len());
+        for (tangent, normal) in mesh.tangents.iter().zip(&mesh.normals) {
+            assert!((tangent.truncate().length() - 1.0).abs() < 1e-5);
+            assert!(tangent.truncate().dot(*normal).abs() < 1e-5);
+            assert!(tangent.w.abs() == 1.0);
+        }
+        // Only the used images are read: not the metallic-roughness one.
+        let directory = asset("Avocado/glTF");
+        assert_eq!(
+            loaded.files_read,
+            vec![
+                directory.join("Avocado.gltf"),
+                directory.join("Avocado.bin"),
+                directory.join("Avocado_baseColor.png"),
+                directory.join("Avocado_normal.png"),
+            ]
+        );
+    }
+
+    #[test]
+    fn computed_tangents_agree_with_the_exported_ones() {
+        // Avocado's exporter wrote tangents; the ones computed from its UVs must point the
+        // same way with the same handedness, or normal maps would light from the wrong side.
+        let mesh = check_asset("Avocado/glTF/Avocado.gltf", 682).mesh;
+        let computed = tangents::compute_tangents(&mesh.positions, &mesh.normals, &mesh.uvs, &mesh.triangles);
+        let agreeing = computed
+            .iter()
+            .zip(&mesh.tangents)
+            .filter(|(c, f)| c.w == f.w && c.truncate().dot(f.truncate()) > 0.9)
+            .count();
+        assert!(
+            agreeing * 100 >= mesh.tangents.len() * 95,
+            "{agreeing} of {}",
+            mesh.tangents.len()
+        );
+    }
+
+    #[test]
+    fn texture_coordinate_test_reads_images_from_data_uris_and_buffer_views() {
+        for relative in [
+            "TextureCoordinateTest/glTF-Embedded/TextureCoordinateTest.gltf",
+            "TextureCoordinateTest/glTF-Binary/TextureCoordinateTest.glb",
+        ] {
+            let loaded = check_asset(relative, 10);
+            let mesh = &loaded.mesh;
+            assert!(loaded.warnings.is_empty(), "{relative}: {:?}", loaded.warnings);
+            // The back plane has no TEXCOORD_0 (and no texture): its vertices get zeros.
+            assert_eq!(mesh.uvs.len(), mesh.positions.len(), "{relative}");
+            // Four materials share texture 0 (one image); the back plane's has none.
+            assert_eq!(mesh.textures.len(), 1, "{relative}");
+            let bound: Vec<_> = mesh.materials.iter().filter_map(|m| m.textures.diffuse).collect();
+            assert_eq!(bound.len(), 4, "{relative}");
+            // The file's only sampler is `{}`: wrapS and wrapT default to REPEAT.
+            assert!(
+                bound
+                    .iter()
+                    .all(|b| b.texture == 0 && b.sampler == Sampler::default())
+            );
+            assert_eq!(
+                loaded.files_read.len(),
+                1,
+                "nothing outside the file: {:?}",
+                loaded.files_read
+            );
+        }
+    }
+
+    /// A textured square: positions, indices, then `extra_blocks`, and a material JSON.
+    fn write_textured_square(
+        dir: &Path,
+        attributes: &str,
+        extra_blocks: &[Block],
+        material: &str,
+        nodes: &str,
+        images: &str,
+    ) -> PathBuf {
+        let mut blocks = vec![Block::Vec3(&SQUARE), Block::Indices(&[0, 1, 2, 2, 1, 3])];
+        blocks.extend_from_slice(extra_blocks);
+        let primitives =
+            format!(r#"[{{"attributes": {{"POSITION": 0, {attributes}}}, "indices": 1, "material": 0}}]"#);
+        let extra = format!(
+            r#""materials": [{material}], "textures": [{{"source": 0, "sampler": 0}}], "samplers": [{{"wrapS": 33648, "wrapT": 33071}}], "images": {images},"#
+        );
+        write_fixture(dir, &blocks, &primitives, nodes, &extra)
+    }
+
+    /// UVs of the square: u along +X, v growing towards −Y (the image upright on it).
+    const SQUARE_UVS: [f32; 8] = [0.0, 1.0, 1.0, 1.0, 0.0, 0.0, 1.0, 0.0];
+
+    #[test]
+    fn normal_map_without_tangents_gets_computed_tangents() {
+        let dir = scratch_dir();
+        write_png(dir.path(), "normal.png");
+        let material = r#"{"normalTexture": {"index": 0, "scale": 0.5}}"#;
+        let images = r#"[{"uri": "normal.png"}]"#;
+        let path = write_textured_square(
+            dir.path(),
+            r#""TEXCOORD_0": 2"#,
+            &[Block::Floats(&SQUARE_UVS, "VEC2")],
+            material,
+            ONE_NODE,
+            images,
+        );
+        let loaded = check_faces_up(&path, 2);
+        let mesh = &loaded.mesh;
+        let binding = mesh.materials[0]
+            .textures
+            .normal
+            .unwrap_or_else(|| panic!("bound"));
+        assert_eq!((binding.scale, binding.uv_set), (0.5, 0));
+        // wrapS 33648 (MIRRORED_REPEAT), wrapT 33071 (CLAMP_TO_EDGE).
+        assert_eq!(
+            binding.sampler,
+            Sampler {
+                wrap_s: Wrap::MirroredRepeat,
+                wrap_t: Wrap::ClampToEdge
+            }
+        );
+        assert!(
+            mesh.tangents.iter().all(|&t| t == Vec4::new(1.0, 0.0, 0.0, 1.0)),
+            "{:?}",
+            mesh.tangents
+        );
+        // A data texture: stored values, not sRGB-decoded.
+        let texel = mesh.textures[0].levels[0].texels[0];
+        assert!(
+            texel.distance(Vec4::new(188.0 / 255.0, 0.0, 0.0, 1.0)) < 1e-6,
+            "{texel}"
+        );
+        assert!(loaded.files_read.contains(&dir.path().join("normal.png")));
+    }
+
+    #[test]
+    fn file_tangents_follow_the_node_and_flip_under_a_mirror() {
+        let dir = scratch_dir();
+        write_png(dir.path(), "normal.png");
+        let tangents = [0.0, 2.0, 0.0, 1.0].repeat(4);
+        let material = r#"{"normalTexture": {"index": 0}}"#;
+        let images = r#"[{"uri": "normal.png"}]"#;
+        // Rotated a quarter turn about Z, then mirrored in x: +Y becomes −X, then +X.
+        let rotate = r#"[{"mesh": 0, "rotation": [0, 0, 0.70710678, 0.70710678]}]"#;
+        let path = write_textured_square(
+            dir.path(),
+            r#""TEXCOORD_0": 2, "TANGENT": 3"#,
+            &[
+                Block::Floats(&SQUARE_UVS, "VEC2"),
+                Block::Floats(&tangents, "VEC4"),
+            ],
+            material,
+            rotate,
+            images,
+        );
+        let loaded = check_faces_up(&path, 2);
+        for t in &loaded.mesh.tangents {
+            assert!(t.distance(Vec4::new(-1.0, 0.0, 0.0, 1.0)) < 1e-6, "{t}");
+        }
+        let mirror = r#"[{"mesh": 0, "matrix": [-1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}]"#;
+        let path = write_textured_square(
+            dir.path(),
+            r#""TEXCOORD_0": 2, "TANGENT": 3"#,
+            &[
+                Block::Floats(&SQUARE_UVS, "VEC2"),
+                Block::Floats(&tangents, "VEC4"),
+            ],
+            material,
+            mirror,
+            images,
+        );
+        // Mirrored in x: rewound, the square still faces +Z; the tangent keeps +Y and w flips
+        // (the bitangent n × t = −X must become +X, the mirror image of the file's).
+        let loaded = check_faces_up(&path, 2);
+        for t in &loaded.mesh.tangents {
+            assert!(t.distance(Vec4::new(0.0, 1.0, 0.0, -1.0)) < 1e-6, "{t}");
+        }
+    }
+
+    #[test]
+    fn colors_and_second_uv_set_from_normalized_integers() {
+        let dir = scratch_dir();
+        write_png(dir.path(), "base.png");
+        let colors: [u8; 16] = [255, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 0, 255, 255, 255, 255];
+        let uvs1: [u16; 8] = [0, 65535, 65535, 65535, 0, 0, 65535, 0];
+        let material = r#"{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}}}"#;
+        let path = write_textured_square(
+            dir.path(),
+            r#""COLOR_0": 2, "TEXCOORD_1": 3"#,
+            &[Block::Bytes(&colors, "VEC4"), Block::Shorts(&uvs1, "VEC2")],
+            material,
+            ONE_NODE,
+            r#"[{"uri": "base.png"}]"#,
+        );
+        let loaded = check_faces_up(&path, 2);
+        let mesh = &loaded.mesh;
+        assert!(mesh.uvs.is_empty(), "no TEXCOORD_0");
+        let by_position = |p: [f32; 3]| {
+            let vertex = mesh
+                .positions
+                .iter()
+                .position(|&q| q == Vec3::from(p))
+                .unwrap_or(usize::MAX);
+            (mesh.colors[vertex], mesh.uvs1[vertex])
+        };
+        assert_eq!(
+            by_position(SQUARE[0]),
+            (Vec4::new(1.0, 0.0, 0.0, 1.0), Vec2::new(0.0, 1.0))
+        );
+        let (green, uv) = by_position(SQUARE[1]);
+        assert!(green.distance(Vec4::new(0.0, 1.0, 0.0, 128.0 / 255.0)) < 1e-6 && uv == Vec2::ONE);
+        let binding = mesh.materials[0]
+            .textures
+            .diffuse
+            .unwrap_or_else(|| panic!("bound"));
+        assert_eq!(binding.uv_set, 1);
+        // A colour texture: sRGB-decoded.
+        let texel = mesh.textures[0].levels[0].texels[0];
+        assert!(
+            texel.distance(Vec4::new(0.502_886, 0.0, 0.0, 1.0)) < 1e-5,
+            "{texel}"
+        );
+    }
+
+    #[test]
+    fn float_rgb_colors_get_alpha_one_and_missing_ones_white() {
+        let dir = scratch_dir();
+        let blocks = [
+            Block::Vec3(&SQUARE[..3]),
+            Block::Vec3(&[[0.5, 0.25, 0.0], [0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]),
+            Block::Vec3(&[SQUARE[1], SQUARE[3], SQUARE[2]]),
+        ];
+        // Two primitives, only the first with COLOR_0.
+        let primitives =
+            r#"[{"attributes": {"POSITION": 0, "COLOR_0": 1}}, {"attributes": {"POSITION": 2}}]"#;
+        let path = write_fixture(dir.path(), &blocks, primitives, ONE_NODE, "");
+        let loaded = check_faces_up(&path, 2);
+        let mesh = &loaded.mesh;
+        assert_eq!(mesh.colors.len(), mesh.positions.len());
+        let first = mesh.triangles[0].map(|v| mesh.colors[v as usize]);
+        assert_eq!(first[0], Vec4::new(0.5, 0.25, 0.0, 1.0));
+        assert!(
+            mesh.triangles[1]
+                .iter()
+                .all(|&v| mesh.colors[v as usize] == Vec4::ONE)
+        );
+    }
+
+    #[test]
+    fn missing_and_broken_images_warn_and_leave_the_material_untextured() {
+        let dir = scratch_dir();
+        std::fs::write(dir.path().join("broken.png"), b"\x89PNG\r\n\x1a\n garbage")
+            .unwrap_or_else(|e| panic!("{e}"));
+        for (uri, problem) in [
+            ("missing%20file.png", "No such file"),
+            ("broken.png", "cannot decode"),
+        ] {
+            let material = r#"{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}"#;
+            let path = write_textured_square(
+                dir.path(),
+                r#""TEXCOORD_0": 2"#,
+                &[Block::Floats(&SQUARE_UVS, "VEC2")],
+                material,
+                ONE_NODE,
+                &format!(r#"[{{"uri": "{uri}"}}]"#),
+            );
+            let loaded = check_faces_up(&path, 2);
+            let file = dir.path().join(percent_decode(uri).unwrap_or_default());
+            assert!(
+                loaded.files_read.contains(&file),
+                "{file:?} in {:?}",
+                loaded.files_read
+            );
+            assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+            let warning = &loaded.warnings[0];
+            assert!(
+                warning.contains(&file.display().to_string()) && warning.contains(problem),
+                "{warning}"
+            );
+            assert_eq!(loaded.mesh.materials[0].textures, Default::default());
+            assert!(loaded.mesh.textures.is_empty());
+        }
+    }
+
+    #[test]
+    fn textures_reading_absent_uv_sets_are_not_bound() {
+        let dir = scratch_dir();
+        write_png(dir.path(), "base.png");
+        let material = r#"{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}}, "normalTexture": {"index": 0, "texCoord": 2}}"#;
+        let path = write_textured_square(
+            dir.path(),
+            r#""TEXCOORD_0": 2"#,
+            &[Block::Floats(&SQUARE_UVS, "VEC2")],
+            material,
+            ONE_NODE,
+            r#"[{"uri": "base.png"}]"#,
+        );
+        let loaded = check_faces_up(&path, 2);
+        assert_eq!(loaded.mesh.materials[0].textures, Default::default());
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("TEXCOORD_1, which no drawn primitive has"))
+        );
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("only TEXCOORD_0 and TEXCOORD_1"))
+        );
+        assert!(
+            !loaded.files_read.contains(&dir.path().join("base.png")),
+            "not read for nothing"
+        );
+    }
+
+    #[test]
+    fn attributes_of_types_gltf_forbids_are_ignored_with_a_warning() {
+        let dir = scratch_dir();
+        let blocks = [
+            Block::Vec3(&SQUARE),
+            Block::Indices(&[0, 1, 2, 2, 1, 3]),
+            Block::Floats(&SQUARE_UVS, "VEC2"),
+        ];
+        let primitives = r#"[{"attributes": {"POSITION": 0, "TEXCOORD_0": 2}, "indices": 1}]"#;
+        let path = write_fixture(dir.path(), &blocks, primitives, ONE_NODE, "");
+        // Unnormalized unsigned bytes are not texture coordinates glTF allows.
+        let text = std::fs::read_to_string(&path).unwrap_or_default().replace(
+            r#""componentType": 5126, "count": 4, "type": "VEC2""#,
+            r#""componentType": 5121, "count": 4, "type": "VEC2""#,
+        );
+        std::fs::write(&path, text).unwrap_or_else(|e| panic!("{e}"));
+        let loaded = check_faces_up(&path, 2);
+        assert!(loaded.mesh.uvs.is_empty());
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("TEXCOORD_0") && w.contains("ignored")),
+            "{:?}",
+            loaded.warnings
+        );
     }
 }

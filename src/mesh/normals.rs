@@ -30,6 +30,11 @@
 //!   faces around the position form well separated groups.
 //! * **Degenerate triangles** (zero area, or too large to measure) have no face normal and
 //!   contribute nothing. They are kept: triangle counts are part of the contract.
+//! * **Other per-vertex data travels with its vertex.** Texture coordinates, vertex colours and
+//!   tangents ([`VertexAttributes`]) are copied to every vertex split from an input vertex,
+//!   and two input vertices are merged only when their positions, normals *and* all of these
+//!   are bit-for-bit equal: a vertex on a UV seam stays two vertices (one per side), while the
+//!   normal is still smoothed across the seam, since normals are grouped by position alone.
 //!
 //! # Fallbacks
 //!
@@ -44,7 +49,7 @@
 
 use std::collections::HashMap;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 
 use super::Mesh;
 
@@ -88,20 +93,87 @@ pub fn unit_or_zero(v: Vec3) -> Vec3 {
     }
 }
 
+/// The per-vertex data, besides positions and normals, that follows each vertex when
+/// vertices are split or merged. Each slice is empty (the mesh has no such data) or holds one
+/// entry per position; a shorter one is read as if padded with zeros (white for colours).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct VertexAttributes<'a> {
+    pub uvs: &'a [Vec2],
+    pub uvs1: &'a [Vec2],
+    pub colors: &'a [Vec4],
+    pub tangents: &'a [Vec4],
+}
+
+impl VertexAttributes<'_> {
+    fn is_empty(&self) -> bool {
+        self.uvs.is_empty() && self.uvs1.is_empty() && self.colors.is_empty() && self.tangents.is_empty()
+    }
+
+    fn uv(&self, vertex: usize) -> Vec2 {
+        self.uvs.get(vertex).copied().unwrap_or(Vec2::ZERO)
+    }
+
+    fn uv1(&self, vertex: usize) -> Vec2 {
+        self.uvs1.get(vertex).copied().unwrap_or(Vec2::ZERO)
+    }
+
+    fn color(&self, vertex: usize) -> Vec4 {
+        self.colors.get(vertex).copied().unwrap_or(Vec4::ONE)
+    }
+
+    fn tangent(&self, vertex: usize) -> Vec4 {
+        self.tangents.get(vertex).copied().unwrap_or(Vec4::ZERO)
+    }
+
+    /// The bits of everything this vertex carries, equal exactly when the data is equal
+    /// (absent arrays contribute zeros).
+    fn key(&self, vertex: usize) -> [u32; 12] {
+        let [u, v] = self.uv(vertex).to_array().map(zero_normalised_bits);
+        let [u1, v1] = self.uv1(vertex).to_array().map(zero_normalised_bits);
+        let [r, g, b, a] = self.color(vertex).to_array().map(zero_normalised_bits);
+        let [tx, ty, tz, tw] = self.tangent(vertex).to_array().map(zero_normalised_bits);
+        [u, v, u1, v1, r, g, b, a, tx, ty, tz, tw]
+    }
+
+    /// Appends this vertex's data to the arrays of `mesh` that this set has.
+    fn push_vertex(&self, vertex: usize, mesh: &mut Mesh) {
+        if !self.uvs.is_empty() {
+            mesh.uvs.push(self.uv(vertex));
+        }
+        if !self.uvs1.is_empty() {
+            mesh.uvs1.push(self.uv1(vertex));
+        }
+        if !self.colors.is_empty() {
+            mesh.colors.push(self.color(vertex));
+        }
+        if !self.tangents.is_empty() {
+            mesh.tangents.push(self.tangent(vertex));
+        }
+    }
+}
+
 /// Builds a mesh with vertex normals from positions and counter-clockwise triangles that
 /// have none, following the crease and weighting rules of the module documentation.
 ///
 /// The result has the same triangles in the same order (so a caller's per-triangle
 /// material list stays valid), with vertices split or merged so that each distinct
-/// (position, normal) pair is one vertex; positions no triangle uses are dropped. Its
-/// `materials` and `triangle_materials` are empty.
+/// (position, normal, attributes) combination is one vertex; positions no triangle uses are
+/// dropped. `attributes` are carried to the new vertices (module documentation). Its
+/// `materials`, `triangle_materials` and `textures` are empty.
 ///
 /// Every index in `triangles` must be less than `positions.len()` (loaders check this
 /// before calling). `crease_angle_degrees` is clamped to [0, 180].
-pub fn compute_vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]], crease_angle_degrees: f32) -> Mesh {
+pub fn compute_vertex_normals(
+    positions: &[Vec3],
+    attributes: VertexAttributes,
+    triangles: &[[u32; 3]],
+    crease_angle_degrees: f32,
+) -> Mesh {
     let groups = PositionGroups::new(positions);
     let corner_normals = corner_normals(positions, triangles, &groups, crease_angle_degrees);
-    split_vertices(positions, triangles, &groups, |corner| corner_normals[corner])
+    split_vertices(positions, attributes, triangles, &groups, |corner| {
+        corner_normals[corner]
+    })
 }
 
 /// A mesh whose file-provided normals were checked, with how many had to be replaced.
@@ -118,12 +190,14 @@ pub struct RepairedNormals {
 /// one (or a missing one, when `normals` is shorter than `positions`) is replaced, at every
 /// corner that uses it, by the normal [`compute_vertex_normals`] would give that corner.
 ///
-/// When nothing needs replacing the vertices are returned as they are; otherwise vertices
-/// are split by (position, normal) as in [`compute_vertex_normals`]. Triangles keep their
-/// order. Every index in `triangles` must be less than `positions.len()`.
+/// When nothing needs replacing the vertices are returned as they are (with `attributes`);
+/// otherwise vertices are split by (position, normal, attributes) as in
+/// [`compute_vertex_normals`]. Triangles keep their order. Every index in `triangles` must be
+/// less than `positions.len()`.
 pub fn repair_normals(
     positions: &[Vec3],
     normals: &[Vec3],
+    attributes: VertexAttributes,
     triangles: &[[u32; 3]],
     crease_angle_degrees: f32,
 ) -> RepairedNormals {
@@ -136,16 +210,20 @@ pub fn repair_normals(
     let replaced_count = is_broken.iter().filter(|&&broken| broken).count();
 
     let mesh = if replaced_count == 0 {
-        Mesh {
+        let mut mesh = Mesh {
             positions: positions.to_vec(),
             normals: (0..positions.len()).map(file_normal).collect(),
             triangles: triangles.to_vec(),
             ..Mesh::default()
+        };
+        for vertex in 0..positions.len() {
+            attributes.push_vertex(vertex, &mut mesh);
         }
+        mesh
     } else {
         let groups = PositionGroups::new(positions);
         let computed = corner_normals(positions, triangles, &groups, crease_angle_degrees);
-        split_vertices(positions, triangles, &groups, |corner| {
+        split_vertices(positions, attributes, triangles, &groups, |corner| {
             let vertex = triangles[corner / 3][corner % 3] as usize;
             if is_broken[vertex] {
                 computed[corner]
@@ -188,14 +266,18 @@ impl PositionGroups {
 /// A hashable key equal for equal vectors. Adding +0 turns -0 into +0 (and changes nothing
 /// else), so that the two zeros, equal as numbers, share a key.
 fn exact_key(v: Vec3) -> [u32; 3] {
-    let v = v + Vec3::ZERO;
-    [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()]
+    v.to_array().map(zero_normalised_bits)
+}
+
+/// The bits of `x`, with -0 turned into +0 (adding +0 does that and changes nothing else).
+fn zero_normalised_bits(x: f32) -> u32 {
+    (x + 0.0).to_bits()
 }
 
 /// The interior angle of a triangle at `corner`, between the edges towards `next` and
 /// `previous`; 0 when an edge has no length. `atan2(|u×v|, u·v)` stays accurate near 0 and
 /// π, where `acos(u·v)` loses precision.
-fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
+pub(super) fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
     let u = unit_or_zero(next - corner);
     let v = unit_or_zero(previous - corner);
     u.cross(v).length().atan2(u.dot(v))
@@ -378,15 +460,23 @@ fn smooth_normal_ignoring_crease(
         .unwrap_or(FALLBACK_NORMAL)
 }
 
-/// Builds the output mesh: one vertex per distinct (position group, normal) pair, created in
-/// the order corners are met, and the triangles re-indexed onto them.
+/// Builds the output mesh: one vertex per distinct (position group, attribute group, normal)
+/// combination, created in the order corners are met, and the triangles re-indexed onto them.
 fn split_vertices(
     positions: &[Vec3],
+    attributes: VertexAttributes,
     triangles: &[[u32; 3]],
     groups: &PositionGroups,
     normal_of_corner: impl Fn(usize) -> Vec3,
 ) -> Mesh {
-    let mut vertex_by_key: HashMap<(u32, [u32; 3]), u32> = HashMap::with_capacity(positions.len());
+    let attribute_group_of_vertex = attribute_groups(positions.len(), attributes);
+    let attribute_group = |vertex: u32| {
+        attribute_group_of_vertex
+            .get(vertex as usize)
+            .copied()
+            .unwrap_or(0)
+    };
+    let mut vertex_by_key: HashMap<(u32, u32, [u32; 3]), u32> = HashMap::with_capacity(positions.len());
     let mut mesh = Mesh {
         triangles: Vec::with_capacity(triangles.len()),
         ..Mesh::default()
@@ -395,16 +485,32 @@ fn split_vertices(
         let mut new_triangle = [0u32; 3];
         for (k, &vertex) in triangle.iter().enumerate() {
             let normal = normal_of_corner(3 * index + k);
-            let key = (groups.of(vertex), exact_key(normal));
+            let key = (groups.of(vertex), attribute_group(vertex), exact_key(normal));
             new_triangle[k] = *vertex_by_key.entry(key).or_insert_with(|| {
                 mesh.positions.push(positions[vertex as usize]);
                 mesh.normals.push(normal);
+                attributes.push_vertex(vertex as usize, &mut mesh);
                 (mesh.positions.len() - 1) as u32
             });
         }
         mesh.triangles.push(new_triangle);
     }
     mesh
+}
+
+/// For each vertex, a number equal for vertices whose attributes are bit-for-bit equal; empty
+/// (every vertex in group 0) when there are no attributes.
+fn attribute_groups(vertex_count: usize, attributes: VertexAttributes) -> Vec<u32> {
+    if attributes.is_empty() {
+        return Vec::new();
+    }
+    let mut group_by_key: HashMap<[u32; 12], u32> = HashMap::with_capacity(vertex_count);
+    (0..vertex_count)
+        .map(|vertex| {
+            let next = group_by_key.len() as u32;
+            *group_by_key.entry(attributes.key(vertex)).or_insert(next)
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -421,7 +527,12 @@ mod tests {
         crease_angle_degrees: f32,
         expected: &[(Vec3, Vec3)],
     ) {
-        let mesh = compute_vertex_normals(positions, triangles, crease_angle_degrees);
+        let mesh = compute_vertex_normals(
+            positions,
+            VertexAttributes::default(),
+            triangles,
+            crease_angle_degrees,
+        );
         check_vertices(&mesh, expected);
         check_same_corners(&mesh, positions, triangles);
     }
@@ -533,7 +644,12 @@ mod tests {
         // sphere(16) stores the seam and poles as separate vertices with equal positions;
         // grouping by position value must still weld them into one smooth vertex each.
         let sphere = super::super::primitives::sphere(16);
-        let mesh = compute_vertex_normals(&sphere.positions, &sphere.triangles, DEFAULT_CREASE_ANGLE_DEGREES);
+        let mesh = compute_vertex_normals(
+            &sphere.positions,
+            VertexAttributes::default(),
+            &sphere.triangles,
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
         check_same_corners(&mesh, &sphere.positions, &sphere.triangles);
         // 15 rings of 16 plus the two poles.
         assert_eq!(mesh.positions.len(), 15 * 16 + 2);
@@ -557,7 +673,12 @@ mod tests {
             10.0 * (FRAC_PI_4.cos() * Vec3::X + FRAC_PI_4.sin() * tilted_y),
         ];
         let triangles = [[0, 1, 2], [3, 4, 5]];
-        let mesh = compute_vertex_normals(&positions, &triangles, DEFAULT_CREASE_ANGLE_DEGREES);
+        let mesh = compute_vertex_normals(
+            &positions,
+            VertexAttributes::default(),
+            &triangles,
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
         let at_origin = mesh.normals[mesh.triangles[0][0] as usize];
         assert_eq!(
             mesh.triangles[1][0], mesh.triangles[0][0],
@@ -624,7 +745,12 @@ mod tests {
             triangles.push([0, rim(s), rim(s + 1)]);
             triangles.push([1, rim(s + 1), rim(s)]);
         }
-        let mesh = compute_vertex_normals(&positions, &triangles, DEFAULT_CREASE_ANGLE_DEGREES);
+        let mesh = compute_vertex_normals(
+            &positions,
+            VertexAttributes::default(),
+            &triangles,
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
         check_same_corners(&mesh, &positions, &triangles);
         let base_centre = mesh.triangles[1][0] as usize;
         assert_eq!(mesh.normals[base_centre], -Vec3::Z);
@@ -657,7 +783,13 @@ mod tests {
     fn repair_keeps_good_normals_and_renormalises() {
         let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let normals = [Vec3::Z * 2.0, Vec3::new(0.0, 1.2, 1.6), Vec3::Z * 1e-30];
-        let repaired = repair_normals(&positions, &normals, &[[0, 1, 2]], DEFAULT_CREASE_ANGLE_DEGREES);
+        let repaired = repair_normals(
+            &positions,
+            &normals,
+            VertexAttributes::default(),
+            &[[0, 1, 2]],
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
         assert_eq!(repaired.replaced_count, 0);
         check_vertices(
             &repaired.mesh,
@@ -678,7 +810,13 @@ mod tests {
         let mut normals = vec![Vec3::ZERO; 8];
         normals[3] = Vec3::new(f32::NAN, 0.0, 1.0);
         normals[5] = Vec3::splat(f32::INFINITY);
-        let repaired = repair_normals(&positions, &normals, &triangles, DEFAULT_CREASE_ANGLE_DEGREES);
+        let repaired = repair_normals(
+            &positions,
+            &normals,
+            VertexAttributes::default(),
+            &triangles,
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
         assert_eq!(repaired.replaced_count, 8);
         let expected: Vec<_> = positions
             .iter()
@@ -692,7 +830,13 @@ mod tests {
     fn repair_mixes_file_and_computed_normals() {
         let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
         let normals = [Vec3::new(0.0, 0.6, 0.8), Vec3::ZERO];
-        let repaired = repair_normals(&positions, &normals, &[[0, 1, 2]], DEFAULT_CREASE_ANGLE_DEGREES);
+        let repaired = repair_normals(
+            &positions,
+            &normals,
+            VertexAttributes::default(),
+            &[[0, 1, 2]],
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
         assert_eq!(repaired.replaced_count, 2, "one zero and one missing normal");
         check_vertices(
             &repaired.mesh,
@@ -702,5 +846,161 @@ mod tests {
                 (Vec3::Y, Vec3::Z),
             ],
         );
+    }
+
+    /// Per-vertex attributes that differ for every input vertex: vertex `i` has UV `(i, 0)`,
+    /// UV1 `(0, i)`, colour `(i, i, i, 1)` and tangent `(1, 0, 0, ±1)`.
+    fn distinct_attributes(count: usize) -> (Vec<Vec2>, Vec<Vec2>, Vec<Vec4>, Vec<Vec4>) {
+        let uvs = (0..count).map(|i| Vec2::new(i as f32, 0.0)).collect();
+        let uvs1 = (0..count).map(|i| Vec2::new(0.0, i as f32)).collect();
+        let colors = (0..count)
+            .map(|i| Vec4::new(i as f32, i as f32, i as f32, 1.0))
+            .collect();
+        let tangents = (0..count)
+            .map(|i| Vec4::new(1.0, 0.0, 0.0, if i % 2 == 0 { 1.0 } else { -1.0 }))
+            .collect();
+        (uvs, uvs1, colors, tangents)
+    }
+
+    /// Every per-vertex array has one entry per position, and every corner of every output
+    /// triangle carries the attributes of the input vertex at that corner.
+    fn check_attributes_follow(mesh: &Mesh, attributes: VertexAttributes, triangles: &[[u32; 3]]) {
+        let count = mesh.positions.len();
+        assert_eq!(
+            [
+                mesh.uvs.len(),
+                mesh.uvs1.len(),
+                mesh.colors.len(),
+                mesh.tangents.len()
+            ],
+            [count; 4]
+        );
+        for (new, old) in mesh.triangles.iter().zip(triangles) {
+            for k in 0..3 {
+                let (new, old) = (new[k] as usize, old[k] as usize);
+                assert_eq!(mesh.uvs[new], attributes.uvs[old], "uv of input vertex {old}");
+                assert_eq!(mesh.uvs1[new], attributes.uvs1[old]);
+                assert_eq!(mesh.colors[new], attributes.colors[old]);
+                assert_eq!(mesh.tangents[new], attributes.tangents[old]);
+            }
+        }
+    }
+
+    #[test]
+    fn attributes_follow_their_vertices_through_crease_splits() {
+        // The shared cube splits its 8 vertices into 24 (three normals each); every copy keeps
+        // the attributes of the vertex it came from.
+        let (positions, triangles) = shared_cube();
+        let (uvs, uvs1, colors, tangents) = distinct_attributes(positions.len());
+        let attributes = VertexAttributes {
+            uvs: &uvs,
+            uvs1: &uvs1,
+            colors: &colors,
+            tangents: &tangents,
+        };
+        let mesh = compute_vertex_normals(&positions, attributes, &triangles, DEFAULT_CREASE_ANGLE_DEGREES);
+        assert_eq!(mesh.positions.len(), 24);
+        check_same_corners(&mesh, &positions, &triangles);
+        check_attributes_follow(&mesh, attributes, &triangles);
+        // Only UVs: the other arrays stay empty.
+        let only_uvs = VertexAttributes {
+            uvs: &uvs,
+            ..VertexAttributes::default()
+        };
+        let mesh = compute_vertex_normals(&positions, only_uvs, &triangles, DEFAULT_CREASE_ANGLE_DEGREES);
+        assert_eq!(mesh.uvs.len(), mesh.positions.len());
+        assert!(mesh.uvs1.is_empty() && mesh.colors.is_empty() && mesh.tangents.is_empty());
+    }
+
+    #[test]
+    fn uv_seams_are_not_merged_but_normals_are_smooth_across_them() {
+        // Two triangles folded 30° along the edge from the origin to Y. The edge's vertices
+        // are duplicated with different UVs on each side (a seam), as OBJ and glTF files store
+        // them; a third copy of the origin has the same UV as the first and must merge with it.
+        let folded = Vec3::new(30f32.to_radians().cos(), 0.0, 30f32.to_radians().sin());
+        let positions = [
+            Vec3::ZERO,
+            -Vec3::X,
+            Vec3::Y,
+            Vec3::ZERO,
+            Vec3::Y,
+            folded,
+            Vec3::ZERO,
+        ];
+        let uvs = [
+            Vec2::new(0.5, 1.0),
+            Vec2::new(0.0, 1.0),
+            Vec2::new(0.5, 0.0),
+            Vec2::new(0.0, 1.0),
+            Vec2::new(0.0, 0.0),
+            Vec2::new(0.5, 1.0),
+            Vec2::new(0.5, 1.0),
+        ];
+        let triangles = [[0, 2, 1], [3, 5, 4], [6, 2, 1]];
+        let attributes = VertexAttributes {
+            uvs: &uvs,
+            ..VertexAttributes::default()
+        };
+        let mesh = compute_vertex_normals(&positions, attributes, &triangles, DEFAULT_CREASE_ANGLE_DEGREES);
+        check_same_corners(&mesh, &positions, &triangles);
+        assert_eq!(
+            mesh.positions.len(),
+            6,
+            "vertices 0 and 6 merge; the seam keeps 3 and 4 apart"
+        );
+        assert_eq!(mesh.triangles[2], mesh.triangles[0]);
+        for (new, old) in mesh.triangles.iter().zip(&triangles) {
+            for k in 0..3 {
+                assert_eq!(mesh.uvs[new[k] as usize], uvs[old[k] as usize]);
+            }
+        }
+        // Both sides of the seam at the origin share one smoothed normal, between the faces'.
+        let [left, right] = [mesh.triangles[0][0], mesh.triangles[1][0]].map(|v| mesh.normals[v as usize]);
+        assert_ne!(mesh.triangles[0][0], mesh.triangles[1][0]);
+        assert!(left.distance(right) < 1e-6, "{left} vs {right}");
+        let faces = [
+            face_normal(positions[0], positions[2], positions[1]),
+            face_normal(positions[3], positions[5], positions[4]),
+        ];
+        assert!(
+            left.dot(faces[0]) < 0.999 && left.dot(faces[1]) < 0.999,
+            "smoothed: {left} {faces:?}"
+        );
+    }
+
+    #[test]
+    fn repair_carries_attributes_whether_or_not_it_splits() {
+        let (positions, triangles) = shared_cube();
+        let (uvs, uvs1, colors, tangents) = distinct_attributes(positions.len());
+        let attributes = VertexAttributes {
+            uvs: &uvs,
+            uvs1: &uvs1,
+            colors: &colors,
+            tangents: &tangents,
+        };
+        // Good normals: vertices kept as they are.
+        let outward: Vec<Vec3> = positions.iter().map(|p| p.normalize()).collect();
+        let kept = repair_normals(
+            &positions,
+            &outward,
+            attributes,
+            &triangles,
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
+        assert_eq!((kept.replaced_count, kept.mesh.positions.len()), (0, 8));
+        check_attributes_follow(&kept.mesh, attributes, &triangles);
+        // One broken normal: that vertex is split by the crease rule, attributes follow.
+        let mut broken = outward.clone();
+        broken[5] = Vec3::ZERO;
+        let split = repair_normals(
+            &positions,
+            &broken,
+            attributes,
+            &triangles,
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
+        assert_eq!((split.replaced_count, split.mesh.positions.len()), (1, 10));
+        check_same_corners(&split.mesh, &positions, &triangles);
+        check_attributes_follow(&split.mesh, attributes, &triangles);
     }
 }

@@ -21,12 +21,32 @@
 //!    malformed numbers are reported with their line. A missing or malformed MTL file is a
 //!    warning, never an error: its materials are absent, and when no library loads the mesh
 //!    has no materials at all (the scene then supplies its default).
-//! 4. **Normals.** When every vertex has a file normal they are used, renormalised, and any
+//!    A library that is named but missing is still recorded in `files_read`, so that a
+//!    watcher reloads the mesh when it appears.
+//! 4. **Texture coordinates.** `vt` values become [`Mesh::uvs`] with v flipped to the glTF
+//!    convention the renderer uses (v' = 1 − v: OBJ's v = 0 is the bottom of the image,
+//!    glTF's the top); non-finite ones become 0. A model where only some face vertices have
+//!    one cannot be trusted (`tobj` then packs them without gaps, so they no longer line up
+//!    with the vertices): its coordinates are dropped with a warning. Models without any get
+//!    zeros when another model has some, so the array stays one per vertex.
+//! 5. **Normals.** When every vertex has a file normal they are used, renormalised, and any
 //!    zero or non-finite one is recomputed ([`normals::repair_normals`]). When none or only
 //!    some have one, all normals are computed with the crease angle
 //!    ([`normals::compute_vertex_normals`]); mixing file and computed normals across one
 //!    surface would show a seam, and "only some" usually means a broken export (a warning
-//!    says so).
+//!    says so). Either way the texture coordinates follow their vertices, and vertices on a
+//!    UV seam stay apart.
+//! 6. **Textures.** `map_Kd` and `map_Ka` are decoded as sRGB colour textures
+//!    ([`Texture::load`]) into [`Mesh::textures`], once per file, and bound to the material's
+//!    `textures.diffuse` / `textures.ambient` (UV set 0, scale 1, wrap `Repeat`, or
+//!    `ClampToEdge` under the statement's `-clamp on` option). Paths are relative to the MTL
+//!    file that names them. The statement's options (`-bm 1`, `-o u v w`, ...: see
+//!    [`texture_file_name`]) are skipped; what follows them is the file name, spaces
+//!    included, as `tobj` reads it. On Unix a backslash is read as a folder separator, as
+//!    Windows exporters write them. A texture that is missing or cannot be decoded is a
+//!    warning naming the file, and the material is drawn without it; the file is recorded in
+//!    `files_read` either way. A texture on a mesh without texture coordinates is not loaded
+//!    (a warning says why). Other maps (`map_Ks`, `bump`, `map_d`, ...) are not used.
 //!
 //! # MTL to [`Material`]
 //!
@@ -48,10 +68,15 @@ use std::io::Cursor;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use std::collections::HashMap;
+use std::sync::Arc;
 
+use glam::{Vec2, Vec3};
+
+use super::normals::VertexAttributes;
 use super::{LoadedMesh, Mesh, MeshError, MeshOptions, io_error_text, normals};
-use crate::scene::{LightingModel, Material};
+use crate::scene::{LightingModel, Material, TextureBinding};
+use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 
 /// Diffuse colour of an MTL material without `Kd`.
 pub const DEFAULT_DIFFUSE: Vec3 = Vec3::splat(0.8);
@@ -70,6 +95,7 @@ pub fn default_material() -> Material {
         shininess: DEFAULT_SHININESS,
         emission: Vec3::ZERO,
         model: LightingModel::BlinnPhong,
+        textures: Default::default(),
     }
 }
 
@@ -86,6 +112,7 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
         directory: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         files_read: RefCell::new(Vec::new()),
         warnings: RefCell::new(Vec::new()),
+        material_directories: RefCell::new(Vec::new()),
     };
     // `..Default::default()` covers tobj's other options, which exist only under cargo
     // features some other crate could enable (they are absent in this build, hence the
@@ -121,17 +148,27 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
     files_read.extend(libraries.files_read.into_inner());
     let mut warnings = scan.warnings;
     warnings.extend(libraries.warnings.into_inner());
+    let material_directories = libraries.material_directories.into_inner();
 
-    let geometry = merge_models(&models).map_err(|message| MeshError::new(path, message))?;
+    let geometry = merge_models(&models, &mut warnings).map_err(|message| MeshError::new(path, message))?;
     if geometry.triangles.is_empty() {
         return Err(MeshError::new(path, "contains no triangles"));
     }
 
     let crease = options.crease_angle_degrees;
+    let attributes = VertexAttributes {
+        uvs: &geometry.uvs,
+        ..VertexAttributes::default()
+    };
     let mut mesh = match &geometry.normals {
         FileNormals::All(file_normals) => {
-            let repaired =
-                normals::repair_normals(&geometry.positions, file_normals, &geometry.triangles, crease);
+            let repaired = normals::repair_normals(
+                &geometry.positions,
+                file_normals,
+                attributes,
+                &geometry.triangles,
+                crease,
+            );
             if repaired.replaced_count > 0 {
                 warnings.push(format!(
                     "{} vertex normals in the file were zero or not finite and were recomputed",
@@ -144,10 +181,10 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
             warnings.push(format!(
                 "only some face vertices have normals; all normals were computed (crease angle {crease}°)"
             ));
-            normals::compute_vertex_normals(&geometry.positions, &geometry.triangles, crease)
+            normals::compute_vertex_normals(&geometry.positions, attributes, &geometry.triangles, crease)
         }
         FileNormals::None => {
-            normals::compute_vertex_normals(&geometry.positions, &geometry.triangles, crease)
+            normals::compute_vertex_normals(&geometry.positions, attributes, &geometry.triangles, crease)
         }
     };
 
@@ -157,6 +194,15 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
         &library_materials,
         &mut warnings,
     );
+    // `assign_materials` keeps the libraries' order: material i is library material i.
+    let mut textures = TextureFiles::default();
+    let has_uvs = !mesh.uvs.is_empty();
+    let with_directories = library_materials.iter().zip(&material_directories);
+    for (material, (mtl, directory)) in mesh.materials.iter_mut().zip(with_directories) {
+        bind_textures(material, mtl, directory, has_uvs, &mut textures, &mut warnings);
+    }
+    mesh.textures = textures.loaded;
+    files_read.extend(textures.files_read);
     if !library_materials.is_empty() {
         let mut reported: Vec<&str> = Vec::new();
         for (name, line) in &scan.material_uses {
@@ -344,8 +390,13 @@ fn check_face_vertex(word: &str, defined: [usize; 3]) -> Result<(), String> {
 /// was read and what went wrong (the loader callback cannot return anything else).
 struct MaterialLibraries {
     directory: PathBuf,
+    /// Libraries read, and libraries named but missing (for a watcher).
     files_read: RefCell<Vec<PathBuf>>,
     warnings: RefCell<Vec<String>>,
+    /// The folder of the library of each material returned to `tobj`, in order: `tobj`
+    /// appends each library's materials to its list as they come, so material i of the
+    /// final list came from `material_directories[i]` (texture paths are relative to it).
+    material_directories: RefCell<Vec<PathBuf>>,
 }
 
 impl MaterialLibraries {
@@ -357,6 +408,13 @@ impl MaterialLibraries {
                 path.display()
             ));
         };
+        {
+            // Recorded even when it cannot be read: a watcher then reloads when it appears.
+            let mut files_read = self.files_read.borrow_mut();
+            if !files_read.contains(&path) {
+                files_read.push(path.clone());
+            }
+        }
         let bytes = match std::fs::read(&path) {
             Ok(bytes) => bytes,
             Err(error) => {
@@ -364,12 +422,6 @@ impl MaterialLibraries {
                 return Err(tobj::LoadError::OpenFileFailed);
             }
         };
-        {
-            let mut files_read = self.files_read.borrow_mut();
-            if !files_read.contains(&path) {
-                files_read.push(path.clone());
-            }
-        }
         let text = String::from_utf8_lossy(&bytes);
         let text = match prepare_mtl(&text) {
             Ok(text) => text,
@@ -378,7 +430,15 @@ impl MaterialLibraries {
                 return Err(tobj::LoadError::MaterialParseError);
             }
         };
-        tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes())).inspect_err(|error| warn(error.to_string()))
+        let loaded = tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes()))
+            .inspect_err(|error| warn(error.to_string()));
+        if let Ok((materials, _)) = &loaded {
+            let directory = path.parent().unwrap_or(Path::new("")).to_path_buf();
+            self.material_directories
+                .borrow_mut()
+                .extend(std::iter::repeat_n(directory, materials.len()));
+        }
+        loaded
     }
 }
 
@@ -454,23 +514,40 @@ enum FileNormals {
 struct MergedGeometry {
     positions: Vec<Vec3>,
     normals: FileNormals,
+    /// One per position in the glTF convention (module documentation), or empty.
+    uvs: Vec<Vec2>,
     triangles: Vec<[u32; 3]>,
     /// Per triangle, the index of its material among the libraries' materials.
     triangle_material_ids: Vec<Option<usize>>,
 }
 
-fn merge_models(models: &[tobj::Model]) -> Result<MergedGeometry, String> {
+fn merge_models(models: &[tobj::Model], warnings: &mut Vec<String>) -> Result<MergedGeometry, String> {
     let mut positions = Vec::new();
     let mut normals = Vec::new();
+    // Per model, its texture coordinates, when every vertex of it has one.
+    let mut model_uvs: Vec<Option<Vec<Vec2>>> = Vec::with_capacity(models.len());
     let mut triangles = Vec::new();
     let mut triangle_material_ids = Vec::new();
     let (mut with_normals, mut without_normals) = (0usize, 0usize);
+    let mut models_with_partial_uvs = Vec::new();
 
     for model in models {
         let mesh = &model.mesh;
         let offset = positions.len();
         let vertex_count = mesh.positions.len() / 3;
         positions.extend(mesh.positions.chunks_exact(3).map(Vec3::from_slice));
+        if mesh.texcoords.len() == 2 * vertex_count && vertex_count > 0 {
+            let flipped = mesh.texcoords.chunks_exact(2).map(|uv| {
+                let flipped = Vec2::new(uv[0], 1.0 - uv[1]);
+                Vec2::select(flipped.is_finite_mask(), flipped, Vec2::ZERO)
+            });
+            model_uvs.push(Some(flipped.collect()));
+        } else {
+            if !mesh.texcoords.is_empty() {
+                models_with_partial_uvs.push(model.name.as_str());
+            }
+            model_uvs.push(None);
+        }
         if mesh.normals.len() == mesh.positions.len() {
             normals.extend(mesh.normals.chunks_exact(3).map(Vec3::from_slice));
             with_normals += vertex_count;
@@ -499,9 +576,30 @@ fn merge_models(models: &[tobj::Model]) -> Result<MergedGeometry, String> {
         (_, 0) => FileNormals::All(normals),
         _ => FileNormals::Some,
     };
+    if !models_with_partial_uvs.is_empty() {
+        warnings.push(format!(
+            "only some face vertices have texture coordinates in {}; those texture coordinates were dropped",
+            models_with_partial_uvs
+                .iter()
+                .map(|name| format!("'{name}'"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    let uvs = if model_uvs.iter().any(Option::is_some) {
+        let counts = models.iter().map(|model| model.mesh.positions.len() / 3);
+        model_uvs
+            .into_iter()
+            .zip(counts)
+            .flat_map(|(uvs, count)| uvs.unwrap_or_else(|| vec![Vec2::ZERO; count]))
+            .collect()
+    } else {
+        Vec::new()
+    };
     Ok(MergedGeometry {
         positions,
         normals,
+        uvs,
         triangles,
         triangle_material_ids,
     })
@@ -577,7 +675,171 @@ fn material_from_mtl(mtl: &tobj::Material, warnings: &mut Vec<String>) -> Materi
         shininess,
         emission,
         model,
+        textures: Default::default(),
     }
+}
+
+/// The textures of one OBJ load: each file decoded once, whatever the number of materials
+/// and statements naming it.
+#[derive(Default)]
+struct TextureFiles {
+    /// Becomes [`Mesh::textures`].
+    loaded: Vec<Arc<Texture>>,
+    /// Each file tried, with its index in `loaded`, or `None` when it failed (and was
+    /// reported).
+    index_by_path: HashMap<PathBuf, Option<u32>>,
+    /// Every texture file tried, found or not, in order.
+    files_read: Vec<PathBuf>,
+}
+
+impl TextureFiles {
+    /// The index of the texture in `path`, loading it the first time; `None` (after one
+    /// warning naming the file) when it is missing or cannot be decoded.
+    fn index_of(
+        &mut self,
+        path: &Path,
+        statement: &str,
+        material: &str,
+        warnings: &mut Vec<String>,
+    ) -> Option<u32> {
+        if let Some(&known) = self.index_by_path.get(path) {
+            return known;
+        }
+        self.files_read.push(path.to_path_buf());
+        let index = match Texture::load(path, ColorSpace::Srgb) {
+            Ok(texture) => {
+                self.loaded.push(Arc::new(texture));
+                Some((self.loaded.len() - 1) as u32)
+            }
+            Err(problem) => {
+                warnings.push(format!(
+                    "texture {} ({statement} of material '{material}'): {problem}; materials using it are drawn without it",
+                    path.display()
+                ));
+                None
+            }
+        };
+        self.index_by_path.insert(path.to_path_buf(), index);
+        index
+    }
+}
+
+/// Binds the `map_Kd` and `map_Ka` textures of one MTL material, whose library is in
+/// `directory` (module documentation, step 6). Without texture coordinates (`has_uvs`
+/// false) nothing is loaded.
+fn bind_textures(
+    material: &mut Material,
+    mtl: &tobj::Material,
+    directory: &Path,
+    has_uvs: bool,
+    textures: &mut TextureFiles,
+    warnings: &mut Vec<String>,
+) {
+    let statements = [
+        ("map_Kd", mtl.diffuse_texture.as_deref()),
+        ("map_Ka", mtl.ambient_texture.as_deref()),
+    ];
+    for (statement, arguments) in statements {
+        let Some(arguments) = arguments else {
+            continue;
+        };
+        if !has_uvs {
+            warnings.push(format!(
+                "material '{}': {statement} is not used: the OBJ file has no texture coordinates (vt)",
+                mtl.name
+            ));
+            continue;
+        }
+        let Some(file) = texture_file_name(arguments) else {
+            warnings.push(format!(
+                "material '{}': {statement} names no file after its options; it is not used",
+                mtl.name
+            ));
+            continue;
+        };
+        let Some(texture) = textures.index_of(&directory.join(file.name), statement, &mtl.name, warnings)
+        else {
+            continue;
+        };
+        let wrap = if file.clamp {
+            Wrap::ClampToEdge
+        } else {
+            Wrap::Repeat
+        };
+        let binding = TextureBinding {
+            texture,
+            uv_set: 0,
+            sampler: Sampler {
+                wrap_s: wrap,
+                wrap_t: wrap,
+            },
+            scale: 1.0,
+        };
+        if statement == "map_Kd" {
+            material.textures.diffuse = Some(binding);
+        } else {
+            material.textures.ambient = Some(binding);
+        }
+    }
+}
+
+/// What a `map_*` statement names, once its options are read.
+#[derive(Debug, PartialEq)]
+struct TextureFileName {
+    /// The file, relative to the MTL file's folder.
+    name: String,
+    /// `-clamp on`: coordinates outside [0, 1] are clamped rather than repeated.
+    clamp: bool,
+}
+
+/// Reads the arguments of a `map_Kd`-style statement (everything after the keyword): the
+/// MTL options first (`-blendu`, `-blendv`, `-bm`, `-boost`, `-cc`, `-clamp`, `-imfchan`,
+/// `-texres` and `-type` take one value, `-mm` two, `-o`, `-s` and `-t` one to three
+/// numbers), then the file name, which may contain spaces. An unknown option is taken as the
+/// start of the file name. `None` when no file name is left.
+fn texture_file_name(arguments: &str) -> Option<TextureFileName> {
+    let mut rest = arguments.trim();
+    let mut clamp = false;
+    while rest.starts_with('-') {
+        let (option, after) = split_word(rest);
+        let (values, numbers_only) = match option {
+            "-blendu" | "-blendv" | "-bm" | "-boost" | "-cc" | "-clamp" | "-imfchan" | "-texres"
+            | "-type" => (1, false),
+            "-mm" => (2, false),
+            "-o" | "-s" | "-t" => (3, true),
+            _ => break,
+        };
+        rest = after;
+        for taken in 0..values {
+            let (value, after) = split_word(rest);
+            // -o, -s and -t take one to three numbers: stop at the first word that is not.
+            if numbers_only && taken > 0 && value.parse::<f32>().is_err() {
+                break;
+            }
+            if option == "-clamp" {
+                clamp = value == "on";
+            }
+            rest = after;
+        }
+    }
+    let name = rest.trim();
+    if name.is_empty() {
+        return None;
+    }
+    let name = if cfg!(windows) {
+        name.to_string()
+    } else {
+        name.replace('\\', "/")
+    };
+    Some(TextureFileName { name, clamp })
+}
+
+/// The first whitespace-separated word of `text` (which starts with it) and what follows,
+/// trimmed at the start.
+fn split_word(text: &str) -> (&str, &str) {
+    let text = text.trim_start();
+    let end = text.find(char::is_whitespace).unwrap_or(text.len());
+    (&text[..end], text[end..].trim_start())
 }
 
 #[cfg(test)]
@@ -605,6 +867,8 @@ mod tests {
     }
 
     fn check_invariant(mesh: &Mesh) {
+        mesh.check_invariant()
+            .unwrap_or_else(|e| panic!("invariant: {e}"));
         assert_eq!(mesh.positions.len(), mesh.normals.len());
         assert!(mesh.positions.iter().all(|p| p.is_finite()));
         assert!(
@@ -815,7 +1079,9 @@ mod tests {
         assert!(loaded.mesh.materials.is_empty() && loaded.mesh.triangle_materials.is_empty());
         assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
         assert!(loaded.warnings[0].contains("nowhere.mtl") && loaded.warnings[0].contains("cannot read"));
-        assert_eq!(loaded.files_read.len(), 1, "the missing file was not read");
+        // Recorded all the same, so that a watcher reloads the mesh when it appears.
+        assert_eq!(loaded.files_read.len(), 2, "{:?}", loaded.files_read);
+        assert!(loaded.files_read[1].ends_with("nowhere.mtl"));
     }
 
     #[test]
@@ -967,5 +1233,266 @@ mod tests {
             .unwrap_or_else(|e| panic!("{e:?}"));
         check_invariant(&mesh);
         assert_eq!(mesh.normals, vec![normals::FALLBACK_NORMAL]);
+    }
+
+    // Texture coordinates and textures.
+
+    /// The `vt` of every face corner of a triangulated OBJ file, in face order, as the file
+    /// states them (v up): what the loader's UVs must match, flipped.
+    fn file_corner_uvs(text: &str) -> Vec<(Vec3, Vec2)> {
+        let mut positions = Vec::new();
+        let mut uvs = Vec::new();
+        let mut corners = Vec::new();
+        let number = |w: &str| w.parse::<f32>().unwrap_or_else(|e| panic!("{w}: {e}"));
+        for line in text.lines() {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            match words.first() {
+                Some(&"v") => positions.push(Vec3::new(number(words[1]), number(words[2]), number(words[3]))),
+                Some(&"vt") => uvs.push(Vec2::new(number(words[1]), number(words[2]))),
+                Some(&"f") => {
+                    for corner in &words[1..] {
+                        let mut parts = corner.split('/').map(|p| p.parse::<usize>().unwrap_or(0));
+                        let (v, vt) = (parts.next().unwrap_or(0), parts.next().unwrap_or(0));
+                        corners.push((positions[v - 1], uvs[vt - 1]));
+                    }
+                }
+                _ => {}
+            }
+        }
+        corners
+    }
+
+    /// spot_triangulated.obj with a material library naming its texture, in a scratch folder
+    /// (the asset ships without one): `mtl` is the library's text.
+    fn textured_spot(mtl: &str) -> (tempfile::TempDir, PathBuf) {
+        let dir = scratch_dir();
+        let obj =
+            std::fs::read_to_string(asset("spot/spot_triangulated.obj")).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::copy(
+            asset("spot/spot_texture.png"),
+            dir.path().join("spot_texture.png"),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        write(dir.path(), "spot.mtl", mtl);
+        let path = write(
+            dir.path(),
+            "spot.obj",
+            &format!("mtllib spot.mtl\nusemtl spot\n{obj}"),
+        );
+        (dir, path)
+    }
+
+    #[test]
+    fn spot_uvs_follow_their_corners_flipped_to_top_left() {
+        let loaded = check_asset("spot/spot_triangulated.obj", 5856);
+        let mesh = &loaded.mesh;
+        assert_eq!(mesh.uvs.len(), mesh.positions.len());
+        let text =
+            std::fs::read_to_string(asset("spot/spot_triangulated.obj")).unwrap_or_else(|e| panic!("{e}"));
+        let corners = file_corner_uvs(&text);
+        assert_eq!(corners.len(), 3 * mesh.triangles.len());
+        for (triangle, file) in mesh.triangles.iter().zip(corners.chunks_exact(3)) {
+            for (&vertex, &(position, uv)) in triangle.iter().zip(file) {
+                assert_eq!(mesh.positions[vertex as usize], position);
+                assert_eq!(
+                    mesh.uvs[vertex as usize],
+                    Vec2::new(uv.x, 1.0 - uv.y),
+                    "corner at {position}"
+                );
+            }
+        }
+        // UV seams keep their vertices apart: more vertices than distinct positions.
+        let mut distinct: Vec<[u32; 3]> = mesh
+            .positions
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect();
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert!(
+            mesh.positions.len() > distinct.len(),
+            "{} vs {}",
+            mesh.positions.len(),
+            distinct.len()
+        );
+    }
+
+    #[test]
+    fn spot_texture_is_loaded_relative_to_its_mtl_and_bound() {
+        let (dir, path) = textured_spot("newmtl spot\nKd 1 1 1\nmap_Kd -bm 1 spot_texture.png\n");
+        let loaded = load(&path).unwrap_or_else(|e| panic!("{e:?}"));
+        check_invariant(&loaded.mesh);
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let mesh = &loaded.mesh;
+        assert_eq!(mesh.textures.len(), 1);
+        let texture = &mesh.textures[0];
+        assert_eq!(
+            (texture.width(), texture.height(), texture.levels.len()),
+            (1024, 1024, 11)
+        );
+        let binding = mesh.materials[0]
+            .textures
+            .diffuse
+            .unwrap_or_else(|| panic!("map_Kd is bound"));
+        assert_eq!((binding.texture, binding.uv_set, binding.scale), (0, 0, 1.0));
+        assert_eq!(binding.sampler, Sampler::default());
+        assert_eq!(mesh.materials[0].textures.ambient, None);
+        assert_eq!(
+            loaded.files_read,
+            vec![
+                path.clone(),
+                dir.path().join("spot.mtl"),
+                dir.path().join("spot_texture.png")
+            ]
+        );
+    }
+
+    #[test]
+    fn textures_are_loaded_once_per_file() {
+        let mtl = "newmtl spot\nmap_Kd spot_texture.png\nmap_Ka -clamp on spot_texture.png\n\
+                   newmtl other\nmap_Kd spot_texture.png\n";
+        let (_dir, path) = textured_spot(mtl);
+        let loaded = load(&path).unwrap_or_else(|e| panic!("{e:?}"));
+        check_invariant(&loaded.mesh);
+        let mesh = &loaded.mesh;
+        assert_eq!(mesh.textures.len(), 1);
+        assert_eq!(loaded.files_read.len(), 3, "{:?}", loaded.files_read);
+        let spot = mesh.materials[0].textures;
+        let (diffuse, ambient) = (spot.diffuse.map(|b| b.texture), spot.ambient.map(|b| b.texture));
+        assert_eq!((diffuse, ambient), (Some(0), Some(0)));
+        assert_eq!(spot.ambient.map(|b| b.sampler.wrap_s), Some(Wrap::ClampToEdge));
+        assert_eq!(mesh.materials[1].textures.diffuse.map(|b| b.texture), Some(0));
+    }
+
+    #[test]
+    fn missing_textures_warn_name_the_file_and_are_recorded() {
+        // The tobj fixture libraries name texture files that do not exist, some with spaces
+        // in their names; an OBJ with texture coordinates elsewhere uses them by absolute
+        // path, so their textures resolve next to the libraries, not next to the OBJ.
+        let library = asset("tobj-fixtures/cornell_box.mtl");
+        let second_library = asset("tobj-fixtures/cornell_box2.mtl");
+        let obj = format!(
+            "mtllib {}\nmtllib {}\n{TRIANGLE}vt 0 0\nvt 1 0\nvt 0 1\nusemtl red\nf 1/1 2/2 3/3\nusemtl green\nf 1/1 2/2 3/3\n",
+            library.display(),
+            second_library.display()
+        );
+        let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+        check_invariant(&loaded.mesh);
+        let fixtures = asset("tobj-fixtures");
+        let expected = [
+            "this diffuse texture has spaces.jpg",
+            "this ambient texture has spaces.jpg",
+            "dummy_texture.png",
+        ];
+        for name in expected {
+            let file = fixtures.join(name);
+            assert!(
+                loaded.files_read.contains(&file),
+                "{file:?} in {:?}",
+                loaded.files_read
+            );
+            let warned = loaded
+                .warnings
+                .iter()
+                .filter(|w| w.contains(&file.display().to_string()) && w.contains("No such file"))
+                .count();
+            assert_eq!(warned, 1, "one warning for {name}: {:?}", loaded.warnings);
+        }
+        assert_eq!(
+            loaded.warnings.len(),
+            3,
+            "green's two statements name one file: {:?}",
+            loaded.warnings
+        );
+        assert!(loaded.mesh.textures.is_empty());
+        assert!(
+            loaded
+                .mesh
+                .materials
+                .iter()
+                .all(|m| m.textures == Default::default())
+        );
+    }
+
+    #[test]
+    fn textures_without_texture_coordinates_are_not_loaded() {
+        // The fixture itself has no vt: its textures are reported as unusable, not missing.
+        let loaded = check_asset("tobj-fixtures/cornell_box.obj", 36);
+        assert!(loaded.mesh.uvs.is_empty() && loaded.mesh.textures.is_empty());
+        let unused: Vec<&String> = loaded
+            .warnings
+            .iter()
+            .filter(|w| w.contains("no texture coordinates"))
+            .collect();
+        assert_eq!(
+            unused.len(),
+            4,
+            "map_Kd and map_Ka of red and green: {:?}",
+            loaded.warnings
+        );
+        assert_eq!(
+            loaded.files_read.len(),
+            3,
+            "no texture was tried: {:?}",
+            loaded.files_read
+        );
+    }
+
+    #[test]
+    fn texture_coordinates_are_flipped_sanitised_and_padded() {
+        // Two objects, the second without vt: its vertices get zeros.
+        let obj = format!("{TRIANGLE}vt 0.25 0.75\nvt 1 nan\nvt 0 1\no a\nf 1/1 2/2 3/3\no b\nf 1 3 2\n");
+        let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+        let mesh = &loaded.mesh;
+        check_invariant(mesh);
+        let first = mesh.triangles[0].map(|v| mesh.uvs[v as usize]);
+        assert_eq!(
+            first,
+            [Vec2::new(0.25, 0.25), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)]
+        );
+        assert!(
+            mesh.triangles[1]
+                .iter()
+                .all(|&v| mesh.uvs[v as usize] == Vec2::ZERO)
+        );
+        // Only some corners with vt: dropped with a warning.
+        let obj = format!("{TRIANGLE}vt 0 0\nf 1/1 2 3\n");
+        let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
+        check_invariant(&loaded.mesh);
+        assert!(loaded.mesh.uvs.is_empty());
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("only some face vertices have texture coordinates"))
+        );
+    }
+
+    #[test]
+    fn texture_statement_options_are_skipped() {
+        let check = |arguments: &str, name: &str, clamp: bool| {
+            assert_eq!(
+                texture_file_name(arguments),
+                Some(TextureFileName {
+                    name: name.to_string(),
+                    clamp
+                }),
+                "{arguments}"
+            );
+        };
+        check("wood.png", "wood.png", false);
+        check("-bm 1 wood.png", "wood.png", false);
+        check(
+            "this diffuse texture has spaces.jpg",
+            "this diffuse texture has spaces.jpg",
+            false,
+        );
+        check("-o 0.5 0.5 0 -clamp on wood.png", "wood.png", true);
+        check("-s 2 wood.png", "wood.png", false);
+        check("-mm 0 1 -blendu off my wood.png", "my wood.png", false);
+        check("-clamp off textures\\wood.png", "textures/wood.png", false);
+        check("-unknown wood.png", "-unknown wood.png", false);
+        assert_eq!(texture_file_name("-bm 1"), None);
+        assert_eq!(texture_file_name("   "), None);
     }
 }

@@ -15,10 +15,13 @@
 use glam::{DMat3, DMat4, DVec3, Mat3, Mat4, Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 
-use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate};
+use std::sync::Arc;
+
+use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate_with_visibility};
 use crate::render::DebugView;
 use crate::render::clip::{Clipped, clip_triangle};
 use crate::render::raster::{GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, setup_triangle};
+use crate::render::shadow::ShadowMap;
 use crate::scene::presets::default_material;
 use crate::scene::{
     BackFaces, Camera, Light, LightingComponent, Material, NormalInterpolation, Object, Projection, Scene,
@@ -45,6 +48,10 @@ pub struct Frame {
     /// Unit view direction, for the depth view.
     pub forward: Vec3,
     pub debug_view: Option<DebugView>,
+    /// Per light, its shadow map (for lights that cast shadows).
+    pub shadows: Vec<Option<Arc<ShadowMap>>>,
+    /// False for a depth-only frame (a shadow map): nothing is lit and nothing culled.
+    pub lit: bool,
 }
 
 /// A vertex in eye-relative world space (the eye at the origin, world axes).
@@ -131,13 +138,18 @@ impl Frame {
         back_facing: bool,
     ) -> Vec3 {
         let unlit = back_facing && style.back_faces == BackFaces::Unlit;
-        let terms = illuminate(
+        let normal = style.side_normal(normal, back_facing);
+        let terms = illuminate_with_visibility(
             &self.materials[material as usize],
             if unlit { &[] } else { &self.lights },
             self.ambient_light,
             position,
-            style.side_normal(normal, back_facing),
+            normal,
             self.viewer.to_viewer(position),
+            |light, to_light| match self.shadows.get(light) {
+                Some(Some(map)) => map.visibility(position, normal, to_light),
+                _ => 1.0,
+            },
         );
         select_component(self.debug_view, style.component, &terms)
     }
@@ -163,25 +175,67 @@ pub fn select_component(
     }
 }
 
-/// Runs the geometry stage for the whole scene.
-pub fn build_frame(scene: &Scene, pattern: SamplePattern, debug_view: Option<DebugView>) -> Frame {
+/// Runs the geometry stage for the whole scene, as its camera sees it.
+pub fn build_frame(
+    scene: &Scene,
+    pattern: SamplePattern,
+    debug_view: Option<DebugView>,
+    shadows: Vec<Option<Arc<ShadowMap>>>,
+) -> Frame {
     let (width, height) = (scene.image.width, scene.image.height);
-    let camera = CameraSetup::new(&scene.camera, width as f64 / height as f64);
+    build(
+        scene,
+        &scene.camera,
+        width,
+        height,
+        pattern,
+        debug_view,
+        shadows,
+        true,
+    )
+}
+
+/// The scene's geometry as `camera` sees it on a `size`×`size` image, for depth only: nothing is
+/// lit and no face is culled (a shadow map needs every surface that can block light).
+pub fn build_depth_frame(scene: &Scene, camera: &Camera, size: u32) -> Frame {
+    build(
+        scene,
+        camera,
+        size,
+        size,
+        SamplePattern::SINGLE,
+        None,
+        Vec::new(),
+        false,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build(
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    pattern: SamplePattern,
+    debug_view: Option<DebugView>,
+    shadows: Vec<Option<Arc<ShadowMap>>>,
+    lit: bool,
+) -> Frame {
+    let eye = camera.eye;
+    let camera = CameraSetup::new(camera, width as f64 / height as f64);
     let mut frame = Frame {
         vertices: Vec::with_capacity(scene.objects.iter().map(|o| o.mesh.positions.len()).sum()),
         triangles: Vec::with_capacity(scene.triangle_count()),
         raster: Vec::new(),
         materials: Vec::new(),
         objects: scene.objects.iter().map(ObjectStyle::of).collect(),
-        lights: scene
-            .lights
-            .iter()
-            .map(|l| shading_light(l, scene.camera.eye))
-            .collect(),
+        lights: scene.lights.iter().map(|l| shading_light(l, eye)).collect(),
         ambient_light: scene.ambient_light,
         viewer: camera.viewer,
         forward: camera.forward.as_vec3(),
         debug_view,
+        shadows,
+        lit,
     };
     let viewport = Viewport {
         width,
@@ -205,16 +259,16 @@ struct Viewport {
 }
 
 /// The camera's matrices with the eye moved to the origin.
-struct CameraSetup {
-    eye: DVec3,
+pub(crate) struct CameraSetup {
+    pub(crate) eye: DVec3,
     /// From eye-relative world space to clip space.
-    clip_from_world: DMat4,
-    forward: DVec3,
-    viewer: Viewer,
+    pub(crate) clip_from_world: DMat4,
+    pub(crate) forward: DVec3,
+    pub(crate) viewer: Viewer,
 }
 
 impl CameraSetup {
-    fn new(camera: &Camera, aspect: f64) -> Self {
+    pub(crate) fn new(camera: &Camera, aspect: f64) -> Self {
         let forward = (camera.target - camera.eye).normalize();
         let view = DMat4::look_to_rh(DVec3::ZERO, forward, camera.up);
         let (projection, viewer) = match camera.projection {
@@ -294,7 +348,7 @@ fn reversed_z_orthographic(width: f64, height: f64, near: f64, far: f64) -> DMat
 fn shading_light(light: &Light, eye: DVec3) -> ShadingLight {
     let relative = |p: DVec3| (p - eye).as_vec3();
     match *light {
-        Light::Directional { direction, color } => ShadingLight {
+        Light::Directional { direction, color, .. } => ShadingLight {
             color,
             kind: ShadingLightKind::Directional {
                 to_light: -direction.normalize_or_zero(),
@@ -304,6 +358,7 @@ fn shading_light(light: &Light, eye: DVec3) -> ShadingLight {
             position,
             color,
             attenuation,
+            ..
         } => ShadingLight {
             color,
             kind: ShadingLightKind::Point {
@@ -318,6 +373,7 @@ fn shading_light(light: &Light, eye: DVec3) -> ShadingLight {
             cutoff_degrees,
             exponent,
             attenuation,
+            ..
         } => ShadingLight {
             color,
             kind: ShadingLightKind::Spot {
@@ -407,7 +463,7 @@ fn add_object(
         .map(|(v, (&p, &n))| {
             let position = transforms.world_from_model.transform_point3(p);
             let normal = (transforms.normal_matrix * n).normalize_or_zero();
-            let color = if style.shading == Shading::Gouraud {
+            let color = if frame.lit && style.shading == Shading::Gouraud {
                 frame.light(vertex_materials[v], &style, position, normal, false)
             } else {
                 Vec3::ZERO
@@ -423,7 +479,7 @@ fn add_object(
 
     // Constant shading: one colour per material for the whole object, lit at the centre of its
     // bounds with the normal facing the viewer.
-    let constant_colors: Vec<Vec3> = if style.shading == Shading::Constant {
+    let constant_colors: Vec<Vec3> = if frame.lit && style.shading == Shading::Constant {
         let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
         let center = transforms.world_from_model.transform_point3((lo + hi) / 2.0);
         let normal = frame.viewer.to_viewer(center);
@@ -512,10 +568,11 @@ fn process_triangle(
 
     let facing = homogeneous_facing(clip);
     let back_facing = facing < 0.0;
-    if facing == 0.0 || facing.is_nan() || (back_facing && style.back_faces == BackFaces::Cull) {
+    let culled = frame.lit && back_facing && style.back_faces == BackFaces::Cull;
+    if facing == 0.0 || facing.is_nan() || culled {
         return triangle; // edge-on, degenerate, non-finite, or culled
     }
-    if style.shading == Shading::Flat {
+    if frame.lit && style.shading == Shading::Flat {
         let centroid = (p0 + p1 + p2) / 3.0;
         triangle.flat_color = frame.light(input.material, style, centroid, face_normal, back_facing);
     }

@@ -24,6 +24,7 @@ pub mod clip;
 pub mod geometry;
 pub mod raster;
 pub mod shade;
+pub mod shadow;
 
 use std::time::{Duration, Instant};
 
@@ -101,7 +102,8 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderSta
 fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderStats) {
     let started = Instant::now();
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
-    let frame = geometry::build_frame(scene, pattern, options.debug_view);
+    let shadows = shadow::render_shadow_maps(scene, scene.camera.eye);
+    let frame = geometry::build_frame(scene, pattern, options.debug_view, shadows);
     let tiles = bin::TileGrid::new(scene.image.width, scene.image.height);
     let bins = bin::bin_triangles(&tiles, &frame.raster);
     let geometry_time = started.elapsed();

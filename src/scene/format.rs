@@ -139,6 +139,15 @@ pub struct AttenuationFile {
     pub quadratic: Option<f32>,
 }
 
+/// `(resolution: 2048, bias: 1.5, filter: 1)`.
+#[derive(Debug, Clone, Copy, Default, Deserialize)]
+#[serde(rename = "ShadowMap", deny_unknown_fields)]
+pub struct ShadowMapFile {
+    pub resolution: Option<u32>,
+    pub bias: Option<f32>,
+    pub filter: Option<u32>,
+}
+
 #[derive(Debug, Clone, Deserialize)]
 #[serde(rename = "Light", deny_unknown_fields)]
 pub enum LightFile {
@@ -147,11 +156,19 @@ pub enum LightFile {
         direction: Option<Vec3File>,
         color: Option<RgbFile>,
         intensity: Option<f32>,
+        /// Cast shadows (a shadow map).
+        shadows: Option<bool>,
+        /// Shadow-map settings.
+        shadow_map: Option<ShadowMapFile>,
     },
     Point {
         position: Option<Vec3File>,
         color: Option<RgbFile>,
         intensity: Option<f32>,
+        /// Cast shadows (a shadow map).
+        shadows: Option<bool>,
+        /// Shadow-map settings.
+        shadow_map: Option<ShadowMapFile>,
         attenuation: Option<AttenuationFile>,
     },
     Spot {
@@ -160,6 +177,10 @@ pub enum LightFile {
         direction: Option<Vec3File>,
         color: Option<RgbFile>,
         intensity: Option<f32>,
+        /// Cast shadows (a shadow map).
+        shadows: Option<bool>,
+        /// Shadow-map settings.
+        shadow_map: Option<ShadowMapFile>,
         /// Half-angle of the cone, degrees.
         cutoff: Option<f32>,
         exponent: Option<f32>,

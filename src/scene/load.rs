@@ -24,13 +24,13 @@ use crate::ron_path;
 use crate::scene::format::{
     self, AttenuationFile, BackFacesFile, CameraFile, ComponentFile, DistributionFile, LightFile,
     LightingModelFile, MaterialFile, MaterialLibraryFile, MaterialRefFile, MeshFile, NormalInterpolationFile,
-    OrderedMap, ScaleFile, SceneFile, ShadingFile,
+    OrderedMap, ScaleFile, SceneFile, ShadingFile, ShadowMapFile,
 };
 use crate::scene::locate::{PathSegment, locate, locate_keys};
 use crate::scene::presets::{self, DEFAULT_RECIPE, MaterialRecipe};
 use crate::scene::{
     Attenuation, BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Microfacet,
-    MicrofacetDistribution, NormalInterpolation, Object, Projection, Scene, Shading,
+    MicrofacetDistribution, NormalInterpolation, Object, Projection, Scene, Shading, ShadowSettings,
 };
 
 /// Image size when the scene gives none.
@@ -209,6 +209,7 @@ impl Loader<'_> {
             (None, Some(camera)) => vec![Light::Directional {
                 direction: (camera.target - camera.eye).normalize().as_vec3(),
                 color: Vec3::ONE,
+                shadow: None,
             }],
             (_, None) => Vec::new(),
         };
@@ -224,6 +225,7 @@ impl Loader<'_> {
             ambient_light: ambient?,
             lights,
             objects,
+            textures: Vec::new(),
         })
     }
 
@@ -1198,11 +1200,30 @@ impl Loader<'_> {
     fn light(&mut self, light: &LightFile, index: usize, source: SourceId, camera: &Camera) -> Option<Light> {
         let field = |name: &str| ron_path!["lights", index, name];
         let toward_target = (camera.target - camera.eye).normalize();
-        let (color, intensity) = match light {
-            LightFile::Directional { color, intensity, .. }
-            | LightFile::Point { color, intensity, .. }
-            | LightFile::Spot { color, intensity, .. } => (*color, *intensity),
+        let (color, intensity, shadows, shadow_map) = match light {
+            LightFile::Directional {
+                color,
+                intensity,
+                shadows,
+                shadow_map,
+                ..
+            }
+            | LightFile::Point {
+                color,
+                intensity,
+                shadows,
+                shadow_map,
+                ..
+            }
+            | LightFile::Spot {
+                color,
+                intensity,
+                shadows,
+                shadow_map,
+                ..
+            } => (*color, *intensity, *shadows, *shadow_map),
         };
+        let shadow = self.shadow_settings(shadows, shadow_map, index, source);
         let color = match color {
             Some(color) => self.color(color, At::new(source, &field("color"))),
             None => Some(Vec3::ONE),
@@ -1227,6 +1248,7 @@ impl Loader<'_> {
                 Some(Light::Directional {
                     direction: direction.as_vec3(),
                     color,
+                    shadow: shadow?,
                 })
             }
             LightFile::Point {
@@ -1243,6 +1265,7 @@ impl Loader<'_> {
                     position,
                     color,
                     attenuation,
+                    shadow: shadow?,
                 })
             }
             LightFile::Spot {
@@ -1289,9 +1312,78 @@ impl Loader<'_> {
                     cutoff_degrees: cutoff? as f32,
                     exponent: exponent? as f32,
                     attenuation: attenuation?,
+                    shadow: shadow?,
                 })
             }
         }
+    }
+
+    /// `shadows: true` turns a light's shadow map on; `shadow_map` tunes it (and is an error
+    /// without `shadows: true`, where it would silently do nothing).
+    fn shadow_settings(
+        &mut self,
+        shadows: Option<bool>,
+        settings: Option<ShadowMapFile>,
+        index: usize,
+        source: SourceId,
+    ) -> Option<Option<ShadowSettings>> {
+        let path = ron_path!["lights", index, "shadow_map"];
+        let Some(true) = shadows else {
+            if settings.is_some() {
+                self.error(
+                    At::new(source, &path),
+                    "`shadow_map` has no effect without `shadows: true`",
+                    Some("ignored"),
+                    Some("add `shadows: true` to this light".into()),
+                );
+                return None;
+            }
+            return Some(None);
+        };
+        let file = settings.unwrap_or_default();
+        let default = ShadowSettings::DEFAULT;
+        let at = |name: &str| [path.as_slice(), &ron_path![name]].concat();
+        let resolution = match file.resolution {
+            Some(r) => self
+                .ranged(
+                    f64::from(r),
+                    16.0,
+                    8192.0,
+                    At::new(source, &at("resolution")),
+                    "shadow map `resolution`",
+                )
+                .map(|r| r as u32),
+            None => Some(default.resolution),
+        };
+        let bias = match file.bias {
+            Some(b) => self
+                .ranged(
+                    f64::from(b),
+                    0.0,
+                    100.0,
+                    At::new(source, &at("bias")),
+                    "shadow map `bias`",
+                )
+                .map(|b| b as f32),
+            None => Some(default.bias),
+        };
+        let filter_radius = match file.filter {
+            Some(f) => self
+                .ranged(
+                    f64::from(f),
+                    0.0,
+                    8.0,
+                    At::new(source, &at("filter")),
+                    "shadow map `filter`",
+                )
+                .map(|f| f as u32),
+            None => Some(default.filter_radius),
+        };
+        Some(Some(ShadowSettings {
+            resolution: resolution?,
+            bias: bias?,
+            filter_radius: filter_radius?,
+        }))
     }
 
     fn attenuation(

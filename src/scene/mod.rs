@@ -27,6 +27,8 @@ pub struct Scene {
     pub ambient_light: Vec3,
     pub lights: Vec<Light>,
     pub objects: Vec<Object>,
+    /// Textures the scene's own materials use (`TextureBinding::texture` indexes this).
+    pub textures: Vec<Arc<crate::texture::Texture>>,
 }
 
 impl Scene {
@@ -99,15 +101,21 @@ impl Attenuation {
 }
 
 /// A light in world space (OpenGL semantics, seed 001). `color` is the light's intensity
-/// `I_l`, used for both its diffuse and specular contributions.
+/// `I_l`, used for both its diffuse and specular contributions. `shadow`, when set, makes the
+/// light cast shadows (seed 001's `S_i` term) through a shadow map with those settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Light {
     /// Infinitely far away; `direction` is the unit direction the light travels in.
-    Directional { direction: Vec3, color: Vec3 },
+    Directional {
+        direction: Vec3,
+        color: Vec3,
+        shadow: Option<ShadowSettings>,
+    },
     Point {
         position: DVec3,
         color: Vec3,
         attenuation: Attenuation,
+        shadow: Option<ShadowSettings>,
     },
     Spot {
         position: DVec3,
@@ -119,7 +127,42 @@ pub enum Light {
         /// Falloff `max(-L·D, 0)^exponent` inside the cone.
         exponent: f32,
         attenuation: Attenuation,
+        shadow: Option<ShadowSettings>,
     },
+}
+
+impl Light {
+    pub fn shadow(&self) -> Option<ShadowSettings> {
+        match *self {
+            Light::Directional { shadow, .. } | Light::Point { shadow, .. } | Light::Spot { shadow, .. } => {
+                shadow
+            }
+        }
+    }
+}
+
+/// How a light's shadow map is made and read.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShadowSettings {
+    /// Texels along each side of the map (of each of the six faces for a point light).
+    pub resolution: u32,
+    /// Normal-offset bias, in texels: before the depth test the shaded point is moved along its
+    /// normal by the filter's reach (`filter_radius + ½` texels, which clears the filter
+    /// footprint on any slope) plus this many shadow-map texels (for the tessellation and
+    /// rasterization error). This removes shadow acne without the peter-panning of a large
+    /// constant depth offset.
+    pub bias: f32,
+    /// Percentage-closer filtering radius in texels: the test is done on a (2r+1)² block and the
+    /// share that is lit is the light's visibility, softening the edge. 0 = a hard edge.
+    pub filter_radius: u32,
+}
+
+impl ShadowSettings {
+    pub const DEFAULT: ShadowSettings = ShadowSettings {
+        resolution: 2048,
+        bias: 1.0,
+        filter_radius: 1,
+    };
 }
 
 /// How a surface reflects light: the coefficients of the seeds' Phong equation.
@@ -136,6 +179,33 @@ pub struct Material {
     /// `k_e`, added whatever the lights.
     pub emission: Vec3,
     pub model: LightingModel,
+    /// Textures that modulate the coefficients (seeds 000 and 004: `k_a` and `k_d`) and perturb
+    /// the normal.
+    pub textures: MaterialTextures,
+}
+
+/// The textures of a material; each multiplies or replaces one input of the lighting.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct MaterialTextures {
+    /// Multiplies `k_d` (MTL `map_Kd`, glTF `baseColorTexture`).
+    pub diffuse: Option<TextureBinding>,
+    /// Multiplies `k_a` (MTL `map_Ka`); when absent, the diffuse texture multiplies `k_a` too.
+    pub ambient: Option<TextureBinding>,
+    /// A tangent-space normal map (glTF `normalTexture`).
+    pub normal: Option<TextureBinding>,
+}
+
+/// One texture used by a material: which, through which UV set, sampled how.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TextureBinding {
+    /// Index into the texture list of whatever owns the material (`Mesh::textures` for a mesh's
+    /// materials, `Scene::textures` for a scene's).
+    pub texture: u32,
+    /// 0 for `Mesh::uvs`, 1 for `Mesh::uvs1`.
+    pub uv_set: u8,
+    pub sampler: crate::texture::Sampler,
+    /// Normal maps: glTF's `normalTexture.scale`, which scales the map's X and Y. 1 otherwise.
+    pub scale: f32,
 }
 
 /// The specular term (and whether there is lighting at all).

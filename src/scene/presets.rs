@@ -63,6 +63,7 @@ impl MaterialRecipe {
             shininess: self.shininess,
             emission: self.emission,
             model: self.model,
+            textures: Default::default(),
         };
         if let LightingModel::CookTorrance(_) = self.model {
             let base = material.diffuse;
@@ -290,6 +291,7 @@ mod tests {
                 shininess: 76.8,
                 emission: Vec3::ZERO,
                 model: LightingModel::Phong,
+                textures: Default::default(),
             },
         );
         check(
@@ -301,6 +303,7 @@ mod tests {
                 shininess: 32.0,
                 emission: Vec3::ZERO,
                 model: LightingModel::Phong,
+                textures: Default::default(),
             },
         );
         assert_eq!(OPENGL_TABLE.len(), 12);

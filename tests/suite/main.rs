@@ -1,12 +1,20 @@
 //! lampshade's integration tests, one binary (it links the library once):
 //! - `render`: the rasterizer's contract on scenes built in code;
+//! - `check`: `lampshade check` on small suites (verdicts, exit codes, bless, shards, reports);
 //! - `cli`: the command line on good and bad scene files (`tests/bad-scenes/`);
-//! - `golden`: every bundled scene against its reference image (`scenes/refs/`).
+//! - `golden`: every bundled scene against its reference image (`scenes/refs/`), through the
+//!   library behind `lampshade check`;
+//! - `watch`: `lampshade watch` as a process on a temporary folder (save styles, includes, meshes,
+//!   errors and recovery, Ctrl-C, the preview server);
+//! - `watch_browser`: the preview page in headless Chromium (skipped without Chromium).
 
+mod check;
 mod cli;
 mod golden;
 mod loading;
 mod render;
+mod watch;
+mod watch_browser;
 
 use std::path::{Path, PathBuf};
 

@@ -8,8 +8,8 @@ use lampshade::mesh::Mesh;
 use lampshade::render::raster::{PixelRect, SamplePattern, for_each_covered_pixel, for_each_covered_sample};
 use lampshade::render::{FrameBuffer, RenderOptions, geometry::build_frame, render};
 use lampshade::scene::{
-    BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Material, NormalInterpolation,
-    Object, Projection, Scene, Shading,
+    BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Material, MaterialTextures,
+    NormalInterpolation, Object, Projection, Scene, Shading,
 };
 
 const UNLIT_WHITE: Material = Material {
@@ -19,6 +19,11 @@ const UNLIT_WHITE: Material = Material {
     shininess: 1.0,
     emission: Vec3::ZERO,
     model: LightingModel::Unlit,
+    textures: MaterialTextures {
+        diffuse: None,
+        ambient: None,
+        normal: None,
+    },
 };
 
 fn object(mesh: Mesh, material: Material, shading: Shading) -> Object {
@@ -56,6 +61,7 @@ fn pixel_aligned_scene(width: u32, height: u32, objects: Vec<Object>) -> Scene {
             },
         },
         ambient_light: Vec3::ZERO,
+        textures: Vec::new(),
         lights: vec![],
         objects,
     }
@@ -64,7 +70,7 @@ fn pixel_aligned_scene(width: u32, height: u32, objects: Vec<Object>) -> Scene {
 /// How many triangles cover each pixel centre.
 fn coverage_counts(scene: &Scene) -> Vec<u32> {
     let (width, height) = (scene.image.width, scene.image.height);
-    let frame = build_frame(scene, SamplePattern::SINGLE, None);
+    let frame = build_frame(scene, SamplePattern::SINGLE, None, Vec::new());
     let rect = PixelRect {
         x0: 0,
         y0: 0,
@@ -157,7 +163,7 @@ fn every_sample_of_every_pattern_is_covered_exactly_once() {
         let pattern = SamplePattern::new(samples).unwrap();
         let mesh = jittered_grid(24, -3.0, 67.0, 0.2, samples);
         let scene = pixel_aligned_scene(64, 48, vec![object(mesh, UNLIT_WHITE, Shading::Flat)]);
-        let frame = build_frame(&scene, pattern, None);
+        let frame = build_frame(&scene, pattern, None, Vec::new());
         let rect = PixelRect {
             x0: 0,
             y0: 0,
@@ -274,6 +280,7 @@ fn a_floor_passing_behind_the_camera_renders_only_its_visible_part() {
         },
         camera: camera_at_origin(0.1),
         ambient_light: Vec3::ZERO,
+        textures: Vec::new(),
         lights: vec![],
         objects: vec![object(floor, UNLIT_WHITE, Shading::Flat)],
     };
@@ -321,9 +328,11 @@ fn attributes_are_interpolated_perspective_correctly() {
         },
         camera: camera_at_origin(0.1),
         ambient_light: Vec3::ZERO,
+        textures: Vec::new(),
         lights: vec![Light::Directional {
             direction: -Vec3::Z,
             color: Vec3::ONE,
+            shadow: None,
         }],
         objects: vec![object(strip, lambert, Shading::Gouraud)],
     };
@@ -400,10 +409,12 @@ fn busy_scene() -> Scene {
             },
         },
         ambient_light: Vec3::splat(0.3),
+        textures: Vec::new(),
         lights: vec![
             Light::Directional {
                 direction: Vec3::new(-1.0, -1.0, -1.0),
                 color: Vec3::ONE,
+                shadow: None,
             },
             Light::Point {
                 position: DVec3::new(2.0, 2.0, 2.0),
@@ -413,6 +424,7 @@ fn busy_scene() -> Scene {
                     linear: 0.1,
                     quadratic: 0.05,
                 },
+                shadow: None,
             },
         ],
         objects,
@@ -498,15 +510,18 @@ fn square_seen_from_behind(style: impl Fn(&mut Object)) -> FrameBuffer {
             },
         },
         ambient_light: Vec3::ONE,
+        textures: Vec::new(),
         lights: vec![
             // Red from the viewer's side (−Z), blue from the other side (+Z).
             Light::Directional {
                 direction: Vec3::Z,
                 color: Vec3::new(1.0, 0.0, 0.0),
+                shadow: None,
             },
             Light::Directional {
                 direction: -Vec3::Z,
                 color: Vec3::new(0.0, 0.0, 1.0),
+                shadow: None,
             },
         ],
         objects: vec![square],
@@ -550,6 +565,7 @@ fn constant_shading_gives_one_colour_per_object_and_components_select_terms() {
         shininess: 10.0,
         emission: Vec3::ZERO,
         model: LightingModel::Phong,
+        textures: MaterialTextures::default(),
     };
     let scene_with = |configure: &dyn Fn(&mut Object)| {
         let mut o = object(sphere.clone(), material, Shading::Phong);
@@ -572,9 +588,11 @@ fn constant_shading_gives_one_colour_per_object_and_components_select_terms() {
                 },
             },
             ambient_light: Vec3::ONE,
+            textures: Vec::new(),
             lights: vec![Light::Directional {
                 direction: Vec3::new(-0.3, -0.4, -1.0),
                 color: Vec3::ONE,
+                shadow: None,
             }],
             objects: vec![o],
         }
@@ -616,4 +634,85 @@ fn constant_shading_gives_one_colour_per_object_and_components_select_terms() {
             }
         }
     }
+}
+
+/// A floor seen from straight above (8 pixels per unit), a cube floating over it, and a
+/// directional light at 45° from +X: the cube's shadow falls on x ∈ [1, 3].
+fn shadow_scene(shadow: Option<lampshade::scene::ShadowSettings>) -> Scene {
+    let lambert = Material {
+        model: LightingModel::Lambert,
+        ambient: Vec3::splat(0.2),
+        ..UNLIT_WHITE
+    };
+    let mut floor = object(lampshade::mesh::primitives::plane(), lambert, Shading::Phong);
+    floor.transform = DMat4::from_scale(DVec3::splat(4.0));
+    let mut cube = object(lampshade::mesh::primitives::cube(), lambert, Shading::Phong);
+    cube.transform =
+        DMat4::from_translation(DVec3::new(0.0, 2.0, 0.0)) * DMat4::from_scale(DVec3::splat(0.5));
+    Scene {
+        image: ImageSettings {
+            width: 64,
+            height: 64,
+            background: Vec3::ZERO,
+            samples: 1,
+        },
+        camera: Camera {
+            eye: DVec3::new(0.0, 10.0, 0.0),
+            target: DVec3::ZERO,
+            up: DVec3::NEG_Z,
+            projection: Projection::Orthographic {
+                height: 8.0,
+                near: 1.0,
+                far: 20.0,
+            },
+        },
+        ambient_light: Vec3::ONE,
+        textures: Vec::new(),
+        lights: vec![Light::Directional {
+            direction: Vec3::new(1.0, -1.0, 0.0).normalize(),
+            color: Vec3::ONE,
+            shadow,
+        }],
+        objects: vec![floor, cube],
+    }
+}
+
+#[test]
+fn shadows_fall_where_the_geometry_says_and_nowhere_else() {
+    let lit = render(&shadow_scene(None), &RenderOptions::default()).0;
+    let settings = lampshade::scene::ShadowSettings {
+        resolution: 512,
+        bias: 1.0,
+        filter_radius: 1,
+    };
+    let shadowed = render(&shadow_scene(Some(settings)), &RenderOptions::default()).0;
+    let floor_lit = 0.2 + std::f32::consts::FRAC_1_SQRT_2;
+    let mut in_shadow = 0;
+    for y in 0..64u32 {
+        for x in 0..64u32 {
+            let i = (y * 64 + x) as usize;
+            // World coordinates of the pixel centre on the floor.
+            let (wx, wz) = ((x as f32 + 0.5) / 8.0 - 4.0, (y as f32 + 0.5) / 8.0 - 4.0);
+            let under_cube = wx.abs() < 0.55 && wz.abs() < 0.55;
+            let shadow_core = (1.15..2.85).contains(&wx) && wz.abs() < 0.4;
+            let shadow_band = (0.85..3.15).contains(&wx) && wz.abs() < 0.6;
+            if under_cube {
+                continue;
+            }
+            if shadow_core {
+                // Ambient only: the light is blocked.
+                assert!(
+                    (shadowed.color[i].x - 0.2).abs() < 1e-5,
+                    "({wx}, {wz}) should be in shadow: {}",
+                    shadowed.color[i]
+                );
+                in_shadow += 1;
+            } else if !shadow_band {
+                // No acne: everywhere else exactly as without shadows.
+                assert_eq!(shadowed.color[i], lit.color[i], "({wx}, {wz}) is darkened");
+                assert!((lit.color[i].x - floor_lit).abs() < 1e-5);
+            }
+        }
+    }
+    assert!(in_shadow > 60, "{in_shadow}");
 }

@@ -1,0 +1,291 @@
+//! Shadow maps: the seeds' shadow term `S_i` (seed 001), one depth image per shadow-casting light.
+//!
+//! Each map is rendered with the same geometry stage and tiled rasterizer as the image (depth
+//! only: nothing lit, nothing culled), from the light's point of view:
+//! - a directional light looks along its direction with an orthographic projection that just
+//!   contains the bounding sphere of every object;
+//! - a spot light looks down its axis with a perspective projection covering its cone (up to a
+//!   60° cutoff; wider cones use the point-light cube);
+//! - a point light renders six 92° perspective faces, one per axis direction (a cube map; the 2°
+//!   overlap keeps filter footprints inside a face at the seams).
+//!
+//! A surface point is tested against the map like this: it is moved along its normal by `bias`
+//! texels of the map at its distance (normal-offset bias, which removes self-shadowing "acne"
+//! on slopes without the detached shadows, "peter-panning", of a large depth offset), projected
+//! into the light's clip space, and compared with the (2r+1)² nearest texels
+//! (percentage-closer filtering): the share of texels that do not hold a nearer surface is the
+//! light's visibility, between 0 and 1. Points outside a map are lit.
+//!
+//! Depth is reversed (1 at the light's near plane), so "nearer to the light" is "greater".
+//! Everything is computed in the frame's eye-relative space, and the maps are deterministic
+//! like the image.
+
+use std::sync::Arc;
+
+use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
+use rayon::prelude::*;
+
+use crate::render::bin::{TileGrid, bin_triangles};
+use crate::render::geometry::{CameraSetup, build_depth_frame};
+use crate::render::raster::{SamplePattern, rasterize_tile};
+use crate::scene::{Camera, Light, Projection, Scene, ShadowSettings};
+
+/// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
+/// perspective face would need a field of view too wide to keep texels usefully small.
+const MAX_SINGLE_FACE_CUTOFF_DEGREES: f32 = 60.0;
+/// Field of view of each cube face: 90° plus a margin so filtering at a face's edge stays inside.
+const CUBE_FACE_FOV_DEGREES: f64 = 92.0;
+
+/// The depth image of one view from a light.
+#[derive(Debug, Clone, PartialEq)]
+struct ShadowFace {
+    /// From the frame's eye-relative space to this face's clip space.
+    clip_from_frame: Mat4,
+    size: u32,
+    /// Reversed-Z depth of the nearest surface per texel, row-major from the top; −∞ where none.
+    depth: Vec<f32>,
+    /// World size of one texel: at unit distance along `forward` (perspective) or everywhere
+    /// (orthographic).
+    texel_size: f32,
+    perspective: bool,
+    /// Where the light is (perspective) in the frame's eye-relative space, and where it looks.
+    origin: Vec3,
+    forward: Vec3,
+}
+
+/// A light's shadow map: one face, or six for a point light.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShadowMap {
+    faces: Vec<ShadowFace>,
+    settings: ShadowSettings,
+}
+
+impl ShadowMap {
+    /// The share of the light that reaches `position` (eye-relative), whose shading normal is
+    /// `normal`, from the direction `to_light`: 1 lit, 0 in shadow.
+    pub fn visibility(&self, position: Vec3, normal: Vec3, to_light: Vec3) -> f32 {
+        let face = if self.faces.len() == 1 {
+            &self.faces[0]
+        } else {
+            // The cube face whose axis is closest to the direction from the light to the point.
+            let direction = -to_light;
+            let Some(face) = self
+                .faces
+                .iter()
+                .max_by(|a, b| a.forward.dot(direction).total_cmp(&b.forward.dot(direction)))
+            else {
+                return 1.0;
+            };
+            face
+        };
+        face.visibility(position, normal, &self.settings)
+    }
+}
+
+impl ShadowFace {
+    fn visibility(&self, position: Vec3, normal: Vec3, settings: &ShadowSettings) -> f32 {
+        let texel = if self.perspective {
+            self.texel_size * (position - self.origin).dot(self.forward).max(0.0)
+        } else {
+            self.texel_size
+        };
+        // A point `b` above a plane tilted by θ from the light clears every texel within `d` of
+        // it when b > d·sin θ: the filter reaches r + ½ texels (nearest-texel rounding), so the
+        // offset is the filter's reach plus the user's bias, which covers every slope.
+        let reach = settings.filter_radius as f32 + 0.5;
+        let offset = position + normal * ((settings.bias + reach) * texel);
+        let clip = self.clip_from_frame * offset.extend(1.0);
+        if !(clip.w > 0.0) {
+            return 1.0;
+        }
+        let ndc = clip.xyz() / clip.w;
+        if !ndc.is_finite() || ndc.x.abs() > 1.0 || ndc.y.abs() > 1.0 || ndc.z > 1.0 {
+            return 1.0;
+        }
+        let size = self.size as i64;
+        let x = (((ndc.x + 1.0) * 0.5 * self.size as f32) as i64).clamp(0, size - 1);
+        let y = (((1.0 - ndc.y) * 0.5 * self.size as f32) as i64).clamp(0, size - 1);
+        let radius = i64::from(settings.filter_radius);
+        let mut lit = 0u32;
+        let mut total = 0u32;
+        for dy in -radius..=radius {
+            for dx in -radius..=radius {
+                let (tx, ty) = ((x + dx).clamp(0, size - 1), (y + dy).clamp(0, size - 1));
+                let occluder = self.depth[(ty * size + tx) as usize];
+                lit += u32::from(occluder <= ndc.z);
+                total += 1;
+            }
+        }
+        lit as f32 / total as f32
+    }
+}
+
+/// Renders the shadow map of every light that casts shadows (`None` for the others), in the
+/// eye-relative space of a frame whose eye is `frame_eye`.
+pub fn render_shadow_maps(scene: &Scene, frame_eye: DVec3) -> Vec<Option<Arc<ShadowMap>>> {
+    let bounds = world_bounds(scene);
+    scene
+        .lights
+        .iter()
+        .map(|light| {
+            let settings = light.shadow()?;
+            let faces = light_views(light, bounds, settings.resolution)
+                .into_iter()
+                .map(|(camera, size)| render_face(scene, &camera, size, frame_eye))
+                .collect();
+            Some(Arc::new(ShadowMap { faces, settings }))
+        })
+        .collect()
+}
+
+/// A bounding sphere of every object, in world space.
+#[derive(Debug, Clone, Copy)]
+struct Bounds {
+    center: DVec3,
+    radius: f64,
+}
+
+fn world_bounds(scene: &Scene) -> Bounds {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for object in &scene.objects {
+        let Some((min, max)) = object.mesh.bounds() else {
+            continue;
+        };
+        for corner in 0..8 {
+            let pick = |bit: u32, a: f32, b: f32| f64::from(if corner & bit == 0 { a } else { b });
+            let local = DVec3::new(
+                pick(1, min.x, max.x),
+                pick(2, min.y, max.y),
+                pick(4, min.z, max.z),
+            );
+            let world = object.transform.transform_point3(local);
+            lo = lo.min(world);
+            hi = hi.max(world);
+        }
+    }
+    if !(lo.x <= hi.x) {
+        return Bounds {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        };
+    }
+    Bounds {
+        center: (lo + hi) / 2.0,
+        radius: ((hi - lo).length() / 2.0).max(1e-6),
+    }
+}
+
+/// Any unit vector not parallel to `forward`, for a camera's `up`.
+fn up_for(forward: DVec3) -> DVec3 {
+    if forward.y.abs() < 0.9 { DVec3::Y } else { DVec3::Z }
+}
+
+/// The cameras (and map sizes) a light's shadow map is rendered from.
+fn light_views(light: &Light, bounds: Bounds, resolution: u32) -> Vec<(Camera, u32)> {
+    let cube = |position: DVec3| -> Vec<(Camera, u32)> {
+        let reach = (bounds.center - position).length() + bounds.radius;
+        [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z]
+            .into_iter()
+            .map(|axis| {
+                let camera = Camera {
+                    eye: position,
+                    target: position + axis,
+                    up: up_for(axis),
+                    projection: Projection::Perspective {
+                        fov_y_degrees: CUBE_FACE_FOV_DEGREES,
+                        near: (reach * 1e-5).max(1e-6),
+                        far: reach * 1.01 + 1e-6,
+                    },
+                };
+                (camera, (resolution / 2).max(16))
+            })
+            .collect()
+    };
+    match *light {
+        Light::Directional { direction, .. } => {
+            let direction = direction.as_dvec3().normalize_or(DVec3::NEG_Y);
+            let eye = bounds.center - direction * (2.0 * bounds.radius);
+            let camera = Camera {
+                eye,
+                target: bounds.center,
+                up: up_for(direction),
+                projection: Projection::Orthographic {
+                    height: 2.0 * bounds.radius * 1.01,
+                    near: bounds.radius * 0.5,
+                    far: bounds.radius * 3.5,
+                },
+            };
+            vec![(camera, resolution)]
+        }
+        Light::Point { position, .. } => cube(position),
+        Light::Spot {
+            position,
+            direction,
+            cutoff_degrees,
+            ..
+        } => {
+            if cutoff_degrees > MAX_SINGLE_FACE_CUTOFF_DEGREES {
+                return cube(position);
+            }
+            let axis = direction.as_dvec3().normalize_or(DVec3::NEG_Y);
+            let reach = (bounds.center - position).length() + bounds.radius;
+            let camera = Camera {
+                eye: position,
+                target: position + axis,
+                up: up_for(axis),
+                projection: Projection::Perspective {
+                    fov_y_degrees: f64::from(2.0 * cutoff_degrees + 4.0),
+                    near: (reach * 1e-5).max(1e-6),
+                    far: reach * 1.01 + 1e-6,
+                },
+            };
+            vec![(camera, resolution)]
+        }
+    }
+}
+
+/// Renders one face's depth, and its mapping from the frame's eye-relative space.
+fn render_face(scene: &Scene, camera: &Camera, size: u32, frame_eye: DVec3) -> ShadowFace {
+    let frame = build_depth_frame(scene, camera, size);
+    let grid = TileGrid::new(size, size);
+    let bins = bin_triangles(&grid, &frame.raster);
+    let tiles: Vec<_> = (0..grid.count())
+        .into_par_iter()
+        .map(|index| {
+            rasterize_tile(
+                grid.rect(index),
+                SamplePattern::SINGLE,
+                &frame.raster,
+                &bins[index],
+            )
+        })
+        .collect();
+    let mut depth = vec![f32::NEG_INFINITY; size as usize * size as usize];
+    for (index, tile) in tiles.iter().enumerate() {
+        let rect = grid.rect(index);
+        let width = rect.width() as usize;
+        for row in 0..rect.height() as usize {
+            let start = (rect.y0 as usize + row) * size as usize + rect.x0 as usize;
+            depth[start..start + width].copy_from_slice(&tile.depth[row * width..(row + 1) * width]);
+        }
+    }
+    let setup = CameraSetup::new(camera, 1.0);
+    let clip_from_frame = setup.clip_from_world * DMat4::from_translation(frame_eye - camera.eye);
+    let (texel_size, perspective) = match camera.projection {
+        Projection::Perspective { fov_y_degrees, .. } => (
+            (2.0 * (fov_y_degrees.to_radians() / 2.0).tan() / f64::from(size)) as f32,
+            true,
+        ),
+        Projection::Orthographic { height, .. } => ((height / f64::from(size)) as f32, false),
+    };
+    ShadowFace {
+        clip_from_frame: clip_from_frame.as_mat4(),
+        size,
+        depth,
+        texel_size,
+        perspective,
+        origin: (camera.eye - frame_eye).as_vec3(),
+        forward: setup.forward.as_vec3(),
+    }
+}
