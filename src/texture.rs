@@ -522,7 +522,7 @@ mod tests {
     }
 
     #[test]
-    fn encoded_png_round_trips_and_junk_is_an_error() {
+    fn encoded_png_and_jpeg_round_trip_and_junk_is_an_error() {
         let mut png = Vec::new();
         let pixels = image::RgbImage::from_raw(1, 1, vec![255, 188, 0]).unwrap_or_else(|| panic!("size"));
         image::DynamicImage::ImageRgb8(pixels)
@@ -534,6 +534,23 @@ mod tests {
             Vec4::new(1.0, 0.502_886, 0.0, 1.0),
             1e-5,
             "decoded PNG",
+        );
+        // JPEG (lossy: a flat grey survives within a code or two).
+        let mut jpeg = Vec::new();
+        let grey = image::RgbImage::from_pixel(8, 8, image::Rgb([188, 188, 188]));
+        image::DynamicImage::ImageRgb8(grey)
+            .write_to(&mut Cursor::new(&mut jpeg), image::ImageFormat::Jpeg)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let texture = Texture::from_encoded(&jpeg, ColorSpace::Srgb).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            (texture.width(), texture.height(), texture.levels.len()),
+            (8, 8, 4)
+        );
+        check(
+            texture.levels[3].texel(0, 0),
+            Vec4::new(0.502_886, 0.502_886, 0.502_886, 1.0),
+            0.01,
+            "decoded JPEG",
         );
         let junk = Texture::from_encoded(b"not an image at all", ColorSpace::Srgb);
         assert!(junk.is_err_and(|e| e.contains("not a PNG or JPEG")));

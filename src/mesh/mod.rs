@@ -85,7 +85,7 @@ impl Mesh {
         if let Some(i) = self
             .normals
             .iter()
-            .position(|n| !((n.length() - 1.0).abs() < 1e-4))
+            .position(|n| !n.is_finite() || (n.length() - 1.0).abs() >= 1e-4)
         {
             return Err(format!("normal {i} ({}) is not unit", self.normals[i]));
         }

@@ -12,7 +12,7 @@
 //! Vertices are processed in parallel and triangles in fixed-size chunks; the outputs are
 //! concatenated in chunk order, so the result does not depend on the thread count.
 
-use glam::{DMat3, DMat4, DVec3, Mat3, Mat4, Vec3, Vec4, Vec4Swizzles};
+use glam::{DMat3, DMat4, DVec3, Mat3, Mat4, Vec2, Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 
 use std::sync::Arc;
@@ -27,6 +27,7 @@ use crate::scene::{
     BackFaces, Camera, Light, LightingComponent, Material, NormalInterpolation, Object, Projection, Scene,
     Shading,
 };
+use crate::texture::Texture;
 
 /// Triangles per parallel work item: large enough to amortise scheduling, small enough to
 /// balance two to a few dozen cores. Fixed, so that output order never depends on threads.
@@ -40,6 +41,8 @@ pub struct Frame {
     pub triangles: Vec<FrameTriangle>,
     pub raster: Vec<RasterTriangle>,
     pub materials: Vec<Material>,
+    /// Every texture of the frame; the materials' bindings index this.
+    pub textures: Vec<Arc<Texture>>,
     /// One per scene object; `FrameTriangle::object` indexes this.
     pub objects: Vec<ObjectStyle>,
     pub lights: Vec<ShadingLight>,
@@ -60,8 +63,18 @@ pub struct FrameVertex {
     pub position: Vec3,
     /// Unit normal, or zero when the mesh gives none usable.
     pub normal: Vec3,
-    /// Gouraud objects: the vertex's lit colour (front side) for the frame's view.
+    /// Gouraud objects: the vertex's lit colour (front side) for the frame's view; with a
+    /// texture, only the part the texture does not modulate (specular and emission).
     pub color: Vec3,
+    /// Gouraud objects with a texture: the ambient and diffuse part, which the texture
+    /// multiplies per pixel (seeds 000 and 004).
+    pub color_textured: Vec3,
+    pub uv: Vec2,
+    pub uv1: Vec2,
+    /// The mesh's vertex colour (glTF `COLOR_0`), white where there is none: multiplies `k_d`.
+    pub tint: Vec3,
+    /// Unit tangent (eye-relative world axes) and bitangent handedness, for normal maps.
+    pub tangent: Vec4,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -73,8 +86,12 @@ pub struct FrameTriangle {
     pub object: u32,
     /// Unit geometric normal of the front side, zero for a degenerate triangle.
     pub face_normal: Vec3,
-    /// Flat and constant objects: the colour of the side that faces the camera.
+    /// Flat and constant objects: the colour of the side that faces the camera (with a texture:
+    /// its specular and emission part).
     pub flat_color: Vec3,
+    /// Flat objects with a texture: the ambient and diffuse part, multiplied by the texture per
+    /// pixel.
+    pub flat_textured: Vec3,
 }
 
 /// How an object is shaded: the settings the shading stage reads per pixel.
@@ -137,10 +154,31 @@ impl Frame {
         normal: Vec3,
         back_facing: bool,
     ) -> Vec3 {
+        let (textured, rest) = self.light_material(
+            &self.materials[material as usize],
+            style,
+            position,
+            normal,
+            back_facing,
+        );
+        textured + rest
+    }
+
+    /// Lights with an explicit material (coefficients already modulated by textures and vertex
+    /// colours) and returns the selected terms split in two: the ambient and diffuse part, which
+    /// a texture multiplies, and the rest (specular and emission).
+    pub fn light_material(
+        &self,
+        material: &Material,
+        style: &ObjectStyle,
+        position: Vec3,
+        normal: Vec3,
+        back_facing: bool,
+    ) -> (Vec3, Vec3) {
         let unlit = back_facing && style.back_faces == BackFaces::Unlit;
         let normal = style.side_normal(normal, back_facing);
         let terms = illuminate_with_visibility(
-            &self.materials[material as usize],
+            material,
             if unlit { &[] } else { &self.lights },
             self.ambient_light,
             position,
@@ -151,7 +189,28 @@ impl Frame {
                 _ => 1.0,
             },
         );
-        select_component(self.debug_view, style.component, &terms)
+        select_component_split(self.debug_view, style.component, &terms)
+    }
+}
+
+/// [`select_component`], split into (ambient + diffuse, specular + emission): the first part
+/// is what a colour texture multiplies.
+pub fn select_component_split(
+    view: Option<DebugView>,
+    component: LightingComponent,
+    terms: &LightingTerms,
+) -> (Vec3, Vec3) {
+    let component = match view {
+        Some(DebugView::Ambient) => LightingComponent::Ambient,
+        Some(DebugView::Diffuse) => LightingComponent::Diffuse,
+        Some(DebugView::Specular) => LightingComponent::Specular,
+        None | Some(DebugView::Normals) | Some(DebugView::Depth) => component,
+    };
+    match component {
+        LightingComponent::All => (terms.ambient + terms.diffuse, terms.specular + terms.emission),
+        LightingComponent::Ambient => (terms.ambient, Vec3::ZERO),
+        LightingComponent::Diffuse => (terms.diffuse, Vec3::ZERO),
+        LightingComponent::Specular => (Vec3::ZERO, terms.specular),
     }
 }
 
@@ -228,6 +287,7 @@ fn build(
         triangles: Vec::with_capacity(scene.triangle_count()),
         raster: Vec::new(),
         materials: Vec::new(),
+        textures: scene.textures.clone(),
         objects: scene.objects.iter().map(ObjectStyle::of).collect(),
         lights: scene.lights.iter().map(|l| shading_light(l, eye)).collect(),
         ambient_light: scene.ambient_light,
@@ -425,7 +485,22 @@ fn add_object(
     match (&object.material, mesh.materials.is_empty()) {
         (Some(material), _) => frame.materials.push(*material),
         (None, true) => frame.materials.push(default_material()),
-        (None, false) => frame.materials.extend_from_slice(&mesh.materials),
+        (None, false) => {
+            // The mesh's texture bindings index its own list: move them to the frame's.
+            let texture_base = frame.textures.len() as u32;
+            frame.textures.extend(mesh.textures.iter().cloned());
+            frame.materials.extend(mesh.materials.iter().map(|material| {
+                let mut material = *material;
+                let textures = &mut material.textures;
+                for binding in [&mut textures.diffuse, &mut textures.ambient, &mut textures.normal]
+                    .into_iter()
+                    .flatten()
+                {
+                    binding.texture += texture_base;
+                }
+                material
+            }));
+        }
     }
     let material_count = frame.materials.len() as u32 - material_base;
     let uses_mesh_materials = object.material.is_none() && !mesh.materials.is_empty();
@@ -463,15 +538,35 @@ fn add_object(
         .map(|(v, (&p, &n))| {
             let position = transforms.world_from_model.transform_point3(p);
             let normal = (transforms.normal_matrix * n).normalize_or_zero();
-            let color = if frame.lit && style.shading == Shading::Gouraud {
-                frame.light(vertex_materials[v], &style, position, normal, false)
+            let tint = mesh.colors.get(v).map_or(Vec3::ONE, |c| c.truncate());
+            let (color_textured, color) = if frame.lit && style.shading == Shading::Gouraud {
+                let material = tinted(&frame.materials[vertex_materials[v] as usize], tint);
+                let (textured, rest) = frame.light_material(&material, &style, position, normal, false);
+                if has_color_texture(&material) {
+                    (textured, rest)
+                } else {
+                    (Vec3::ZERO, textured + rest)
+                }
             } else {
-                Vec3::ZERO
+                (Vec3::ZERO, Vec3::ZERO)
             };
+            let tangent = mesh.tangents.get(v).map_or(Vec4::ZERO, |t| {
+                let direction = transforms
+                    .world_from_model
+                    .transform_vector3(t.truncate())
+                    .normalize_or_zero();
+                let handedness = if transforms.mirrored { -t.w } else { t.w };
+                direction.extend(handedness)
+            });
             FrameVertex {
                 position,
                 normal,
                 color,
+                color_textured,
+                uv: mesh.uvs.get(v).copied().unwrap_or(Vec2::ZERO),
+                uv1: mesh.uvs1.get(v).copied().unwrap_or(Vec2::ZERO),
+                tint,
+                tangent,
             }
         })
         .collect();
@@ -564,6 +659,7 @@ fn process_triangle(
         object: input.object,
         face_normal,
         flat_color: input.constant_color.unwrap_or(Vec3::ZERO),
+        flat_textured: Vec3::ZERO,
     };
 
     let facing = homogeneous_facing(clip);
@@ -574,7 +670,18 @@ fn process_triangle(
     }
     if frame.lit && style.shading == Shading::Flat {
         let centroid = (p0 + p1 + p2) / 3.0;
-        triangle.flat_color = frame.light(input.material, style, centroid, face_normal, back_facing);
+        let tint = vertices
+            .map(|v| frame.vertices[v as usize].tint)
+            .iter()
+            .sum::<Vec3>()
+            / 3.0;
+        let material = tinted(&frame.materials[input.material as usize], tint);
+        let (textured, rest) = frame.light_material(&material, style, centroid, face_normal, back_facing);
+        if has_color_texture(&material) {
+            (triangle.flat_textured, triangle.flat_color) = (textured, rest);
+        } else {
+            triangle.flat_color = textured + rest;
+        }
     }
 
     let (width, height) = (viewport.width, viewport.height);
@@ -617,6 +724,19 @@ fn process_triangle(
         }
     }
     triangle
+}
+
+/// `material` with its diffuse colour multiplied by a vertex colour (glTF `COLOR_0`).
+pub fn tinted(material: &Material, tint: Vec3) -> Material {
+    Material {
+        diffuse: material.diffuse * tint,
+        ..*material
+    }
+}
+
+/// Whether a texture multiplies the material's ambient or diffuse colour.
+pub fn has_color_texture(material: &Material) -> bool {
+    material.textures.diffuse.is_some() || material.textures.ambient.is_some()
 }
 
 /// The sign of `det[x y w]` of the clip-space corners: positive when the triangle is seen from

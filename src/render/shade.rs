@@ -11,12 +11,12 @@
 //! Back faces are lit from behind with the normal flipped. Gouraud back colours are lit lazily
 //! here, for the few back faces that are actually visible, instead of for every vertex.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 use crate::render::DebugView;
-use crate::render::geometry::Frame;
+use crate::render::geometry::{Frame, FrameVertex, has_color_texture, tinted};
 use crate::render::raster::{NO_TRIANGLE, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_values};
-use crate::scene::{NormalInterpolation, Shading};
+use crate::scene::{NormalInterpolation, Shading, TextureBinding};
 
 /// The shaded pixels of one tile, row-major.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,7 +26,8 @@ pub struct TileImage {
 }
 
 /// The Gouraud colours of the back side of the last back-facing triangle shaded.
-type BackColorCache = Option<(u32, [Vec3; 3])>;
+/// Per vertex: (the part a colour texture multiplies, the rest); see `Frame::light_material`.
+type BackColorCache = Option<(u32, [(Vec3, Vec3); 3])>;
 
 /// Shades every pixel of a tile.
 ///
@@ -139,23 +140,103 @@ fn shade_sample(
         _ => {}
     }
 
+    let material = &frame.materials[triangle.material as usize];
+    let color_texture = material.textures.diffuse;
+    let textured =
+        color_texture.is_some() || material.textures.ambient.is_some() || material.textures.normal.is_some();
+    // Texture footprints: the source weights one pixel to the right and one down (the plane
+    // equation extends past the triangle's edges, so this is valid at its border too).
+    let (weights_dx, weights_dy) = if textured {
+        (
+            source_weights(raster, (at.0 + SUBPIXEL_ONE, at.1)),
+            source_weights(raster, (at.0, at.1 + SUBPIXEL_ONE)),
+        )
+    } else {
+        (weights, weights)
+    };
+    let sample = |binding: &TextureBinding| -> Vec4 {
+        let uv_of = |v: &FrameVertex| if binding.uv_set == 1 { v.uv1 } else { v.uv };
+        let uv_at = |w: Vec3| uv_of(a) * w.x + uv_of(b) * w.y + uv_of(c) * w.z;
+        let uv = uv_at(weights);
+        frame.textures[binding.texture as usize].sample(
+            uv,
+            uv_at(weights_dx) - uv,
+            uv_at(weights_dy) - uv,
+            &binding.sampler,
+        )
+    };
+    let modulation = || color_texture.map_or(Vec3::ONE, |binding| sample(&binding).truncate());
+
     match style.shading {
-        Shading::Flat | Shading::Constant => triangle.flat_color,
-        Shading::Gouraud if !back => interpolate(a.color, b.color, c.color),
-        Shading::Gouraud => {
-            let colors = match *back_colors {
-                Some((source, colors)) if source == raster.source => colors,
-                _ => {
-                    let colors =
-                        [a, b, c].map(|v| frame.light(triangle.material, style, v.position, v.normal, true));
-                    *back_colors = Some((raster.source, colors));
-                    colors
-                }
-            };
-            interpolate(colors[0], colors[1], colors[2])
+        Shading::Flat | Shading::Constant if color_texture.is_some() => {
+            triangle.flat_color + triangle.flat_textured * modulation()
         }
-        Shading::Phong => frame.light(triangle.material, style, position, smooth_normal(), back),
+        Shading::Flat | Shading::Constant => triangle.flat_color,
+        Shading::Gouraud => {
+            let colors = if back {
+                match *back_colors {
+                    Some((source, colors)) if source == raster.source => colors,
+                    _ => {
+                        let colors = [a, b, c].map(|v| {
+                            let vertex_material = tinted(material, v.tint);
+                            let (textured_part, rest) =
+                                frame.light_material(&vertex_material, style, v.position, v.normal, true);
+                            if has_color_texture(&vertex_material) {
+                                (textured_part, rest)
+                            } else {
+                                (Vec3::ZERO, textured_part + rest)
+                            }
+                        });
+                        *back_colors = Some((raster.source, colors));
+                        colors
+                    }
+                }
+            } else {
+                [a, b, c].map(|v| (v.color_textured, v.color))
+            };
+            let rest = interpolate(colors[0].1, colors[1].1, colors[2].1);
+            if color_texture.is_some() || material.textures.ambient.is_some() {
+                rest + interpolate(colors[0].0, colors[1].0, colors[2].0) * modulation()
+            } else {
+                rest
+            }
+        }
+        Shading::Phong => {
+            let mut surface = tinted(material, interpolate(a.tint, b.tint, c.tint));
+            if let Some(binding) = material.textures.diffuse {
+                let texel = sample(&binding).truncate();
+                surface.diffuse *= texel;
+                if material.textures.ambient.is_none() {
+                    surface.ambient *= texel;
+                }
+            }
+            if let Some(binding) = material.textures.ambient {
+                surface.ambient *= sample(&binding).truncate();
+            }
+            let mut normal = smooth_normal();
+            if let Some(binding) = material.textures.normal {
+                let tangent = a.tangent * weights.x + b.tangent * weights.y + c.tangent * weights.z;
+                normal = perturb_normal(normal, tangent, sample(&binding).truncate(), binding.scale);
+            }
+            let (textured_part, rest) = frame.light_material(&surface, style, position, normal, back);
+            textured_part + rest
+        }
     }
+}
+
+/// A tangent-space normal map texel (`rgb` in [0, 1], encoding [−1, 1]) applied to the
+/// interpolated frame: `normalize(T·x·s + B·y·s + N·z)` with `B = (N × T)·w` (glTF's
+/// convention, `s` its `scale`). Without a usable tangent the normal is left as it is.
+pub fn perturb_normal(normal: Vec3, tangent: Vec4, texel: Vec3, scale: f32) -> Vec3 {
+    let t = (tangent.truncate() - normal * normal.dot(tangent.truncate())).normalize_or_zero();
+    if t == Vec3::ZERO || !texel.is_finite() {
+        return normal;
+    }
+    let handedness = if tangent.w < 0.0 { -1.0 } else { 1.0 };
+    let bitangent = normal.cross(t) * handedness;
+    let mapped = texel * 2.0 - Vec3::ONE;
+    let perturbed = t * (mapped.x * scale) + bitangent * (mapped.y * scale) + normal * mapped.z;
+    perturbed.try_normalize().unwrap_or(normal)
 }
 
 /// `v` scaled to unit length; where it has (almost) none, as when the vertex normals of an

@@ -128,6 +128,10 @@ pub struct MaterialFile {
     pub fresnel: Option<RgbFile>,
     /// Cook-Torrance: the microfacet distribution.
     pub distribution: Option<DistributionFile>,
+    /// An image (sRGB) that multiplies the diffuse and ambient colours.
+    pub texture: Option<String>,
+    /// A tangent-space normal map (linear).
+    pub normal_map: Option<String>,
 }
 
 /// `(constant: 1, linear: 0, quadratic: 0)`.

@@ -31,7 +31,9 @@ use crate::scene::presets::{self, DEFAULT_RECIPE, MaterialRecipe};
 use crate::scene::{
     Attenuation, BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Microfacet,
     MicrofacetDistribution, NormalInterpolation, Object, Projection, Scene, Shading, ShadowSettings,
+    TextureBinding,
 };
+use crate::texture::{ColorSpace, Sampler, Texture};
 
 /// Image size when the scene gives none.
 pub const DEFAULT_WIDTH: u32 = 800;
@@ -120,6 +122,8 @@ pub fn load_scene_cached(
         diagnostics: Vec::new(),
         files_read: Vec::new(),
         cache,
+        textures: Vec::new(),
+        texture_paths: HashMap::new(),
     };
     let scene = loader.load(options);
     let (errors, warnings): (Vec<_>, Vec<_>) = loader.diagnostics.into_iter().partition(|d| d.is_error());
@@ -144,6 +148,9 @@ struct Loader<'c> {
     diagnostics: Vec<Diagnostic>,
     files_read: Vec<PathBuf>,
     cache: &'c mut MeshCache,
+    /// Textures of the scene's own materials, and where each came from (to load each once).
+    textures: Vec<Arc<Texture>>,
+    texture_paths: HashMap<(PathBuf, bool), u32>,
 }
 
 /// A material defined in a table: where, so errors can point at it.
@@ -225,7 +232,7 @@ impl Loader<'_> {
             ambient_light: ambient?,
             lights,
             objects,
-            textures: Vec::new(),
+            textures: std::mem::take(&mut self.textures),
         })
     }
 
@@ -667,6 +674,25 @@ impl Loader<'_> {
                 }),
             };
         }
+        for (file, slot, color_space, name) in [
+            (&material.texture, 0, ColorSpace::Srgb, "texture"),
+            (&material.normal_map, 1, ColorSpace::Linear, "normal_map"),
+        ] {
+            let Some(file) = file else { continue };
+            let at_path = field(name);
+            let texture = self.texture(file, color_space, At::new(source, &at_path))?;
+            let binding = Some(TextureBinding {
+                texture,
+                uv_set: 0,
+                sampler: Sampler::default(),
+                scale: 1.0,
+            });
+            if slot == 0 {
+                recipe.textures.diffuse = binding;
+            } else {
+                recipe.textures.normal = binding;
+            }
+        }
         recipe.roughness = roughness.unwrap_or(recipe.roughness);
         recipe.metallic = metallic.unwrap_or(recipe.metallic);
         recipe.fresnel = fresnel.or(recipe.fresnel);
@@ -677,6 +703,48 @@ impl Loader<'_> {
             };
         }
         Some(recipe)
+    }
+
+    /// Loads (once) the texture `file`, relative to the file `at` is in; its index in the
+    /// scene's texture list.
+    fn texture(&mut self, file: &str, color_space: ColorSpace, at: At) -> Option<u32> {
+        let base = self
+            .sources
+            .path(at.source)
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        let path = base.join(file);
+        let key = (path.clone(), color_space == ColorSpace::Srgb);
+        if let Some(&index) = self.texture_paths.get(&key) {
+            return Some(index);
+        }
+        self.files_read.push(path.clone());
+        match Texture::load(&path, color_space) {
+            Ok(texture) => {
+                let index = self.textures.len() as u32;
+                self.textures.push(Arc::new(texture));
+                self.texture_paths.insert(key, index);
+                Some(index)
+            }
+            Err(reason) => {
+                let why = if path.exists() {
+                    reason
+                } else {
+                    "no such file".into()
+                };
+                self.error(
+                    at,
+                    format!("cannot load texture `{}`: {why}", path.display()),
+                    Some("not loaded"),
+                    Some(
+                        "textures are PNG or JPEG images; paths are relative to the file that names them"
+                            .into(),
+                    ),
+                );
+                None
+            }
+        }
     }
 
     fn unknown_material(&mut self, name: &str, at: At, table: &HashMap<String, MaterialDefinition>) {

@@ -16,7 +16,7 @@
 
 use glam::Vec3;
 
-use crate::scene::{LightingModel, Material, Microfacet, MicrofacetDistribution};
+use crate::scene::{LightingModel, Material, MaterialTextures, Microfacet, MicrofacetDistribution};
 
 /// A material before its coefficients are computed: MATLAB-style colour and strengths, and
 /// OpenGL-style explicit coefficients that take precedence where present.
@@ -43,6 +43,8 @@ pub struct MaterialRecipe {
     /// Cook-Torrance only: an explicit `F0`, instead of the one `metallic` implies.
     pub fresnel: Option<Vec3>,
     pub distribution: MicrofacetDistribution,
+    /// Textures (bindings into the scene's texture list).
+    pub textures: MaterialTextures,
 }
 
 /// `F0` of dielectrics (water, plastics, glass: about 4% reflected at normal incidence).
@@ -63,7 +65,7 @@ impl MaterialRecipe {
             shininess: self.shininess,
             emission: self.emission,
             model: self.model,
-            textures: Default::default(),
+            textures: self.textures,
         };
         if let LightingModel::CookTorrance(_) = self.model {
             let base = material.diffuse;
@@ -105,6 +107,11 @@ pub const DEFAULT_RECIPE: MaterialRecipe = MaterialRecipe {
     metallic: 0.0,
     fresnel: None,
     distribution: MicrofacetDistribution::Beckmann,
+    textures: MaterialTextures {
+        diffuse: None,
+        ambient: None,
+        normal: None,
+    },
 };
 
 pub fn default_material() -> Material {

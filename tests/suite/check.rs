@@ -347,7 +347,7 @@ fn a_suite_config_sets_tolerances_per_scene() {
     let output = suite.check(&[]);
     let text = everything(&output);
     assert_eq!(output.status.code(), Some(2), "{text}");
-    assert!(text.contains("lampshade-check.ron:2:10"), "{text}");
+    assert!(text.contains("lampshade-check.ron:2:9"), "{text}");
     assert!(text.contains("no scene was checked"), "{text}");
 }
 

@@ -53,6 +53,7 @@ impl Browser {
                 "--disable-sync",
                 "--remote-debugging-address=127.0.0.1",
                 "--remote-debugging-port=0",
+                "--window-size=640,420",
             ])
             .arg(format!("--user-data-dir={}", profile.path().display()))
             .arg(url)
@@ -103,25 +104,42 @@ impl Browser {
         }
     }
 
-    /// Evaluates `expression` in the page and returns its value.
-    fn evaluate(&mut self, expression: &str) -> Value {
+    /// Calls DevTools method `method` and returns its result.
+    fn call(&mut self, method: &str, params: Value) -> Value {
         self.last_id += 1;
         let id = self.last_id;
-        let call = json!({
-            "id": id,
-            "method": "Runtime.evaluate",
-            "params": { "expression": expression, "returnByValue": true },
-        });
+        let call = json!({ "id": id, "method": method, "params": params });
         self.socket.send(Message::text(call.to_string())).unwrap();
         loop {
             let message = self.socket.read().expect("a DevTools reply");
             let Message::Text(text) = message else { continue };
             let reply: Value = serde_json::from_str(text.as_str()).unwrap();
             if reply["id"] == id {
-                assert!(reply["result"]["exceptionDetails"].is_null(), "{reply}");
-                return reply["result"]["result"]["value"].clone();
+                assert!(reply["error"].is_null(), "{method}: {reply}");
+                return reply["result"].clone();
             }
         }
+    }
+
+    /// Evaluates `expression` in the page and returns its value.
+    fn evaluate(&mut self, expression: &str) -> Value {
+        let result = self.call(
+            "Runtime.evaluate",
+            json!({ "expression": expression, "returnByValue": true }),
+        );
+        assert!(result["exceptionDetails"].is_null(), "{result}");
+        result["result"]["value"].clone()
+    }
+
+    /// Saves a screenshot of the page as `name` in the test's scratch folder under `target/`,
+    /// for a person to look at what the test saw.
+    fn save_screenshot(&mut self, name: &str) {
+        let result = self.call("Page.captureScreenshot", json!({ "format": "png" }));
+        let Some(png) = result["data"].as_str().and_then(decode_base64) else {
+            panic!("no screenshot in {result}");
+        };
+        let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+        std::fs::write(&path, png).unwrap();
     }
 }
 
@@ -158,6 +176,29 @@ impl Drop for Browser {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// Standard base64 (as DevTools sends screenshots); `None` on anything else.
+fn decode_base64(text: &str) -> Option<Vec<u8>> {
+    let mut bytes = Vec::with_capacity(text.len() / 4 * 3);
+    let (mut accumulator, mut bits) = (0u32, 0);
+    for c in text.bytes().filter(|&c| c != b'=') {
+        let value = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => return None,
+        };
+        accumulator = (accumulator << 6) | u32::from(value);
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            bytes.push((accumulator >> bits) as u8);
+        }
+    }
+    Some(bytes)
 }
 
 /// What the page shows: its state, image version, overlay text, and the colour of pixel (PIXEL_X, PIXEL_Y)
@@ -251,12 +292,14 @@ fn the_preview_page_follows_edits_and_shows_errors_over_the_last_good_image() {
         state["image"] != first_version && shows_colour(state, after)
     });
     assert_eq!(folder.image().unwrap(), second);
+    browser.save_screenshot("watch-preview-image.png");
     let second_version = state["image"].clone();
 
     folder.write("scene.ron", "Scene(objects: [(mesh: Sphere(]");
     let last_state = browser.wait_for_page(&probe, "the error overlay", &watch, |state| {
         state["state"] == "error"
     });
+    browser.save_screenshot("watch-preview-error.png");
     let overlay = last_state["overlay"].as_str().unwrap_or_default();
     assert!(overlay.contains("scene.ron:1:"), "overlay: {overlay:?}");
     assert!(
