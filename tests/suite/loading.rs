@@ -193,7 +193,7 @@ fn the_format_reference_examples_load() {
 }
 
 #[test]
-fn every_bundled_scene_loads_without_warnings_except_untextured_gltf() {
+fn every_bundled_scene_loads_without_warnings_except_unsampled_gltf_textures() {
     for scene in crate::ron_files(&repo().join("scenes")) {
         let loaded = load_scene(&scene, &LoadOptions::default()).unwrap();
         for warning in &loaded.warnings {
