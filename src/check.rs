@@ -42,7 +42,7 @@
 
 pub mod compare;
 pub mod config;
-mod console;
+pub mod console;
 pub mod escape;
 pub mod junit;
 pub mod report;

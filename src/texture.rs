@@ -220,34 +220,25 @@ impl Texture {
     /// Decodes a PNG or JPEG image held in memory (a glTF data URI or buffer view, a file's
     /// contents). The format is recognised from the bytes, not from a name or MIME type.
     pub fn from_encoded(bytes: &[u8], color_space: ColorSpace) -> Result<Texture, String> {
-        let reader = image::ImageReader::new(Cursor::new(bytes))
-            .with_guessed_format()
-            .map_err(|error| format!("cannot decode it: {error}"))?;
-        if reader.format().is_none() {
-            return Err("not a PNG or JPEG image (the formats textures can have)".to_string());
-        }
-        // Dimensions come from the header alone: refuse a huge image before decoding it.
+        // The header alone gives the size: refuse a huge image before decoding it. (The
+        // decoders run under `catch_unwind`: a bug in one must not end the render.)
         let (width, height) = catch_unwind(AssertUnwindSafe(|| {
-            image::ImageReader::new(Cursor::new(bytes))
-                .with_guessed_format()
-                .map_err(|error| error.to_string())
-                .and_then(|header| header.into_dimensions().map_err(|error| error.to_string()))
+            image_reader(bytes)?
+                .into_dimensions()
+                .map_err(|error| format!("cannot decode it: {error}"))
         }))
-        .unwrap_or_else(|_| Err("the image decoder gave up on it".to_string()))
-        .map_err(|error| format!("cannot decode it: {error}"))?;
+        .unwrap_or_else(|_| Err(DECODER_PANICKED.to_string()))?;
         if u64::from(width) * u64::from(height) > MAX_TEXELS {
             return Err(format!(
                 "it is {width}×{height}: textures are limited to {MAX_TEXELS} texels (4096×4096); scale it down"
             ));
         }
-        let mut reader = reader;
-        let mut limits = image::Limits::default();
-        limits.max_image_width = Some(width.max(1));
-        limits.max_image_height = Some(height.max(1));
-        reader.limits(limits);
-        let image = catch_unwind(AssertUnwindSafe(|| reader.decode()))
-            .map_err(|_| "cannot decode it: the image decoder gave up on it".to_string())?
-            .map_err(|error| format!("cannot decode it: {error}"))?;
+        let image = catch_unwind(AssertUnwindSafe(|| {
+            image_reader(bytes)?
+                .decode()
+                .map_err(|error| format!("cannot decode it: {error}"))
+        }))
+        .unwrap_or_else(|_| Err(DECODER_PANICKED.to_string()))?;
         Ok(Texture::from_image(&image, color_space))
     }
 
@@ -298,6 +289,21 @@ impl Texture {
             Some(upper) if fraction > 0.0 => near + (bilinear(upper, uv, sampler) - near) * fraction,
             _ => near,
         }
+    }
+}
+
+/// The error of a decoder that panicked.
+const DECODER_PANICKED: &str = "cannot decode it: the image decoder gave up on it";
+
+/// A reader for an encoded PNG or JPEG image, its format recognised from the bytes. `image`'s
+/// default limits stay on (at most 512 MiB allocated while decoding).
+fn image_reader(bytes: &[u8]) -> Result<image::ImageReader<Cursor<&[u8]>>, String> {
+    let reader = image::ImageReader::new(Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|error| format!("cannot decode it: {error}"))?;
+    match reader.format() {
+        Some(_) => Ok(reader),
+        None => Err("not a PNG or JPEG image (the formats textures can have)".to_string()),
     }
 }
 
@@ -556,6 +562,16 @@ mod tests {
         assert!(junk.is_err_and(|e| e.contains("not a PNG or JPEG")));
         let truncated = Texture::from_encoded(&png[..png.len() / 2], ColorSpace::Srgb);
         assert!(truncated.is_err_and(|e| e.starts_with("cannot decode it")));
+    }
+
+    #[test]
+    fn images_beyond_the_texel_limit_are_refused() {
+        let mut png = Vec::new();
+        image::DynamicImage::ImageLuma8(image::GrayImage::new(4097, 4096))
+            .write_to(&mut Cursor::new(&mut png), image::ImageFormat::Png)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let refused = Texture::from_encoded(&png, ColorSpace::Linear);
+        assert!(refused.is_err_and(|e| e.contains("4097×4096") && e.contains("limited")));
     }
 
     #[test]

@@ -58,9 +58,10 @@ use files::{FolderWatches, WatchedFiles};
 use server::PreviewServer;
 
 /// The debounce: long enough to cover the events of one save (a few milliseconds apart),
-/// short enough to stay well inside the 100 ms a change may take to show.
+/// short enough to stay well inside the 100 ms a change may take to show (see [`debounce`]).
 const DEBOUNCE: Debounce = Debounce {
     quiet: Duration::from_millis(50),
+    after_save: Duration::from_millis(15),
     max_delay: Duration::from_millis(500),
 };
 

@@ -41,7 +41,7 @@
 //!    `textures.diffuse` / `textures.ambient` (UV set 0, scale 1, wrap `Repeat`, or
 //!    `ClampToEdge` under the statement's `-clamp on` option). Paths are relative to the MTL
 //!    file that names them. The statement's options (`-bm 1`, `-o u v w`, ...: see
-//!    [`texture_file_name`]) are skipped; what follows them is the file name, spaces
+//!    `texture_file_name`) are skipped; what follows them is the file name, spaces
 //!    included, as `tobj` reads it. On Unix a backslash is read as a folder separator, as
 //!    Windows exporters write them. A texture that is missing or cannot be decoded is a
 //!    warning naming the file, and the material is drawn without it; the file is recorded in

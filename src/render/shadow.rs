@@ -95,7 +95,7 @@ impl ShadowFace {
         let reach = settings.filter_radius as f32 + 0.5;
         let offset = position + normal * ((settings.bias + reach) * texel);
         let clip = self.clip_from_frame * offset.extend(1.0);
-        if !(clip.w > 0.0) {
+        if clip.w.is_nan() || clip.w <= 0.0 {
             return 1.0;
         }
         let ndc = clip.xyz() / clip.w;
@@ -164,7 +164,7 @@ fn world_bounds(scene: &Scene) -> Bounds {
             hi = hi.max(world);
         }
     }
-    if !(lo.x <= hi.x) {
+    if lo.x.is_nan() || lo.x > hi.x {
         return Bounds {
             center: DVec3::ZERO,
             radius: 1.0,

@@ -1064,12 +1064,13 @@ impl Loader<'_> {
             path: path.to_path_buf(),
             crease_angle_bits: crease_angle.to_bits(),
         };
-        let fresh = self.cache.entries.get(&key).filter(|cached| {
-            cached
-                .stamps
-                .iter()
-                .all(|(file, stamp)| modified(file) == *stamp && stamp.is_some())
-        });
+        // Fresh when every file it read is unchanged, and every file it looked for but did not
+        // find (a missing texture) is still missing: creating one makes it stale.
+        let fresh = self
+            .cache
+            .entries
+            .get(&key)
+            .filter(|cached| cached.stamps.iter().all(|(file, stamp)| modified(file) == *stamp));
         let (mesh, files_read, warnings) = match fresh {
             Some(cached) => (
                 cached.mesh.clone(),

@@ -4,7 +4,14 @@
 //! create, several modifies and one or two renames, a delete-and-recreate is a remove then a
 //! create, and some editors write in several chunks. Rendering on the first event would read a
 //! half-written file and flash an error. So changes are collected until the followed files have
-//! been quiet for [`Debounce::quiet`] (the debounce), then handed over as one batch.
+//! been quiet for a while (the debounce), then handed over as one batch.
+//!
+//! How long "a while" is depends on the last event. After one that leaves a file complete (a
+//! write closed, a file renamed into place: how nearly every save ends) only
+//! [`Debounce::after_save`] is waited, enough for the rest of a multi-file save or a metadata
+//! touch; after any other event (a file truncated, half written, removed) the full
+//! [`Debounce::quiet`]. A flat 50 ms would be simpler, but it is half of the 100 ms a change may
+//! take to show, and the render of a 130,000-triangle scene needs most of the rest.
 //!
 //! Events are stamped when notify delivers them, and the quiet period is measured between those
 //! stamps, not from when the loop gets round to reading them. So a save made while a render was
@@ -40,8 +47,10 @@ pub enum Signal {
 /// How long to wait before a batch of changes is rendered.
 #[derive(Debug, Clone, Copy)]
 pub struct Debounce {
-    /// Render once the followed files have had no event for this long.
+    /// Render once the followed files have had no event for this long...
     pub quiet: Duration,
+    /// ... or this long, when the last event left a file complete.
+    pub after_save: Duration,
     /// ... or once this long has passed since the first change, whatever is still arriving.
     pub max_delay: Duration,
 }
@@ -67,7 +76,8 @@ pub fn wait_for_changes(
     on_error: &mut dyn FnMut(notify::Error),
 ) -> Option<Changes> {
     let mut pending: Option<Changes> = None;
-    let mut last_seen = Instant::now();
+    // When the batch may be rendered if nothing else comes (last event + its quiet period).
+    let mut settled_at = Instant::now();
     loop {
         let signal = match &pending {
             None => signals.recv().ok()?,
@@ -82,7 +92,7 @@ pub fn wait_for_changes(
                     Ok(signal) => signal,
                     Err(TryRecvError::Disconnected) => return None,
                     Err(TryRecvError::Empty) => {
-                        let deadline = (last_seen + timing.quiet).min(cut_off);
+                        let deadline = settled_at.min(cut_off);
                         let now = Instant::now();
                         if now >= deadline {
                             return pending;
@@ -106,11 +116,16 @@ pub fn wait_for_changes(
                 if changed.is_empty() {
                     continue;
                 }
-                last_seen = last_seen.max(at);
+                let quiet = if files.completes_a_save(&event) {
+                    timing.after_save
+                } else {
+                    timing.quiet
+                };
+                // Events arrive in order, so this is the latest event's settling time.
+                settled_at = at + quiet;
                 match &mut pending {
                     Some(changes) => changes.files.extend(changed),
                     None => {
-                        last_seen = at;
                         pending = Some(Changes {
                             files: changed,
                             first_seen: at,
@@ -125,12 +140,13 @@ pub fn wait_for_changes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use notify::event::{DataChange, EventKind, ModifyKind};
+    use notify::event::{AccessKind, AccessMode, DataChange, EventKind, ModifyKind};
     use std::path::Path;
     use std::sync::mpsc::{Sender, channel};
 
     const TIMING: Debounce = Debounce {
         quiet: Duration::from_millis(50),
+        after_save: Duration::from_millis(10),
         max_delay: Duration::from_millis(400),
     };
 
@@ -190,6 +206,31 @@ mod tests {
         let changes = wait_for_changes(&receiver, &files, TIMING, &mut no_errors).unwrap();
         assert!(now.elapsed() >= TIMING.quiet);
         assert_eq!(changes.files.len(), 1);
+    }
+
+    #[test]
+    fn a_closed_write_settles_without_the_full_quiet_period() {
+        let (_temporary, dir, files, sender, receiver) = setup();
+        let scene = dir.join("scene.ron");
+        // A quiet period far longer than the test may take: only the short wait can end it.
+        let timing = Debounce {
+            quiet: Duration::from_secs(600),
+            after_save: Duration::from_millis(1),
+            max_delay: Duration::from_secs(1200),
+        };
+        let now = Instant::now();
+        sender.send(modified(&scene, now)).unwrap();
+        let closed = notify::Event::new(EventKind::Access(AccessKind::Close(AccessMode::Write)))
+            .add_path(scene.clone());
+        sender
+            .send(Signal::FileSystem {
+                event: Ok(closed),
+                at: now,
+            })
+            .unwrap();
+        let changes = wait_for_changes(&receiver, &files, timing, &mut no_errors).unwrap();
+        assert!(now.elapsed() < Duration::from_secs(60));
+        assert_eq!(changes.files, [scene].into());
     }
 
     #[test]

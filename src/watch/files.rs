@@ -39,7 +39,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::OsStr;
 use std::path::{Component, Path, PathBuf};
 
-use notify::event::{AccessKind, AccessMode, EventKind};
+use notify::event::{AccessKind, AccessMode, EventKind, ModifyKind, RenameMode};
 use notify::{RecommendedWatcher, RecursiveMode, Watcher};
 
 /// Prefix and suffix of the temporary file `output::write_atomically` writes beside an output
@@ -195,6 +195,21 @@ impl WatchedFiles {
         changed
     }
 
+    /// Whether `event` leaves a followed file complete: a write to it was closed, or a file was
+    /// renamed into its place. Most saves end with one of these; what may follow (a metadata
+    /// touch, the next file of a multi-file save) comes within milliseconds.
+    pub fn completes_a_save(&self, event: &notify::Event) -> bool {
+        let completed = match event.kind {
+            EventKind::Access(AccessKind::Close(AccessMode::Write))
+            | EventKind::Modify(ModifyKind::Name(RenameMode::To)) => event.paths.first(),
+            // `[from, to]`: only the destination is complete (renaming a followed file *away*,
+            // as vim does with its backup, is the start of a save, not its end).
+            EventKind::Modify(ModifyKind::Name(RenameMode::Both)) => event.paths.get(1),
+            _ => None,
+        };
+        completed.is_some_and(|path| !self.is_our_output(path) && self.files.contains_key(path))
+    }
+
     fn is_our_output(&self, path: &Path) -> bool {
         let Some(output) = &self.output else { return false };
         if path == output.key {
@@ -322,7 +337,7 @@ impl FolderWatches {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use notify::event::{CreateKind, DataChange, ModifyKind, RemoveKind, RenameMode};
+    use notify::event::{CreateKind, DataChange, RemoveKind};
 
     fn event(kind: EventKind, paths: &[&Path]) -> notify::Event {
         let mut event = notify::Event::new(kind);
@@ -393,6 +408,38 @@ mod tests {
         assert_eq!(files.changed_by(&away), [scene.clone()].into());
         let removed = event(EventKind::Remove(RemoveKind::File), &[&scene]);
         assert_eq!(files.changed_by(&removed), [scene].into());
+    }
+
+    #[test]
+    fn closing_a_write_or_renaming_into_place_completes_a_save_and_nothing_else_does() {
+        let (_temporary, dir) = folder();
+        let scene = dir.join("scene.ron");
+        let backup = dir.join("scene.ron~");
+        let mut files = WatchedFiles::new(&dir.join("scene.png"));
+        files.follow([scene.as_path()]);
+        let closed = event(EventKind::Access(AccessKind::Close(AccessMode::Write)), &[&scene]);
+        let renamed_in = event(EventKind::Modify(ModifyKind::Name(RenameMode::To)), &[&scene]);
+        let swapped_in = event(
+            EventKind::Modify(ModifyKind::Name(RenameMode::Both)),
+            &[&backup, &scene],
+        );
+        assert!(files.completes_a_save(&closed));
+        assert!(files.completes_a_save(&renamed_in));
+        assert!(files.completes_a_save(&swapped_in));
+
+        let renamed_away = event(
+            EventKind::Modify(ModifyKind::Name(RenameMode::Both)),
+            &[&scene, &backup],
+        );
+        let created = event(EventKind::Create(CreateKind::File), &[&scene]);
+        let other_closed = event(
+            EventKind::Access(AccessKind::Close(AccessMode::Write)),
+            &[&backup],
+        );
+        assert!(!files.completes_a_save(&renamed_away));
+        assert!(!files.completes_a_save(&event(modified(), &[&scene])));
+        assert!(!files.completes_a_save(&created));
+        assert!(!files.completes_a_save(&other_closed));
     }
 
     #[test]
