@@ -5,7 +5,7 @@
 //!          ┌─────────────────────────────────────────────────────────────────────┐
 //!          ▼                                                                     │
 //! notify events ──► wait_for_changes ──► build: pipeline::render_scene_file ──► write PNG ──► status line
-//! Ctrl-C            (quiet 50 ms)               (persistent MeshCache)          (atomic)      (+ preview)
+//! Ctrl-C            (debounce)                  (persistent MeshCache)          (atomic)      (+ preview)
 //!                                                      │                                     │
 //!                                                      └─► follow exactly the files read ───┘
 //! ```
@@ -15,9 +15,9 @@
 //!   [`MeshCache`] kept across builds, so a mesh whose files have not changed is not read again:
 //!   editing a light in a scene with a million-triangle mesh costs the light, not the mesh.
 //! - The files followed are exactly those the last build read, whether it succeeded or failed,
-//!   missing ones included ([`files`]): an error in an include is fixed by editing the include,
+//!   missing ones included (`watch::files`): an error in an include is fixed by editing the include,
 //!   and a file named before it exists is picked up when it is created.
-//! - Bursts of events are debounced by a quiet period ([`debounce`]); changes made during a render
+//! - Bursts of events are debounced by a quiet period (`watch::debounce`); changes made during a render
 //!   are collected into the next one, which starts as soon as the current one ends.
 //! - A failed build prints its diagnostics, leaves the last good image untouched (the image is
 //!   only ever replaced by a complete new one, atomically) and waits for the next save. A panic
@@ -28,13 +28,13 @@
 //!   stderr, like `render`'s.
 //! - Ctrl-C (or SIGTERM) stops the loop after the current build and exits with 0; a second
 //!   Ctrl-C exits at once.
-//! - `--serve` adds the browser preview ([`server`]).
+//! - `--serve` adds the browser preview (`watch::server`).
 //!
 //! Rejected: re-running the whole `render` command per change (re-reads every mesh); a loop that
 //! polls modification times (latency or CPU, and misses a file replaced within one tick);
 //! rendering in a background thread that a new save cancels (the renderer has no cancellation
-//! points, and at the scene sizes hand-written files reach, finishing the current render and
-//! starting the next at once is as fast as abandoning it).
+//! points, and hand-written scenes render in tens of milliseconds: finishing the current render
+//! costs little, and its image is a step closer to what the user is typing).
 
 mod debounce;
 mod files;
@@ -58,7 +58,7 @@ use files::{FolderWatches, WatchedFiles};
 use server::PreviewServer;
 
 /// The debounce: long enough to cover the events of one save (a few milliseconds apart),
-/// short enough to stay well inside the 100 ms a change may take to show (see [`debounce`]).
+/// short enough to stay well inside the 100 ms a change may take to show (see `watch::debounce`).
 const DEBOUNCE: Debounce = Debounce {
     quiet: Duration::from_millis(50),
     after_save: Duration::from_millis(15),

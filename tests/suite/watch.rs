@@ -466,6 +466,7 @@ fn a_mesh_in_a_folder_that_does_not_exist_yet_is_picked_up() {
     expect_new_image(&watch, &folder, &[]);
 }
 
+#[cfg(unix)]
 #[test]
 fn ctrl_c_stops_the_watch_cleanly() {
     let folder = SceneFolder::new();
