@@ -311,11 +311,12 @@ fn timings_table(
         .filter(|(_, result)| !matches!(result.status, SceneStatus::NotRun))
         .collect();
     let mut out = format!(
-        "timings: {} scenes in {:.3} s wall ({:.1} scenes/s) on {workers} worker threads; \
+        "timings: {} scenes in {:.3} s wall ({:.1} scenes/s) on {workers} worker {}; \
          finding the suite took {:.1} ms\n",
         ran.len(),
         elapsed.as_secs_f64(),
         ran.len() as f64 / elapsed.as_secs_f64().max(1e-9),
+        if workers == 1 { "thread" } else { "threads" },
         discovery.as_secs_f64() * 1000.0
     );
     let mut totals = runner::PhaseTimes::default();

@@ -46,6 +46,18 @@
 //!   primitive has no `TANGENT`, tangents are computed from the final positions, normals and
 //!   the normal map's UV set ([`tangents::compute_tangents`]), as the glTF specification asks.
 //!
+//! * **Lights and cameras.** Every node instance of the drawn scene with a
+//!   `KHR_lights_punctual` light or a `camera` gives an [`ImportedLight`] or
+//!   [`ImportedCamera`] in [`LoadedMesh::lights`] / [`LoadedMesh::cameras`], placed by the
+//!   node's world matrix like the positions: position = the node's origin, direction = its
+//!   −Z (lights travel and cameras look that way), camera up = its +Y, all renormalised.
+//!   Spot cone angles are converted from the file's radians to degrees; `znear`, `zfar` and
+//!   `ymag` are scaled by how much the node stretches −Z and +Y (a viewer using the node's
+//!   inverse as its view matrix sees the same). A light or camera whose values are not finite,
+//!   or a camera whose projection cannot be used, is left out with a warning; a light with a
+//!   `range` gets a warning that the range is not applied. How they become scene lights:
+//!   [`ImportedLight::to_light`].
+//!
 //! # Textures
 //!
 //! `baseColorTexture` is decoded as sRGB and bound to `textures.diffuse`; `normalTexture` as
@@ -95,13 +107,16 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
 use super::normals::VertexAttributes;
-use super::{LoadedMesh, Mesh, MeshError, MeshOptions, io_error_text, normals, tangents};
+use super::{
+    ImportedCamera, ImportedLight, ImportedLightKind, ImportedProjection, LoadedMesh, Mesh, MeshError,
+    MeshOptions, io_error_text, normals, tangents,
+};
 use crate::scene::{LightingModel, Material, Microfacet, MicrofacetDistribution, TextureBinding};
 use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 
 /// Required extensions a file may list and still load: both are understood by the `gltf`
 /// crate as built here, and neither changes the geometry (`KHR_lights_punctual` adds lights,
-/// which are not part of a mesh and are ignored).
+/// returned in [`LoadedMesh::lights`]).
 const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] = ["KHR_materials_emissive_strength", "KHR_lights_punctual"];
 
 /// The Blinn-Phong exponent equivalent to a glTF perceptual roughness (clamped to [0, 1]):
@@ -192,10 +207,33 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         missing_uv_sets: Vec::new(),
         warnings: Vec::new(),
     };
+    let mut lights = Vec::new();
+    let mut cameras = Vec::new();
+    let mut placement_warnings = Vec::new();
     for (node, world) in scene_instances(&document).map_err(fail)? {
         if let Some(mesh) = node.mesh() {
             for primitive in mesh.primitives() {
                 baker.bake(&mesh, &primitive, world).map_err(fail)?;
+            }
+        }
+        if let Some(light) = node.light() {
+            match imported_light(&light, world) {
+                Some(light) => lights.push(light),
+                None => placement_warnings.push(format!(
+                    "light {} (node {}) has a non-finite colour, intensity or placement and is ignored",
+                    light.index(),
+                    node.index()
+                )),
+            }
+        }
+        if let Some(camera) = node.camera() {
+            match imported_camera(&camera, node.name(), world) {
+                Some(camera) => cameras.push(camera),
+                None => placement_warnings.push(format!(
+                    "camera {} (node {}) has non-finite or invalid settings or placement and cannot be used",
+                    camera.index(),
+                    node.index()
+                )),
             }
         }
     }
@@ -221,6 +259,18 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
                 .map(|(mesh, primitive)| format!("{mesh}, {primitive}"))
                 .collect::<Vec<_>>()
                 .join("; ")
+        ));
+    }
+    warnings.extend(placement_warnings);
+    let ranged: Vec<String> = lights
+        .iter()
+        .filter(|light| light.range.is_some())
+        .map(|light| light.index.to_string())
+        .collect();
+    if !ranged.is_empty() {
+        warnings.push(format!(
+            "lights {} have a `range`, which is not applied: they fall off as 1/d² everywhere",
+            ranged.join(", ")
         ));
     }
     if repaired_normals > 0 {
@@ -277,6 +327,103 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         mesh,
         files_read,
         warnings,
+        lights,
+        cameras,
+    })
+}
+
+/// A `KHR_lights_punctual` light at a node with world matrix `world`; `None` when something
+/// is not finite. Negative colours or intensities (invalid glTF) are taken as 0.
+fn imported_light(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> Option<ImportedLight> {
+    use gltf::khr_lights_punctual::Kind;
+    let color = Vec3::from(light.color()).max(Vec3::ZERO) * light.intensity().max(0.0);
+    let kind = match light.kind() {
+        Kind::Directional => ImportedLightKind::Directional,
+        Kind::Point => ImportedLightKind::Point,
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
+            let outer = outer_cone_angle.to_degrees().clamp(0.0, 90.0);
+            ImportedLightKind::Spot {
+                inner_cone_degrees: inner_cone_angle.to_degrees().clamp(0.0, outer),
+                outer_cone_degrees: outer,
+            }
+        }
+    };
+    let position = world.transform_point3(DVec3::ZERO);
+    // A node that scales to nothing keeps glTF's own −Z.
+    let direction = world
+        .transform_vector3(DVec3::NEG_Z)
+        .try_normalize()
+        .unwrap_or(DVec3::NEG_Z);
+    let finite = color.is_finite()
+        && position.is_finite()
+        && match kind {
+            ImportedLightKind::Spot {
+                inner_cone_degrees,
+                outer_cone_degrees,
+            } => inner_cone_degrees.is_finite() && outer_cone_degrees.is_finite(),
+            _ => true,
+        };
+    finite.then(|| ImportedLight {
+        name: light.name().map(str::to_owned),
+        index: light.index(),
+        kind,
+        color,
+        position,
+        direction,
+        range: light.range().filter(|range| range.is_finite() && *range > 0.0),
+    })
+}
+
+/// A camera at a node with world matrix `world`: the eye at the node's origin looking down its
+/// −Z with +Y up; `zfar`, `znear` and `ymag` scaled by how much the node stretches the view
+/// and up directions (as a viewer whose view matrix is the node's inverse sees it). `None`
+/// when the placement or the projection cannot make a camera (not finite, `znear ≤ 0`,
+/// `zfar ≤ znear`, a field of view outside (0°, 180°), `ymag = 0`, or a node that flattens
+/// the view or up direction or makes them parallel).
+fn imported_camera(camera: &gltf::Camera, node_name: Option<&str>, world: DMat4) -> Option<ImportedCamera> {
+    let eye = world.transform_point3(DVec3::ZERO);
+    let forward = world.transform_vector3(DVec3::NEG_Z);
+    let up = world.transform_vector3(DVec3::Y);
+    let (depth_scale, height_scale) = (forward.length(), up.length());
+    let (forward, up) = (forward.try_normalize()?, up.try_normalize()?);
+    if !eye.is_finite() || forward.cross(up).length() < 1e-9 {
+        return None;
+    }
+    let projection = match camera.projection() {
+        gltf::camera::Projection::Perspective(perspective) => {
+            let fov_y_degrees = f64::from(perspective.yfov()).to_degrees();
+            let near = f64::from(perspective.znear()) * depth_scale;
+            let far = perspective.zfar().map(|far| f64::from(far) * depth_scale);
+            let valid = fov_y_degrees > 0.0
+                && fov_y_degrees < 180.0
+                && near > 0.0
+                && near.is_finite()
+                && far.is_none_or(|far| far > near && far.is_finite());
+            valid.then_some(ImportedProjection::Perspective {
+                fov_y_degrees,
+                near,
+                far,
+            })?
+        }
+        gltf::camera::Projection::Orthographic(orthographic) => {
+            let height = 2.0 * f64::from(orthographic.ymag()).abs() * height_scale;
+            let near = f64::from(orthographic.znear()) * depth_scale;
+            let far = f64::from(orthographic.zfar()) * depth_scale;
+            let valid = height > 0.0 && height.is_finite() && near >= 0.0 && far > near && far.is_finite();
+            valid.then_some(ImportedProjection::Orthographic { height, near, far })?
+        }
+    };
+    Some(ImportedCamera {
+        name: camera.name().map(str::to_owned),
+        node_name: node_name.map(str::to_owned),
+        index: camera.index(),
+        eye,
+        forward,
+        up,
+        projection,
     })
 }
 
@@ -1295,6 +1442,110 @@ mod tests {
         // SimpleMeshes: the triangle spans [0, 1]² in XY, and the second node moves it by +1 in x.
         let simple = check_asset("SimpleMeshes/glTF/SimpleMeshes.gltf", 2);
         assert_eq!(simple.mesh.bounds(), Some((Vec3::ZERO, Vec3::new(2.0, 1.0, 0.0))));
+    }
+
+    #[test]
+    fn cameras_sample_gives_both_cameras_in_model_space() {
+        let loaded = check_asset("Cameras/glTF/Cameras.gltf", 2);
+        assert!(loaded.lights.is_empty());
+        assert_eq!(loaded.cameras.len(), 2);
+        for (index, camera) in loaded.cameras.iter().enumerate() {
+            assert_eq!(camera.index, index);
+            assert_eq!(
+                (camera.name.as_deref(), camera.node_name.as_deref()),
+                (None, None)
+            );
+            assert!((camera.eye - DVec3::new(0.5, 0.5, 3.0)).length() < 1e-6);
+            assert_eq!((camera.forward, camera.up), (DVec3::NEG_Z, DVec3::Y));
+        }
+        let ImportedProjection::Perspective {
+            fov_y_degrees,
+            near,
+            far,
+        } = loaded.cameras[0].projection
+        else {
+            panic!("{:?}", loaded.cameras[0])
+        };
+        assert!((fov_y_degrees - 40.107).abs() < 1e-3, "0.7 rad: {fov_y_degrees}");
+        assert!((near - 0.01).abs() < 1e-6 && far == Some(100.0));
+        let ImportedProjection::Orthographic { height, near, far } = loaded.cameras[1].projection else {
+            panic!("{:?}", loaded.cameras[1])
+        };
+        assert!((height - 2.0).abs() < 1e-9 && (near - 0.01).abs() < 1e-6 && far == 100.0);
+        // The Duck's camera hangs under the root node, which scales by 0.01: so do its
+        // position and depth range.
+        let duck = check_asset("Duck/glTF/Duck.gltf", 4212);
+        assert!(duck.lights.is_empty());
+        assert_eq!(duck.cameras.len(), 1);
+        let camera = &duck.cameras[0];
+        assert!(
+            (camera.eye - DVec3::new(4.00113, 4.63264, -4.31078)).length() < 1e-4,
+            "{camera:?}"
+        );
+        let ImportedProjection::Perspective { near, far, .. } = camera.projection else {
+            panic!("{camera:?}")
+        };
+        assert!(
+            (near - 0.01).abs() < 1e-6 && (far.unwrap() - 100.0).abs() < 1e-3,
+            "{camera:?}"
+        );
+    }
+
+    #[test]
+    fn camera_and_light_nodes_follow_the_hierarchy_and_scale_distances() {
+        let dir = scratch_dir();
+        let down = "[-0.70710678, 0, 0, 0.70710678]";
+        let nodes = format!(
+            r#"[{{"mesh": 0, "children": [1]}},
+            {{"translation": [0, 0, 5], "scale": [2, 2, 2], "children": [2, 3]}},
+            {{"name": "Top", "camera": 0, "translation": [0, 3, 0], "rotation": {down}}},
+            {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "rotation": {down}}}]"#
+        );
+        let extra = r#""extensionsUsed": ["KHR_lights_punctual"],
+            "cameras": [{"type": "orthographic", "name": "Plan", "orthographic": {"xmag": 1, "ymag": 1.5, "znear": 0, "zfar": 10}}],
+            "extensions": {"KHR_lights_punctual": {"lights": [
+                {"type": "spot", "range": 4, "spot": {"innerConeAngle": 0.7853982, "outerConeAngle": 0.7853982}}
+            ]}},"#;
+        let blocks = [Block::Vec3(&SQUARE), Block::Indices(&[0, 1, 2, 2, 1, 3])];
+        let path = write_fixture(dir.path(), &blocks, TRIANGLES, &nodes, extra);
+        let loaded = load(&path).unwrap();
+        let camera = &loaded.cameras[0];
+        assert_eq!(
+            (camera.name.as_deref(), camera.node_name.as_deref()),
+            (Some("Plan"), Some("Top"))
+        );
+        assert!(
+            (camera.eye - DVec3::new(0.0, 6.0, 5.0)).length() < 1e-6,
+            "{camera:?}"
+        );
+        assert!((camera.forward - DVec3::NEG_Y).length() < 1e-6, "{camera:?}");
+        assert!((camera.up - DVec3::NEG_Z).length() < 1e-6, "{camera:?}");
+        let ImportedProjection::Orthographic { height, near, far } = camera.projection else {
+            panic!("{camera:?}")
+        };
+        assert!(
+            (height - 6.0).abs() < 1e-5 && near == 0.0 && (far - 20.0).abs() < 1e-5,
+            "{camera:?}"
+        );
+        let light = &loaded.lights[0];
+        assert_eq!(
+            light.kind,
+            ImportedLightKind::Spot {
+                inner_cone_degrees: 45.0,
+                outer_cone_degrees: 45.0
+            }
+        );
+        assert!((light.position - DVec3::new(0.0, 0.0, 5.0)).length() < 1e-6);
+        assert!((light.direction - DVec3::NEG_Y).length() < 1e-6);
+        assert_eq!((light.color, light.range), (Vec3::ONE, Some(4.0)));
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("lights 0 have a `range`, which is not applied")),
+            "{:?}",
+            loaded.warnings
+        );
     }
 
     #[test]

@@ -29,11 +29,11 @@ use std::path::{Path, PathBuf};
 
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{DMat4, DVec3, Vec2, Vec3, Vec4};
 
 use crate::texture::Texture;
 
-use crate::scene::Material;
+use crate::scene::{Attenuation, Light, Material};
 
 /// An indexed triangle mesh in its own model space.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -257,4 +257,317 @@ pub struct LoadedMesh {
     /// Problems that did not stop the load (a missing MTL or texture file, skipped
     /// primitives, ...).
     pub warnings: Vec<String>,
+    /// Lights the file places (glTF `KHR_lights_punctual`), in the mesh's model space, in the
+    /// order the drawn scene's nodes are visited; empty for OBJ files and primitives.
+    pub lights: Vec<ImportedLight>,
+    /// Cameras the file places (glTF nodes with a `camera`), in the mesh's model space, in the
+    /// order the drawn scene's nodes are visited; empty for OBJ files and primitives.
+    pub cameras: Vec<ImportedCamera>,
+}
+
+/// A light a mesh file places (glTF `KHR_lights_punctual`), in the mesh's model space: the
+/// node's world transform is applied, as to the positions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedLight {
+    /// The light's name in the file, if it has one.
+    pub name: Option<String>,
+    /// Index of the light in the file's light list (`KHR_lights_punctual.lights`).
+    pub index: usize,
+    pub kind: ImportedLightKind,
+    /// Linear RGB `color × intensity` as the file gives them (lux for directional lights,
+    /// candela for point and spot lights); see [`ImportedLight::to_light`] for the scale.
+    pub color: Vec3,
+    /// Where the light is (the node's origin); unused by directional lights.
+    pub position: DVec3,
+    /// Unit direction the light travels in (the node's local −Z); unused by point lights.
+    pub direction: DVec3,
+    /// Distance beyond which glTF says the light has no effect, when the file gives one.
+    pub range: Option<f32>,
+}
+
+/// The kinds of light glTF has; spot angles converted from the file's radians to degrees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ImportedLightKind {
+    Directional,
+    Point,
+    Spot {
+        /// Angle from the axis inside which the spot is at full strength, degrees.
+        inner_cone_degrees: f32,
+        /// Angle from the axis beyond which the spot gives no light, degrees.
+        outer_cone_degrees: f32,
+    },
+}
+
+/// glTF point and spot lights fall off with the inverse square of the distance.
+pub const INVERSE_SQUARE: Attenuation = Attenuation {
+    constant: 0.0,
+    linear: 0.0,
+    quadratic: 1.0,
+};
+
+impl ImportedLight {
+    /// This light as a scene light, placed by `transform` (model to world): the position
+    /// through the matrix, the direction through its linear part, renormalised.
+    ///
+    /// Mapping (documented in `docs/scene-format.md`, glTF section):
+    /// * colour: `color × intensity` as it is, so 1 lux of a directional light and 1 candela
+    ///   of a point or spot light seen from 1 unit away both light a white surface facing them
+    ///   like our default `intensity: 1` light;
+    /// * attenuation: [`INVERSE_SQUARE`] (`1/d²`), glTF's falloff; `range` is not applied (our
+    ///   attenuation is a polynomial and cannot reach zero), so lights reach past it;
+    /// * spot: `cutoff` = the outer cone angle; `exponent` from [`spot_exponent`], the one
+    ///   whose cone carries the same power as glTF's smooth inner-to-outer falloff;
+    /// * no shadows (glTF has no such setting).
+    pub fn to_light(&self, transform: DMat4) -> Light {
+        let position = transform.transform_point3(self.position);
+        let direction = transform
+            .transform_vector3(self.direction)
+            .try_normalize()
+            .unwrap_or(self.direction)
+            .as_vec3();
+        match self.kind {
+            ImportedLightKind::Directional => Light::Directional {
+                direction,
+                color: self.color,
+                shadow: None,
+            },
+            ImportedLightKind::Point => Light::Point {
+                position,
+                color: self.color,
+                attenuation: INVERSE_SQUARE,
+                shadow: None,
+            },
+            ImportedLightKind::Spot {
+                inner_cone_degrees,
+                outer_cone_degrees,
+            } => Light::Spot {
+                position,
+                direction,
+                color: self.color,
+                cutoff_degrees: outer_cone_degrees,
+                exponent: spot_exponent(inner_cone_degrees, outer_cone_degrees),
+                attenuation: INVERSE_SQUARE,
+                shadow: None,
+            },
+        }
+    }
+}
+
+/// The exponent `e` of our spot falloff `cos^e θ` (cut off at the outer angle) that matches
+/// glTF's falloff between the inner and outer cone angles (degrees): glTF's strength is 1
+/// inside the inner cone and `t²` between the cones, with `t` going linearly in `cos θ` from 1
+/// at the inner angle to 0 at the outer. `cos^e` cannot be flat and then fall, so `e` is chosen
+/// so that both cones emit the same power: with `u = cos θ`, `c_o`, `c_i` the cosines of the
+/// outer and inner angles, `∫_{c_o}^1 u^e du = (1 − c_i) + (c_i − c_o)/3`. Equal angles (a
+/// hard-edged glTF spot) give `e = 0`, our hard-edged spot, exactly; glTF's default cone
+/// (inner 0°, outer 45°) gives `e ≈ 8.9`. Solved by bisection (the left side falls as `e`
+/// grows); at most 10⁸ (a cone narrower than about 0.01°).
+pub fn spot_exponent(inner_degrees: f32, outer_degrees: f32) -> f32 {
+    let outer = f64::from(outer_degrees.clamp(0.0, 90.0)).to_radians();
+    let inner = f64::from(inner_degrees).to_radians().clamp(0.0, outer);
+    let (cos_outer, cos_inner) = (outer.cos(), inner.cos());
+    let target = (1.0 - cos_inner) + (cos_inner - cos_outer) / 3.0;
+    let power = |e: f64| (1.0 - cos_outer.powf(e + 1.0)) / (e + 1.0);
+    if 1.0 - cos_outer < 1e-9 || power(0.0) - target < 1e-9 * power(0.0) {
+        return 0.0;
+    }
+    let (mut low, mut high) = (0.0_f64, 1e8_f64);
+    if power(high) >= target {
+        return high as f32;
+    }
+    for _ in 0..100 {
+        let middle = 0.5 * (low + high);
+        if power(middle) > target {
+            low = middle;
+        } else {
+            high = middle;
+        }
+    }
+    (0.5 * (low + high)) as f32
+}
+
+/// A camera a mesh file places (a glTF node with a `camera`), in the mesh's model space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedCamera {
+    /// The camera's name in the file, if it has one.
+    pub name: Option<String>,
+    /// The name of the node that places it, if it has one.
+    pub node_name: Option<String>,
+    /// Index of the camera in the file's `cameras` list.
+    pub index: usize,
+    /// The node's origin.
+    pub eye: DVec3,
+    /// Unit direction the camera looks in: the node's local −Z.
+    pub forward: DVec3,
+    /// Unit up direction: the node's local +Y.
+    pub up: DVec3,
+    /// Distances and sizes in the mesh's model space (the node's scale applied).
+    pub projection: ImportedProjection,
+}
+
+/// A glTF camera's projection; the file's aspect ratio (`aspectRatio`, `xmag`) is not kept:
+/// the image's aspect ratio decides the width.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ImportedProjection {
+    Perspective {
+        /// `yfov`, converted to degrees.
+        fov_y_degrees: f64,
+        near: f64,
+        /// `None` for glTF's infinite projection (no `zfar`).
+        far: Option<f64>,
+    },
+    Orthographic {
+        /// `2 · ymag`.
+        height: f64,
+        near: f64,
+        far: f64,
+    },
+}
+
+impl ImportedCamera {
+    /// `camera N`, with its name (or else its node's name) when it has one.
+    pub fn label(&self) -> String {
+        match self.name.as_ref().or(self.node_name.as_ref()) {
+            Some(name) => format!("{} \"{name}\"", self.index),
+            None => format!("{} (unnamed)", self.index),
+        }
+    }
+
+    /// Whether `name` is the camera's name or its node's.
+    pub fn is_named(&self, name: &str) -> bool {
+        self.name.as_deref() == Some(name) || self.node_name.as_deref() == Some(name)
+    }
+
+    /// This camera placed by `transform` (model to world): the eye through the matrix, the
+    /// view and up directions through its linear part (renormalised), and the distances and
+    /// the orthographic height scaled by how much the transform stretches the view and up
+    /// directions, so an object drawn through its own camera looks the same at any scale.
+    pub fn transformed(&self, transform: DMat4) -> ImportedCamera {
+        let forward = transform.transform_vector3(self.forward);
+        let up = transform.transform_vector3(self.up);
+        let (depth_scale, height_scale) = (forward.length(), up.length());
+        let projection = match self.projection {
+            ImportedProjection::Perspective {
+                fov_y_degrees,
+                near,
+                far,
+            } => ImportedProjection::Perspective {
+                fov_y_degrees,
+                near: near * depth_scale,
+                far: far.map(|far| far * depth_scale),
+            },
+            ImportedProjection::Orthographic { height, near, far } => ImportedProjection::Orthographic {
+                height: height * height_scale,
+                near: near * depth_scale,
+                far: far * depth_scale,
+            },
+        };
+        ImportedCamera {
+            name: self.name.clone(),
+            node_name: self.node_name.clone(),
+            index: self.index,
+            eye: transform.transform_point3(self.eye),
+            forward: forward.try_normalize().unwrap_or(self.forward),
+            up: up.try_normalize().unwrap_or(self.up),
+            projection,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The power of our cone, `∫_{cos outer}^1 u^e du`, and of glTF's falloff.
+    fn powers(inner: f32, outer: f32, exponent: f32) -> (f64, f64) {
+        let (ci, co) = (
+            f64::from(inner).to_radians().cos(),
+            f64::from(outer).to_radians().cos(),
+        );
+        let e = f64::from(exponent);
+        ((1.0 - co.powf(e + 1.0)) / (e + 1.0), (1.0 - ci) + (ci - co) / 3.0)
+    }
+
+    #[test]
+    fn spot_exponent_matches_the_power_of_gltf_falloff() {
+        assert_eq!(spot_exponent(30.0, 30.0), 0.0, "hard edge");
+        assert_eq!(spot_exponent(40.0, 30.0), 0.0, "inner past outer is a hard edge");
+        assert_eq!(spot_exponent(0.0, 0.0), 0.0);
+        let default = spot_exponent(0.0, 45.0);
+        assert!((default - 8.91).abs() < 0.01, "{default}");
+        for (inner, outer) in [(0.0, 45.0), (10.0, 20.0), (0.0, 90.0), (5.0, 6.0), (0.0, 1.0)] {
+            let exponent = spot_exponent(inner, outer);
+            let (ours, gltf) = powers(inner, outer, exponent);
+            assert!(exponent.is_finite() && exponent >= 0.0);
+            assert!(
+                (ours - gltf).abs() < 1e-6 * gltf,
+                "{inner}..{outer}: e = {exponent}"
+            );
+        }
+        // A softer falloff (wider gap between the cones) is a larger exponent.
+        assert!(spot_exponent(0.0, 30.0) > spot_exponent(20.0, 30.0));
+    }
+
+    #[test]
+    fn imported_lights_and_cameras_follow_a_transform() {
+        let transform = DMat4::from_scale_rotation_translation(
+            DVec3::splat(3.0),
+            glam::DQuat::from_rotation_y(std::f64::consts::FRAC_PI_2),
+            DVec3::new(0.0, 1.0, 0.0),
+        );
+        let spot = ImportedLight {
+            name: None,
+            index: 0,
+            kind: ImportedLightKind::Spot {
+                inner_cone_degrees: 10.0,
+                outer_cone_degrees: 20.0,
+            },
+            color: Vec3::ONE,
+            position: DVec3::new(0.0, 0.0, 1.0),
+            direction: DVec3::NEG_Z,
+            range: None,
+        };
+        let Light::Spot {
+            position,
+            direction,
+            cutoff_degrees,
+            attenuation,
+            ..
+        } = spot.to_light(transform)
+        else {
+            panic!("a spot")
+        };
+        assert!(
+            (position - DVec3::new(3.0, 1.0, 0.0)).length() < 1e-9,
+            "{position}"
+        );
+        assert!(direction.abs_diff_eq(Vec3::NEG_X, 1e-6), "{direction}");
+        assert_eq!((cutoff_degrees, attenuation), (20.0, INVERSE_SQUARE));
+        let camera = ImportedCamera {
+            name: Some("Cam".into()),
+            node_name: None,
+            index: 0,
+            eye: DVec3::ZERO,
+            forward: DVec3::NEG_Z,
+            up: DVec3::Y,
+            projection: ImportedProjection::Orthographic {
+                height: 2.0,
+                near: 0.5,
+                far: 10.0,
+            },
+        }
+        .transformed(transform);
+        assert!((camera.forward - DVec3::NEG_X).length() < 1e-9);
+        assert!((camera.up - DVec3::Y).length() < 1e-9);
+        assert_eq!(
+            camera.projection,
+            ImportedProjection::Orthographic {
+                height: 6.0,
+                near: 1.5,
+                far: 30.0
+            }
+        );
+        assert!(camera.is_named("Cam") && !camera.is_named("cam"));
+        assert_eq!(camera.label(), "0 \"Cam\"");
+    }
 }

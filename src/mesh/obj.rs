@@ -220,6 +220,8 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
         mesh,
         files_read,
         warnings,
+        lights: Vec::new(),
+        cameras: Vec::new(),
     })
 }
 

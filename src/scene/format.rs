@@ -82,6 +82,22 @@ pub enum CameraFile {
         near: Option<f64>,
         far: Option<f64>,
     },
+    /// A camera placed in a glTF file: `Gltf(object: 0, camera: "Name")`.
+    Gltf {
+        /// The object whose mesh file holds the camera: its index in `objects` or its `name`.
+        /// Default: the first object whose mesh brings a camera.
+        object: Option<NameOrIndexFile>,
+        /// The glTF camera: its name (or its node's name), or its index in the file's `cameras`.
+        /// Default: the first camera of the object.
+        camera: Option<NameOrIndexFile>,
+    },
+}
+
+/// `"name"` or `3`: something referred to by name or by position.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum NameOrIndexFile {
+    Name(String),
+    Index(usize),
 }
 
 /// The lighting model names of the file.
@@ -329,6 +345,33 @@ impl<'de> Deserialize<'de> for ScaleFile {
     }
 }
 
+impl<'de> Deserialize<'de> for NameOrIndexFile {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct NameOrIndexVisitor;
+        impl<'de> Visitor<'de> for NameOrIndexVisitor {
+            type Value = NameOrIndexFile;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a name like \"Camera\" or an index like 0")
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<NameOrIndexFile, E> {
+                Ok(NameOrIndexFile::Name(v.to_owned()))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<NameOrIndexFile, E> {
+                usize::try_from(v)
+                    .map(NameOrIndexFile::Index)
+                    .map_err(|_| E::invalid_value(de::Unexpected::Unsigned(v), &self))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<NameOrIndexFile, E> {
+                match u64::try_from(v) {
+                    Ok(v) => self.visit_u64(v),
+                    Err(_) => Err(E::invalid_value(de::Unexpected::Signed(v), &self)),
+                }
+            }
+        }
+        deserializer.deserialize_any(NameOrIndexVisitor)
+    }
+}
+
 impl<'de> Deserialize<'de> for MaterialRefFile {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         struct MaterialRefVisitor;
@@ -424,5 +467,32 @@ mod tests {
         )
         .unwrap();
         assert_eq!(scene.lights.unwrap().len(), 3);
+    }
+
+    #[test]
+    fn gltf_camera_by_name_or_index() {
+        let scene = parse(r#"(camera: Gltf(object: "house", camera: 2))"#).unwrap();
+        let Some(CameraFile::Gltf { object, camera }) = scene.camera else {
+            panic!("a glTF camera expected")
+        };
+        assert_eq!(object, Some(NameOrIndexFile::Name("house".into())));
+        assert_eq!(camera, Some(NameOrIndexFile::Index(2)));
+        let scene = parse("(camera: Gltf())").unwrap();
+        assert!(matches!(
+            scene.camera,
+            Some(CameraFile::Gltf {
+                object: None,
+                camera: None
+            })
+        ));
+        for bad in ["-1", "1.5", "(1, 2)"] {
+            let error = parse(&format!("(camera: Gltf(camera: {bad}))")).unwrap_err();
+            assert!(
+                error
+                    .to_string()
+                    .contains(r#"a name like "Camera" or an index like 0"#),
+                "{bad}: {error}"
+            );
+        }
     }
 }

@@ -18,13 +18,16 @@ use std::time::SystemTime;
 use glam::{DMat4, DQuat, DVec3, EulerRot, Vec3};
 
 use crate::diag::{Diagnostic, SourceId, Sources, from_ron_error};
-use crate::mesh::{LoadedMesh, Mesh, MeshError, MeshOptions, gltf::load_gltf, obj::load_obj, primitives};
+use crate::mesh::{
+    ImportedCamera, ImportedLight, ImportedProjection, LoadedMesh, Mesh, MeshError, MeshOptions,
+    gltf::load_gltf, obj::load_obj, primitives,
+};
 use crate::render::raster::SamplePattern;
 use crate::ron_path;
 use crate::scene::format::{
     self, AttenuationFile, BackFacesFile, CameraFile, ComponentFile, DistributionFile, LightFile,
-    LightingModelFile, MaterialFile, MaterialLibraryFile, MaterialRefFile, MeshFile, NormalInterpolationFile,
-    OrderedMap, ScaleFile, SceneFile, ShadingFile, ShadowMapFile,
+    LightingModelFile, MaterialFile, MaterialLibraryFile, MaterialRefFile, MeshFile, NameOrIndexFile,
+    NormalInterpolationFile, OrderedMap, ScaleFile, SceneFile, ShadingFile, ShadowMapFile,
 };
 use crate::scene::locate::{PathSegment, locate, locate_keys};
 use crate::scene::presets::{self, DEFAULT_RECIPE, MaterialRecipe};
@@ -97,8 +100,23 @@ struct CachedMesh {
     /// Modification times of every file the mesh read, at load time.
     stamps: Vec<(PathBuf, Option<SystemTime>)>,
     mesh: Arc<Mesh>,
+    placed: Arc<Placed>,
     files_read: Vec<PathBuf>,
     warnings: Vec<String>,
+}
+
+/// The lights and cameras a mesh file places, in its model space.
+#[derive(Debug, Default)]
+struct Placed {
+    lights: Vec<ImportedLight>,
+    cameras: Vec<ImportedCamera>,
+}
+
+/// What an object that loaded brings besides its mesh, by its index in `objects`.
+#[derive(Debug)]
+struct ObjectPlacement {
+    transform: DMat4,
+    placed: Arc<Placed>,
 }
 
 fn modified(path: &Path) -> Option<SystemTime> {
@@ -190,13 +208,27 @@ impl Loader<'_> {
 
         let image = self.image(&file, source, options);
         let mut objects = Vec::new();
+        let mut placements = Vec::new();
         for (index, object) in file.objects.iter().enumerate() {
-            if let Some(object) = self.object(object, index, source, &table, &materials, options) {
+            let loaded = self.object(object, index, source, &table, &materials, options);
+            placements.push(loaded.map(|(object, placed)| {
+                let transform = object.transform;
                 objects.push(object);
-            }
+                ObjectPlacement { transform, placed }
+            }));
         }
         let bounds = scene_bounds(&objects);
-        let camera = self.camera(file.camera.as_ref(), source, bounds, image);
+        let camera = match &file.camera {
+            Some(CameraFile::Gltf { object, camera }) => self.gltf_camera(
+                object.as_ref(),
+                camera.as_ref(),
+                source,
+                bounds,
+                &file.objects,
+                &placements,
+            ),
+            camera => self.camera(camera.as_ref(), source, bounds, image),
+        };
         let ambient = match file.ambient {
             Some(ambient) => self.color(
                 ambient,
@@ -207,12 +239,21 @@ impl Loader<'_> {
             ),
             None => Some(DEFAULT_AMBIENT),
         };
+        // Lights that mesh files place come after the scene's own, always; the default
+        // headlight is only for scenes without any light.
+        let imported: Vec<Light> = placements
+            .iter()
+            .flatten()
+            .flat_map(|p| p.placed.lights.iter().map(|light| light.to_light(p.transform)))
+            .collect();
         let lights = match (&file.lights, camera) {
             (Some(lights), Some(camera)) => lights
                 .iter()
                 .enumerate()
                 .filter_map(|(i, light)| self.light(light, i, source, &camera))
+                .chain(imported)
                 .collect(),
+            (None, Some(_)) if !imported.is_empty() => imported,
             (None, Some(camera)) => vec![Light::Directional {
                 direction: (camera.target - camera.eye).normalize().as_vec3(),
                 color: Vec3::ONE,
@@ -852,7 +893,7 @@ impl Loader<'_> {
         table: &HashMap<String, MaterialDefinition>,
         materials: &HashMap<String, MaterialRecipe>,
         options: &LoadOptions,
-    ) -> Option<Object> {
+    ) -> Option<(Object, Arc<Placed>)> {
         let field = |name: &str| ron_path!["objects", index, name];
         let crease_angle = match object.crease_angle {
             Some(angle) => self
@@ -932,16 +973,18 @@ impl Loader<'_> {
             Some(NormalInterpolationFile::Slerp) => NormalInterpolation::Slerp,
         };
         let name = object.name.clone().unwrap_or_else(|| format!("object {index}"));
-        Some(Object {
+        let (mesh, placed) = mesh?;
+        let object = Object {
             name,
-            mesh: mesh?,
+            mesh,
             transform: transform?,
             shading,
             material: material?,
             back_faces,
             component,
             normal_interpolation,
-        })
+        };
+        Some((object, placed))
     }
 
     fn transform(&mut self, object: &format::ObjectFile, index: usize, source: SourceId) -> Option<DMat4> {
@@ -1004,8 +1047,9 @@ impl Loader<'_> {
         index: usize,
         source: SourceId,
         crease_angle: f32,
-    ) -> Option<Arc<Mesh>> {
+    ) -> Option<(Arc<Mesh>, Arc<Placed>)> {
         let mesh_path = ron_path!["objects", index, "mesh"];
+        let nothing_placed = || Arc::new(Placed::default());
         match mesh {
             MeshFile::Sphere { segments } => {
                 let segments = segments.unwrap_or(DEFAULT_SPHERE_SEGMENTS);
@@ -1021,10 +1065,10 @@ impl Loader<'_> {
                     at,
                     "sphere `segments`",
                 )?;
-                Some(Arc::new(primitives::sphere(segments)))
+                Some((Arc::new(primitives::sphere(segments)), nothing_placed()))
             }
-            MeshFile::Plane => Some(Arc::new(primitives::plane())),
-            MeshFile::Cube => Some(Arc::new(primitives::cube())),
+            MeshFile::Plane => Some((Arc::new(primitives::plane()), nothing_placed())),
+            MeshFile::Cube => Some((Arc::new(primitives::cube()), nothing_placed())),
             MeshFile::Obj(file) | MeshFile::Gltf(file) => {
                 let at_path = [mesh_path.as_slice(), &ron_path![0]].concat();
                 let at = At {
@@ -1059,7 +1103,13 @@ impl Loader<'_> {
         }
     }
 
-    fn load_mesh_file(&mut self, path: &Path, is_obj: bool, crease_angle: f32, at: At) -> Option<Arc<Mesh>> {
+    fn load_mesh_file(
+        &mut self,
+        path: &Path,
+        is_obj: bool,
+        crease_angle: f32,
+        at: At,
+    ) -> Option<(Arc<Mesh>, Arc<Placed>)> {
         let key = MeshKey {
             path: path.to_path_buf(),
             crease_angle_bits: crease_angle.to_bits(),
@@ -1071,9 +1121,10 @@ impl Loader<'_> {
             .entries
             .get(&key)
             .filter(|cached| cached.stamps.iter().all(|(file, stamp)| modified(file) == *stamp));
-        let (mesh, files_read, warnings) = match fresh {
+        let (mesh, placed, files_read, warnings) = match fresh {
             Some(cached) => (
                 cached.mesh.clone(),
+                cached.placed.clone(),
                 cached.files_read.clone(),
                 cached.warnings.clone(),
             ),
@@ -1091,8 +1142,11 @@ impl Loader<'_> {
                         mesh,
                         files_read,
                         warnings,
+                        lights,
+                        cameras,
                     }) => {
                         let mesh = Arc::new(mesh);
+                        let placed = Arc::new(Placed { lights, cameras });
                         let mut stamped: Vec<PathBuf> = files_read.clone();
                         if !stamped.iter().any(|f| f == path) {
                             stamped.push(path.to_path_buf());
@@ -1102,11 +1156,12 @@ impl Loader<'_> {
                             CachedMesh {
                                 stamps: stamped.iter().map(|f| (f.clone(), modified(f))).collect(),
                                 mesh: mesh.clone(),
+                                placed: placed.clone(),
                                 files_read: files_read.clone(),
                                 warnings: warnings.clone(),
                             },
                         );
-                        (mesh, files_read, warnings)
+                        (mesh, placed, files_read, warnings)
                     }
                     Err(error) => {
                         self.files_read.push(path.to_path_buf());
@@ -1121,7 +1176,7 @@ impl Loader<'_> {
         for warning in warnings {
             self.diagnostics.push(Diagnostic::warning(path, warning));
         }
-        Some(mesh)
+        Some((mesh, placed))
     }
 
     fn mesh_error(&mut self, error: MeshError, at: At) {
@@ -1153,7 +1208,7 @@ impl Loader<'_> {
     ) -> Option<Camera> {
         let field = |name: &str| ron_path!["camera", name];
         let (eye, target, up, near, far) = match camera {
-            None => (None, None, None, None, None),
+            None | Some(CameraFile::Gltf { .. }) => (None, None, None, None, None),
             Some(CameraFile::Perspective {
                 eye,
                 target,
@@ -1262,6 +1317,157 @@ impl Loader<'_> {
             eye,
             target,
             up,
+            projection,
+        })
+    }
+
+    /// `camera: Gltf(object: ..., camera: ...)`: a camera that an object's mesh file places,
+    /// moved by the object's transform (see [`ImportedCamera::transformed`]).
+    fn gltf_camera(
+        &mut self,
+        object: Option<&NameOrIndexFile>,
+        camera: Option<&NameOrIndexFile>,
+        source: SourceId,
+        bounds: Bounds,
+        objects: &[format::ObjectFile],
+        placements: &[Option<ObjectPlacement>],
+    ) -> Option<Camera> {
+        let describe = |index: usize| match &objects[index].name {
+            Some(name) => format!("{index} \"{name}\""),
+            None => index.to_string(),
+        };
+        let candidates: Vec<usize> = (0..placements.len())
+            .filter(|&i| {
+                placements[i]
+                    .as_ref()
+                    .is_some_and(|p| !p.placed.cameras.is_empty())
+            })
+            .collect();
+        let all_loaded = placements.iter().all(Option::is_some);
+        let listing = if candidates.is_empty() {
+            "no object brings a camera: cameras come from glTF files (`mesh: Gltf(...)`) whose scene has camera nodes"
+                .to_string()
+        } else {
+            let names: Vec<String> = candidates.iter().map(|&i| describe(i)).collect();
+            format!("objects with cameras (by index or name): {}", names.join(", "))
+        };
+        let object_path = ron_path!["camera", "object"];
+        let index = match object {
+            None => match candidates.first() {
+                Some(&index) => index,
+                None if all_loaded => {
+                    self.error(
+                        At::new(source, &ron_path!["camera"]),
+                        "`Gltf` camera: no object of the scene brings a camera",
+                        Some("no camera to take"),
+                        Some(listing),
+                    );
+                    return None;
+                }
+                None => return None, // an object that failed to load may have had one
+            },
+            Some(NameOrIndexFile::Index(index)) if *index >= objects.len() => {
+                self.error(
+                    At::new(source, &object_path),
+                    format!(
+                        "`Gltf` camera: there is no object {index}; the scene has {} objects",
+                        objects.len()
+                    ),
+                    Some("no such object"),
+                    Some(listing),
+                );
+                return None;
+            }
+            Some(NameOrIndexFile::Index(index)) => *index,
+            Some(NameOrIndexFile::Name(name)) => {
+                match objects
+                    .iter()
+                    .position(|o| o.name.as_deref() == Some(name.as_str()))
+                {
+                    Some(index) => index,
+                    None => {
+                        self.error(
+                            At::new(source, &object_path),
+                            format!("`Gltf` camera: no object is named `{name}`"),
+                            Some("no such object"),
+                            Some(listing),
+                        );
+                        return None;
+                    }
+                }
+            }
+        };
+        // An object that did not load has said why already.
+        let placement = placements[index].as_ref()?;
+        let cameras = &placement.placed.cameras;
+        if cameras.is_empty() {
+            self.error(
+                At::new(source, &object_path),
+                format!("`Gltf` camera: object {} brings no camera", describe(index)),
+                Some("no cameras in its mesh"),
+                Some(listing),
+            );
+            return None;
+        }
+        let chosen = match camera {
+            None => Some(&cameras[0]),
+            Some(NameOrIndexFile::Index(wanted)) => cameras.iter().find(|c| c.index == *wanted),
+            Some(NameOrIndexFile::Name(wanted)) => cameras.iter().find(|c| c.is_named(wanted)),
+        };
+        let Some(chosen) = chosen else {
+            let what = match camera {
+                Some(NameOrIndexFile::Name(name)) => format!("named `{name}`"),
+                Some(NameOrIndexFile::Index(wanted)) => wanted.to_string(),
+                None => unreachable!("the first camera exists"),
+            };
+            let available: Vec<String> = cameras.iter().map(ImportedCamera::label).collect();
+            self.error(
+                At::new(source, &ron_path!["camera", "camera"]),
+                format!("`Gltf` camera: object {} has no camera {what}", describe(index)),
+                Some("no such camera"),
+                Some(format!(
+                    "its cameras (by index in the glTF `cameras` list, or by name): {}",
+                    available.join(", ")
+                )),
+            );
+            return None;
+        };
+        let placed = chosen.transformed(placement.transform);
+        if placed.forward.cross(placed.up).length() < 1e-9 {
+            self.error(
+                At::new(source, &ron_path!["camera"]),
+                format!(
+                    "`Gltf` camera: the transform of object {} makes the camera's up parallel to its view direction",
+                    describe(index)
+                ),
+                Some("degenerate camera"),
+                None,
+            );
+            return None;
+        }
+        let eye = placed.eye;
+        // Defaults as for our own cameras: past the far side of every object.
+        let reach = (bounds.center - eye).length() + bounds.radius;
+        let projection = match placed.projection {
+            ImportedProjection::Perspective {
+                fov_y_degrees,
+                near,
+                far,
+            } => Projection::Perspective {
+                fov_y_degrees: fov_y_degrees.clamp(1e-3, 179.0),
+                near,
+                far: far.unwrap_or_else(|| (2.0 * reach).max(10.0 * near)),
+            },
+            ImportedProjection::Orthographic { height, near, far } => Projection::Orthographic {
+                height,
+                near: if near > 0.0 { near } else { far / 10_000.0 },
+                far,
+            },
+        };
+        Some(Camera {
+            eye,
+            target: eye + placed.forward,
+            up: placed.up,
             projection,
         })
     }
@@ -1577,4 +1783,309 @@ fn edit_distance(a: &str, b: &str) -> usize {
         previous = current;
     }
     previous[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diag::render_diagnostics;
+
+    fn asset(relative: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets")
+            .join(relative)
+    }
+
+    fn write(folder: &Path, name: &str, text: &str) -> PathBuf {
+        let path = folder.join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    fn load_ok(path: &Path) -> LoadedScene {
+        load_scene(path, &LoadOptions::default()).unwrap_or_else(|error| {
+            panic!(
+                "{}",
+                render_diagnostics(&error.diagnostics, &error.sources, false)
+            )
+        })
+    }
+
+    fn close(a: DVec3, b: DVec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    /// The Cameras sample with names: the perspective camera is "Persp", the orthographic
+    /// camera's node is "OrthoNode" (its camera has no name).
+    fn named_cameras(folder: &Path) {
+        let text = std::fs::read_to_string(asset("gltf/Cameras/glTF/Cameras.gltf")).unwrap();
+        let text = text
+            .replacen(
+                r#""type": "perspective","#,
+                r#""type": "perspective", "name": "Persp","#,
+                1,
+            )
+            .replacen(r#""camera" : 1"#, r#""camera" : 1, "name": "OrthoNode""#, 1);
+        assert!(text.contains("Persp") && text.contains("OrthoNode"));
+        write(folder, "Cameras.gltf", &text);
+        std::fs::copy(
+            asset("gltf/Cameras/glTF/simpleSquare.bin"),
+            folder.join("simpleSquare.bin"),
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn gltf_cameras_by_index_and_name_through_the_object_transform() {
+        // The sample as it is (unnamed cameras), by index: both sit at (0.5, 0.5, 3) looking
+        // down −Z; camera 1 is orthographic with ymag 1.
+        let folder = tempfile::tempdir().unwrap();
+        let sample = asset("gltf/Cameras/glTF/Cameras.gltf");
+        let scene = |camera: &str, transform: &str| {
+            format!(
+                "(camera: {camera}, objects: [(mesh: Sphere()), (name: \"square\", mesh: Gltf({:?}){transform})])",
+                sample.display().to_string()
+            )
+        };
+        let load = |text: String| load_ok(&write(folder.path(), "scene.ron", &text)).scene;
+
+        let camera = load(scene("Gltf(object: 1, camera: 1)", "")).camera;
+        assert!(close(camera.eye, DVec3::new(0.5, 0.5, 3.0)), "{camera:?}");
+        assert!(close(camera.target - camera.eye, DVec3::NEG_Z));
+        assert!(close(camera.up, DVec3::Y));
+        let Projection::Orthographic { height, near, far } = camera.projection else {
+            panic!("orthographic expected: {camera:?}")
+        };
+        assert!((height - 2.0).abs() < 1e-6 && (near - 0.01).abs() < 1e-6 && (far - 100.0).abs() < 1e-4);
+
+        // The default object (the first that brings cameras) and camera (the first one),
+        // through translate, rotate and scale: the eye moves, near and far scale.
+        let camera = load(scene(
+            "Gltf()",
+            ", translate: (1, 0, 0), rotate: (0, 90, 0), scale: 2",
+        ))
+        .camera;
+        // Scaled (1, 1, 6), rotated 90° about Y: (6, 1, −1), translated: (7, 1, −1).
+        assert!(close(camera.eye, DVec3::new(7.0, 1.0, -1.0)), "{camera:?}");
+        assert!(close(camera.target - camera.eye, DVec3::NEG_X), "{camera:?}");
+        assert!(close(camera.up, DVec3::Y));
+        let Projection::Perspective {
+            fov_y_degrees,
+            near,
+            far,
+        } = camera.projection
+        else {
+            panic!("perspective expected: {camera:?}")
+        };
+        assert!(
+            (fov_y_degrees - 0.7f64.to_degrees()).abs() < 1e-4,
+            "{fov_y_degrees}"
+        );
+        assert!(
+            (near - 0.02).abs() < 1e-6 && (far - 200.0).abs() < 1e-4,
+            "{near} {far}"
+        );
+
+        // By name: a camera's name, or its node's name; the object by name.
+        named_cameras(folder.path());
+        let scene = |camera: &str| {
+            format!(
+                "(camera: {camera}, objects: [(mesh: Cube), (name: \"square\", mesh: Gltf(\"Cameras.gltf\"))])"
+            )
+        };
+        let camera = load(scene(r#"Gltf(object: "square", camera: "Persp")"#)).camera;
+        assert!(matches!(camera.projection, Projection::Perspective { .. }));
+        let camera = load(scene(r#"Gltf(object: "square", camera: "OrthoNode")"#)).camera;
+        assert!(
+            matches!(camera.projection, Projection::Orthographic { height, .. } if (height - 2.0).abs() < 1e-6)
+        );
+        assert!(close(camera.eye, DVec3::new(0.5, 0.5, 3.0)));
+    }
+
+    #[test]
+    fn unknown_gltf_cameras_and_objects_are_located_errors_listing_the_choices() {
+        let folder = tempfile::tempdir().unwrap();
+        named_cameras(folder.path());
+        let check = |camera: &str, line: usize, expected: &[&str]| {
+            let text = format!(
+                "Scene(\n    objects: [(mesh: Cube), (name: \"square\", mesh: Gltf(\"Cameras.gltf\"))],\n    camera: {camera},\n)"
+            );
+            let path = write(folder.path(), "scene.ron", &text);
+            let error = load_scene(&path, &LoadOptions::default()).unwrap_err();
+            let rendered = render_diagnostics(&error.diagnostics, &error.sources, false);
+            let (found_line, _) = error.diagnostics[0].line_column(&error.sources).expect("located");
+            assert_eq!(found_line, line, "{rendered}");
+            assert!(rendered.contains(&format!("scene.ron:{line}:")), "{rendered}");
+            for part in expected {
+                assert!(rendered.contains(part), "{part:?} missing from:\n{rendered}");
+            }
+        };
+        check(
+            r#"Gltf(object: "square", camera: "Front")"#,
+            3,
+            &[
+                "object 1 \"square\" has no camera named `Front`",
+                "its cameras (by index in the glTF `cameras` list, or by name): 0 \"Persp\", 1 \"OrthoNode\"",
+            ],
+        );
+        check(
+            "Gltf(object: 1, camera: 7)",
+            3,
+            &["has no camera 7", "0 \"Persp\", 1 \"OrthoNode\""],
+        );
+        check(
+            r#"Gltf(object: "sqare")"#,
+            3,
+            &[
+                "no object is named `sqare`",
+                "objects with cameras (by index or name): 1 \"square\"",
+            ],
+        );
+        check("Gltf(object: 0)", 3, &["object 0 brings no camera"]);
+        check(
+            "Gltf(object: 5)",
+            3,
+            &["there is no object 5; the scene has 2 objects"],
+        );
+    }
+
+    /// A glTF file with the Cameras sample's square and three `KHR_lights_punctual` lights: a
+    /// directional light pointing down, a point light at (1, 2, 3), and a spot light (inner
+    /// 0.2, outer 0.5 radians) pointing down from (0, 4, 0) under a parent at (0, 0, −1).
+    fn lights_fixture(folder: &Path) -> PathBuf {
+        std::fs::copy(
+            asset("gltf/Cameras/glTF/simpleSquare.bin"),
+            folder.join("simpleSquare.bin"),
+        )
+        .unwrap();
+        let down = "[-0.70710678, 0, 0, 0.70710678]";
+        let text = format!(
+            r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensionsRequired": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [
+    {{"type": "directional", "color": [1, 0.5, 0.25], "intensity": 2}},
+    {{"type": "point", "intensity": 10}},
+    {{"type": "spot", "name": "Spot", "intensity": 5, "spot": {{"innerConeAngle": 0.2, "outerConeAngle": 0.5}}}}
+  ]}}}},
+  "scene": 0,
+  "scenes": [{{"nodes": [0, 1, 2, 4]}}],
+  "nodes": [
+    {{"mesh": 0}},
+    {{"rotation": {down}, "extensions": {{"KHR_lights_punctual": {{"light": 0}}}}}},
+    {{"translation": [1, 2, 3], "extensions": {{"KHR_lights_punctual": {{"light": 1}}}}}},
+    {{"translation": [0, 4, 0], "rotation": {down}, "extensions": {{"KHR_lights_punctual": {{"light": 2}}}}}},
+    {{"translation": [0, 0, -1], "children": [3]}}
+  ],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 1}}, "indices": 0}}]}}],
+  "buffers": [{{"uri": "simpleSquare.bin", "byteLength": 60}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 12, "target": 34963}},
+    {{"buffer": 0, "byteOffset": 12, "byteLength": 48, "target": 34962}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5123, "count": 6, "type": "SCALAR"}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}}
+  ]
+}}"#
+        );
+        write(folder, "lights.gltf", &text)
+    }
+
+    #[test]
+    fn gltf_lights_become_scene_lights_through_the_object_transform() {
+        let folder = tempfile::tempdir().unwrap();
+        lights_fixture(folder.path());
+        // Scale 2, then 90° about Z ((x, y) → (−y, x)), then (1, 0, 0).
+        let object = r#"(mesh: Gltf("lights.gltf"), scale: 2, rotate: (0, 0, 90), translate: (1, 0, 0))"#;
+        let scene = write(
+            folder.path(),
+            "scene.ron",
+            &format!("(lights: [Directional(direction: (0, 0, -1))], objects: [{object}])"),
+        );
+        let loaded = load_ok(&scene);
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let lights = &loaded.scene.lights;
+        assert_eq!(lights.len(), 4, "the scene's light, then the file's: {lights:?}");
+        assert!(matches!(lights[0], Light::Directional { direction, .. } if direction == Vec3::NEG_Z));
+        let Light::Directional { direction, color, .. } = lights[1] else {
+            panic!("directional expected: {:?}", lights[1])
+        };
+        assert!(direction.abs_diff_eq(Vec3::X, 1e-5), "{direction}");
+        assert_eq!(color, Vec3::new(2.0, 1.0, 0.5));
+        let Light::Point {
+            position,
+            color,
+            attenuation,
+            ..
+        } = lights[2]
+        else {
+            panic!("point expected: {:?}", lights[2])
+        };
+        // (1, 2, 3) → (2, 4, 6) → (−4, 2, 6) → (−3, 2, 6).
+        assert!(close(position, DVec3::new(-3.0, 2.0, 6.0)), "{position}");
+        assert_eq!(color, Vec3::splat(10.0));
+        assert_eq!(attenuation, crate::mesh::INVERSE_SQUARE);
+        let Light::Spot {
+            position,
+            direction,
+            color,
+            cutoff_degrees,
+            exponent,
+            ..
+        } = lights[3]
+        else {
+            panic!("spot expected: {:?}", lights[3])
+        };
+        // (0, 4, −1) → (0, 8, −2) → (−8, 0, −2) → (−7, 0, −2), pointing down → +X.
+        assert!(close(position, DVec3::new(-7.0, 0.0, -2.0)), "{position}");
+        assert!(direction.abs_diff_eq(Vec3::X, 1e-5), "{direction}");
+        assert_eq!(color, Vec3::splat(5.0));
+        assert!(
+            (cutoff_degrees - 28.647_89).abs() < 1e-3,
+            "0.5 rad in degrees: {cutoff_degrees}"
+        );
+        assert_eq!(
+            exponent,
+            crate::mesh::spot_exponent(0.2f32.to_degrees(), 0.5f32.to_degrees())
+        );
+        assert!(exponent > 0.0);
+
+        // Without `lights`, the file's lights replace the default headlight...
+        let scene = write(folder.path(), "scene.ron", &format!("(objects: [{object}])"));
+        assert_eq!(load_ok(&scene).scene.lights.len(), 3);
+        // ... which a glTF without lights still gets.
+        let scene = write(
+            folder.path(),
+            "scene.ron",
+            &format!(
+                "(objects: [(mesh: Gltf({:?}))])",
+                asset("gltf/Cameras/glTF/Cameras.gltf").display().to_string()
+            ),
+        );
+        assert_eq!(load_ok(&scene).scene.lights.len(), 1);
+    }
+
+    #[test]
+    fn cached_meshes_keep_their_lights_and_cameras() {
+        let folder = tempfile::tempdir().unwrap();
+        lights_fixture(folder.path());
+        named_cameras(folder.path());
+        let scene = write(
+            folder.path(),
+            "scene.ron",
+            r#"(camera: Gltf(object: 1, camera: "Persp"), objects: [(mesh: Gltf("lights.gltf")), (mesh: Gltf("Cameras.gltf"))])"#,
+        );
+        let mut cache = MeshCache::default();
+        let first = load_scene_cached(&scene, &LoadOptions::default(), &mut cache).unwrap();
+        let second = load_scene_cached(&scene, &LoadOptions::default(), &mut cache).unwrap();
+        assert!(
+            Arc::ptr_eq(&first.scene.objects[0].mesh, &second.scene.objects[0].mesh),
+            "cached"
+        );
+        assert_eq!(first.scene.lights, second.scene.lights);
+        assert_eq!(second.scene.lights.len(), 3);
+        assert_eq!(first.scene.camera, second.scene.camera);
+    }
 }

@@ -30,9 +30,19 @@ fn find_chromium() -> Option<PathBuf> {
         .find(|candidate| candidate.is_file())
 }
 
+/// A child process killed when dropped: Chromium must not outlive a failed test.
+struct KillOnDrop(Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// A headless Chromium with one page open, driven over the DevTools protocol; killed on drop.
 struct Browser {
-    child: Child,
+    _process: KillOnDrop,
     socket: WebSocket<TcpStream>,
     last_id: u64,
     _profile: tempfile::TempDir,
@@ -41,7 +51,8 @@ struct Browser {
 impl Browser {
     fn open(chromium: &Path, url: &str) -> Browser {
         let profile = tempfile::tempdir().unwrap();
-        let child = Command::new(chromium)
+        // Guarded at once: every step below may panic.
+        let process = Command::new(chromium)
             .args([
                 "--headless",
                 "--no-sandbox",
@@ -57,10 +68,14 @@ impl Browser {
             ])
             .arg(format!("--user-data-dir={}", profile.path().display()))
             .arg(url)
+            // Chromium leaves a singleton-socket folder in TMPDIR when killed: keep it in the
+            // profile, which is removed after the test.
+            .env("TMPDIR", profile.path())
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
+            .map(KillOnDrop)
             .unwrap_or_else(|e| panic!("cannot start {}: {e}", chromium.display()));
         // Chromium writes the DevTools port it chose into the profile once it listens.
         let port_file = profile.path().join("DevToolsActivePort");
@@ -97,7 +112,7 @@ impl Browser {
         let (socket, _) =
             tungstenite::client(page_socket.as_str(), stream).expect("the DevTools WebSocket opens");
         Browser {
-            child,
+            _process: process,
             socket,
             last_id: 0,
             _profile: profile,
@@ -168,13 +183,6 @@ page state: {state}
             }
             std::thread::sleep(std::time::Duration::from_millis(50));
         }
-    }
-}
-
-impl Drop for Browser {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
     }
 }
 
