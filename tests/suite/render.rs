@@ -740,10 +740,22 @@ fn a_texture_modulates_the_diffuse_colour_through_perspective_correct_uvs() {
         ],
         vec![[0, 1, 2], [0, 2, 3]],
     );
-    quad.uvs = vec![glam::Vec2::new(0.0, 1.0), glam::Vec2::new(1.0, 1.0), glam::Vec2::new(1.0, 0.0), glam::Vec2::ZERO];
-    let mut material = Material { diffuse: Vec3::splat(0.5), ..UNLIT_WHITE };
-    material.textures.diffuse =
-        Some(TextureBinding { texture: 0, uv_set: 0, sampler: Sampler::default(), scale: 1.0 });
+    quad.uvs = vec![
+        glam::Vec2::new(0.0, 1.0),
+        glam::Vec2::new(1.0, 1.0),
+        glam::Vec2::new(1.0, 0.0),
+        glam::Vec2::ZERO,
+    ];
+    let mut material = Material {
+        diffuse: Vec3::splat(0.5),
+        ..UNLIT_WHITE
+    };
+    material.textures.diffuse = Some(TextureBinding {
+        texture: 0,
+        uv_set: 0,
+        sampler: Sampler::default(),
+        scale: 1.0,
+    });
     for shading in [Shading::Phong, Shading::Gouraud, Shading::Flat] {
         let mut scene = pixel_aligned_scene(64, 64, vec![object(quad.clone(), material, shading)]);
         scene.textures = vec![texture.clone()];
@@ -751,9 +763,21 @@ fn a_texture_modulates_the_diffuse_colour_through_perspective_correct_uvs() {
         let at = |x: usize, y: usize| image.color[y * 64 + x];
         // Pixel centres at texel centres read the texel exactly, times k_d = 0.5.
         let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 0.02;
-        assert!(close(at(16, 16), Vec3::new(0.5, 0.0, 0.0)), "{shading:?}: {}", at(16, 16));
-        assert!(close(at(48, 16), Vec3::new(0.0, 0.5, 0.0)), "{shading:?}: {}", at(48, 16));
-        assert!(close(at(16, 48), Vec3::new(0.0, 0.0, 0.5)), "{shading:?}: {}", at(16, 48));
+        assert!(
+            close(at(16, 16), Vec3::new(0.5, 0.0, 0.0)),
+            "{shading:?}: {}",
+            at(16, 16)
+        );
+        assert!(
+            close(at(48, 16), Vec3::new(0.0, 0.5, 0.0)),
+            "{shading:?}: {}",
+            at(48, 16)
+        );
+        assert!(
+            close(at(16, 48), Vec3::new(0.0, 0.0, 0.5)),
+            "{shading:?}: {}",
+            at(16, 48)
+        );
         assert!(close(at(48, 48), Vec3::splat(0.5)), "{shading:?}: {}", at(48, 48));
     }
 }
