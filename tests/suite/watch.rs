@@ -274,8 +274,8 @@ fn an_in_place_write_gives_a_new_image() {
     // And again: the watch goes on after a change.
     folder.write("scene.ron", &scene_text((0.4, 1.0, 0.4)));
     expect_new_image(&watch, &folder, &second);
-    let line = watch.status_lines().pop().unwrap();
-    assert!(line.contains("scene.ron changed"), "{line}");
+    // The status line follows the image by a moment: wait for it too.
+    let line = watch.wait_for_stdout("scene.ron changed → out.png");
     assert!(line.contains("change to image"), "{line}");
 }
 
@@ -333,8 +333,7 @@ fn editing_an_included_material_file_gives_a_new_image() {
     let (watch, first) = start_watch(&folder);
     folder.write("mats.ron", &materials_text((0.1, 0.3, 0.9)));
     expect_new_image(&watch, &folder, &first);
-    let line = watch.status_lines().pop().unwrap();
-    assert!(line.contains("mats.ron changed"), "{line}");
+    watch.wait_for_stdout("mats.ron changed → out.png");
 }
 
 #[test]
@@ -343,8 +342,7 @@ fn editing_an_obj_mesh_gives_a_new_image() {
     let (watch, first) = start_watch(&folder);
     folder.write("tri.obj", "v -0.6 0.6 0\nv 0 -0.6 0\nv 0.6 0.6 0\nf 1 2 3\n");
     expect_new_image(&watch, &folder, &first);
-    let line = watch.status_lines().pop().unwrap();
-    assert!(line.contains("tri.obj changed"), "{line}");
+    watch.wait_for_stdout("tri.obj changed → out.png");
 }
 
 #[test]
@@ -379,8 +377,17 @@ fn an_unchanged_mesh_is_not_read_again() {
         || watch.output(),
         || (folder.image().as_deref() == Some(expected.as_slice())).then_some(()),
     );
+    // Wait for the successful build's line: any failed build's line comes before it.
+    let lines = wait_for(
+        "the successful build's status line",
+        || watch.output(),
+        || {
+            let lines = watch.status_lines();
+            lines[builds..].iter().any(|l| l.contains(" → ")).then_some(lines)
+        },
+    );
     assert!(
-        watch.status_lines()[builds..].iter().all(|l| l.contains(" → ")),
+        lines[builds..].iter().all(|l| l.contains(" → ")),
         "a build read the garbage mesh\n{}",
         watch.output()
     );
@@ -442,7 +449,11 @@ fn a_missing_include_is_reported_then_picked_up_when_created() {
     std::fs::remove_file(folder.file("mats.ron")).unwrap();
     let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "out.png"]);
     watch.wait_for_stdout("waiting for mats.ron to be created");
-    assert!(watch.stderr().contains("mats.ron"), "{}", watch.output());
+    wait_for(
+        "the diagnostic about mats.ron",
+        || watch.output(),
+        || watch.stderr().contains("mats.ron").then_some(()),
+    );
     assert!(
         folder.image().is_none(),
         "no image from a scene that does not load"
@@ -477,7 +488,8 @@ fn ctrl_c_stops_the_watch_cleanly() {
         .expect("kill runs");
     assert!(interrupted.success());
     assert_eq!(watch.wait_for_exit(), Some(0), "{}", watch.output());
-    assert!(watch.stdout().contains("stopped"), "{}", watch.output());
+    // The output pipe may still be being read after the exit.
+    watch.wait_for_stdout("stopped");
 }
 
 #[test]
@@ -655,10 +667,11 @@ fn a_busy_port_is_replaced_by_a_free_one_and_reported() {
     );
     let port = preview_port(&watch);
     assert_ne!(port, busy);
-    assert!(
-        watch.stderr().contains(&format!("port {busy} is not available")),
-        "{}",
-        watch.output()
+    let note = format!("port {busy} is not available");
+    wait_for(
+        "the note about the busy port",
+        || watch.output(),
+        || watch.stderr().contains(&note).then_some(()),
     );
     assert_eq!(http_get(port, "/", &format!("127.0.0.1:{port}")).0, 200);
 }
