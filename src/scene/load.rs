@@ -98,7 +98,7 @@ struct MeshKey {
 #[derive(Debug)]
 struct CachedMesh {
     /// Modification times of every file the mesh read, at load time.
-    stamps: Vec<(PathBuf, Option<SystemTime>)>,
+    stamps: Vec<(PathBuf, Option<FileStamp>)>,
     mesh: Arc<Mesh>,
     placed: Arc<Placed>,
     files_read: Vec<PathBuf>,
@@ -119,8 +119,13 @@ struct ObjectPlacement {
     placed: Arc<Placed>,
 }
 
-fn modified(path: &Path) -> Option<SystemTime> {
-    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+/// What says a file changed: its modification time and its size (two saves within one tick of
+/// a coarse file-system clock still differ in size more often than not).
+type FileStamp = (SystemTime, u64);
+
+fn modified(path: &Path) -> Option<FileStamp> {
+    let metadata = std::fs::metadata(path).ok()?;
+    Some((metadata.modified().ok()?, metadata.len()))
 }
 
 /// Loads the scene at `path`.
