@@ -347,16 +347,20 @@ fn editing_an_obj_mesh_gives_a_new_image() {
 
 #[test]
 fn an_unchanged_mesh_is_not_read_again() {
-    // The mesh cache trusts a file whose modification time has not changed. Replace the OBJ by
-    // garbage with its old time: if the next build read it again, it would fail.
+    // The mesh cache trusts a file whose modification time and size have not changed. Replace
+    // the OBJ by garbage of the same size with its old time: if the next build read it again,
+    // it would fail.
     let folder = SceneFolder::new();
     let (watch, first) = start_watch(&folder);
     let mesh = folder.file("tri.obj");
-    let modified = std::fs::metadata(&mesh).unwrap().modified().unwrap();
+    let metadata = std::fs::metadata(&mesh).unwrap();
+    let modified = metadata.modified().unwrap();
     // Written aside with the old time, then renamed into place: one step, so no build can see
     // the garbage with a new time in between.
     let garbage = folder.file("garbage.tmp");
-    std::fs::write(&garbage, "f 1 2 99\nthis is not an OBJ file\n").unwrap();
+    let mut junk = b"f 1 2 99\nthis is not an OBJ file\n".to_vec();
+    junk.resize(metadata.len() as usize, b'#');
+    std::fs::write(&garbage, &junk).unwrap();
     std::fs::File::options()
         .write(true)
         .open(&garbage)
