@@ -319,6 +319,8 @@ fn a_burst_of_writes_ends_in_the_image_of_the_last_one() {
     std::fs::write(&scene, &final_text).unwrap();
     std::fs::write(&scene, &final_text).unwrap();
     expect_new_image(&watch, &folder, &first);
+    // The image is renamed into place just before its status line is printed: wait for the line.
+    watch.wait_for_stdout(&format!("#{} ", builds_before + 1));
     let builds = watch.status_lines().len() - builds_before;
     assert!(
         (1..=5).contains(&builds),
