@@ -193,44 +193,28 @@ impl Frame {
     }
 }
 
-/// [`select_component`], split into (ambient + diffuse, specular + emission): the first part
-/// is what a colour texture multiplies.
+/// The component a pixel shows: the debug view's if one is asked, else the object's.
+fn shown_component(view: Option<DebugView>, component: LightingComponent) -> LightingComponent {
+    match view {
+        Some(DebugView::Ambient) => LightingComponent::Ambient,
+        Some(DebugView::Diffuse) => LightingComponent::Diffuse,
+        Some(DebugView::Specular) => LightingComponent::Specular,
+        None | Some(DebugView::Normals) | Some(DebugView::Depth) => component,
+    }
+}
+
+/// The terms a pixel shows, split into (ambient + diffuse, specular + emission): the first part
+/// is what a colour texture multiplies. Their sum is the pixel's colour.
 pub fn select_component_split(
     view: Option<DebugView>,
     component: LightingComponent,
     terms: &LightingTerms,
 ) -> (Vec3, Vec3) {
-    let component = match view {
-        Some(DebugView::Ambient) => LightingComponent::Ambient,
-        Some(DebugView::Diffuse) => LightingComponent::Diffuse,
-        Some(DebugView::Specular) => LightingComponent::Specular,
-        None | Some(DebugView::Normals) | Some(DebugView::Depth) => component,
-    };
-    match component {
+    match shown_component(view, component) {
         LightingComponent::All => (terms.ambient + terms.diffuse, terms.specular + terms.emission),
         LightingComponent::Ambient => (terms.ambient, Vec3::ZERO),
         LightingComponent::Diffuse => (terms.diffuse, Vec3::ZERO),
         LightingComponent::Specular => (Vec3::ZERO, terms.specular),
-    }
-}
-
-/// The terms a pixel shows: the debug view's if one is asked, else the object's component.
-pub fn select_component(
-    view: Option<DebugView>,
-    component: LightingComponent,
-    terms: &LightingTerms,
-) -> Vec3 {
-    let component = match view {
-        Some(DebugView::Ambient) => LightingComponent::Ambient,
-        Some(DebugView::Diffuse) => LightingComponent::Diffuse,
-        Some(DebugView::Specular) => LightingComponent::Specular,
-        None | Some(DebugView::Normals) | Some(DebugView::Depth) => component,
-    };
-    match component {
-        LightingComponent::All => terms.total(),
-        LightingComponent::Ambient => terms.ambient,
-        LightingComponent::Diffuse => terms.diffuse,
-        LightingComponent::Specular => terms.specular,
     }
 }
 

@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use crate::render::bin::{TileGrid, bin_triangles};
 use crate::render::geometry::{CameraSetup, build_depth_frame};
 use crate::render::raster::{SamplePattern, rasterize_tile};
-use crate::scene::{Camera, Light, Projection, Scene, ShadowSettings};
+use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
 
 /// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
 /// perspective face would need a field of view too wide to keep texels usefully small.
@@ -123,7 +123,7 @@ impl ShadowFace {
 /// Renders the shadow map of every light that casts shadows (`None` for the others), in the
 /// eye-relative space of a frame whose eye is `frame_eye`.
 pub fn render_shadow_maps(scene: &Scene, frame_eye: DVec3) -> Vec<Option<Arc<ShadowMap>>> {
-    let bounds = world_bounds(scene);
+    let bounds = bounding_sphere(&scene.objects);
     scene
         .lights
         .iter()
@@ -138,51 +138,13 @@ pub fn render_shadow_maps(scene: &Scene, frame_eye: DVec3) -> Vec<Option<Arc<Sha
         .collect()
 }
 
-/// A bounding sphere of every object, in world space.
-#[derive(Debug, Clone, Copy)]
-struct Bounds {
-    center: DVec3,
-    radius: f64,
-}
-
-fn world_bounds(scene: &Scene) -> Bounds {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for object in &scene.objects {
-        let Some((min, max)) = object.mesh.bounds() else {
-            continue;
-        };
-        for corner in 0..8 {
-            let pick = |bit: u32, a: f32, b: f32| f64::from(if corner & bit == 0 { a } else { b });
-            let local = DVec3::new(
-                pick(1, min.x, max.x),
-                pick(2, min.y, max.y),
-                pick(4, min.z, max.z),
-            );
-            let world = object.transform.transform_point3(local);
-            lo = lo.min(world);
-            hi = hi.max(world);
-        }
-    }
-    if lo.x.is_nan() || lo.x > hi.x {
-        return Bounds {
-            center: DVec3::ZERO,
-            radius: 1.0,
-        };
-    }
-    Bounds {
-        center: (lo + hi) / 2.0,
-        radius: ((hi - lo).length() / 2.0).max(1e-6),
-    }
-}
-
 /// Any unit vector not parallel to `forward`, for a camera's `up`.
 fn up_for(forward: DVec3) -> DVec3 {
     if forward.y.abs() < 0.9 { DVec3::Y } else { DVec3::Z }
 }
 
 /// The cameras (and map sizes) a light's shadow map is rendered from.
-fn light_views(light: &Light, bounds: Bounds, resolution: u32) -> Vec<(Camera, u32)> {
+fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32) -> Vec<(Camera, u32)> {
     let cube = |position: DVec3| -> Vec<(Camera, u32)> {
         let reach = (bounds.center - position).length() + bounds.radius;
         [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z]

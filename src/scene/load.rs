@@ -32,9 +32,9 @@ use crate::scene::format::{
 use crate::scene::locate::{PathSegment, locate, locate_keys};
 use crate::scene::presets::{self, DEFAULT_RECIPE, MaterialRecipe};
 use crate::scene::{
-    Attenuation, BackFaces, Camera, ImageSettings, Light, LightingComponent, LightingModel, Microfacet,
-    MicrofacetDistribution, NormalInterpolation, Object, Projection, Scene, Shading, ShadowSettings,
-    TextureBinding,
+    Attenuation, BackFaces, BoundingSphere, Camera, ImageSettings, Light, LightingComponent, LightingModel,
+    Microfacet, MicrofacetDistribution, NormalInterpolation, Object, Projection, Scene, Shading,
+    ShadowSettings, TextureBinding, bounding_sphere,
 };
 use crate::texture::{ColorSpace, Sampler, Texture};
 
@@ -222,7 +222,7 @@ impl Loader<'_> {
                 ObjectPlacement { transform, placed }
             }));
         }
-        let bounds = scene_bounds(&objects);
+        let bounds = bounding_sphere(&objects);
         let camera = match &file.camera {
             Some(CameraFile::Gltf { object, camera }) => self.gltf_camera(
                 object.as_ref(),
@@ -1208,7 +1208,7 @@ impl Loader<'_> {
         &mut self,
         camera: Option<&CameraFile>,
         source: SourceId,
-        bounds: Bounds,
+        bounds: BoundingSphere,
         image: Option<ImageSettings>,
     ) -> Option<Camera> {
         let field = |name: &str| ron_path!["camera", name];
@@ -1333,7 +1333,7 @@ impl Loader<'_> {
         object: Option<&NameOrIndexFile>,
         camera: Option<&NameOrIndexFile>,
         source: SourceId,
-        bounds: Bounds,
+        bounds: BoundingSphere,
         objects: &[format::ObjectFile],
         placements: &[Option<ObjectPlacement>],
     ) -> Option<Camera> {
@@ -1712,47 +1712,9 @@ impl Loader<'_> {
     }
 }
 
-/// A bounding sphere of the scene's objects in world space.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Bounds {
-    center: DVec3,
-    radius: f64,
-}
-
-fn scene_bounds(objects: &[Object]) -> Bounds {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for object in objects {
-        let Some((min, max)) = object.mesh.bounds() else {
-            continue;
-        };
-        for corner in 0..8 {
-            let pick = |bit: u32, a: f32, b: f32| f64::from(if corner & bit == 0 { a } else { b });
-            let local = DVec3::new(
-                pick(1, min.x, max.x),
-                pick(2, min.y, max.y),
-                pick(4, min.z, max.z),
-            );
-            let world = object.transform.transform_point3(local);
-            lo = lo.min(world);
-            hi = hi.max(world);
-        }
-    }
-    if lo.x > hi.x {
-        return Bounds {
-            center: DVec3::ZERO,
-            radius: 1.0,
-        };
-    }
-    Bounds {
-        center: (lo + hi) / 2.0,
-        radius: ((hi - lo).length() / 2.0).max(1e-6),
-    }
-}
-
 /// Where the default camera stands: a three-quarter view from the front-right and above, far
 /// enough back that the bounding sphere fits the narrower field of view with a margin.
-fn auto_eye(bounds: Bounds, target: DVec3, up: DVec3, fov_y_degrees: f64, aspect: f64) -> DVec3 {
+fn auto_eye(bounds: BoundingSphere, target: DVec3, up: DVec3, fov_y_degrees: f64, aspect: f64) -> DVec3 {
     // In a +Y-up frame: right (+X), above (+Y), in front (+Z).
     let y_up_direction = DVec3::new(0.6, 0.45, 1.0).normalize();
     let direction = DQuat::from_rotation_arc(DVec3::Y, up) * y_up_direction;

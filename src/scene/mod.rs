@@ -310,3 +310,43 @@ pub enum NormalInterpolation {
     /// Spherical linear interpolation: equal angles for equal steps.
     Slerp,
 }
+
+/// A sphere containing every object, in world space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoundingSphere {
+    pub center: DVec3,
+    pub radius: f64,
+}
+
+/// The sphere around the world-space bounding box of `objects` (each mesh's box through its
+/// transform); a unit sphere at the origin when there is nothing to bound.
+pub fn bounding_sphere(objects: &[Object]) -> BoundingSphere {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for object in objects {
+        let Some((min, max)) = object.mesh.bounds() else {
+            continue;
+        };
+        for corner in 0..8 {
+            let pick = |bit: u32, a: f32, b: f32| f64::from(if corner & bit == 0 { a } else { b });
+            let local = DVec3::new(
+                pick(1, min.x, max.x),
+                pick(2, min.y, max.y),
+                pick(4, min.z, max.z),
+            );
+            let world = object.transform.transform_point3(local);
+            lo = lo.min(world);
+            hi = hi.max(world);
+        }
+    }
+    if lo.x.is_nan() || lo.x > hi.x {
+        return BoundingSphere {
+            center: DVec3::ZERO,
+            radius: 1.0,
+        };
+    }
+    BoundingSphere {
+        center: (lo + hi) / 2.0,
+        radius: ((hi - lo).length() / 2.0).max(1e-6),
+    }
+}
