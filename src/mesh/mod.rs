@@ -122,11 +122,18 @@ impl Mesh {
                 ));
             }
         }
-        if !self.triangle_materials.is_empty() && self.triangle_materials.len() != self.triangles.len() {
+        // One material index per triangle when the mesh has materials, none when it has none.
+        let expected_indices = if self.materials.is_empty() {
+            0
+        } else {
+            self.triangles.len()
+        };
+        if self.triangle_materials.len() != expected_indices {
             return Err(format!(
-                "{} triangle materials for {} triangles",
+                "{} triangle materials for {} triangles and {} materials",
                 self.triangle_materials.len(),
-                self.triangles.len()
+                self.triangles.len(),
+                self.materials.len()
             ));
         }
         if let Some(m) = self
