@@ -18,8 +18,8 @@ use crate::diag::render_diagnostics;
 use crate::output::{self, Encoding, OutputFormat, PngCompression};
 use crate::pipeline::{RenderedScene, render_scene_file};
 use crate::render::{DebugView, RenderOptions};
-use crate::scene::Shading;
 use crate::scene::load::{LoadOptions, MeshCache};
+use crate::scene::{LightingModel, Shading};
 
 pub const EXIT_OK: i32 = 0;
 pub const EXIT_OUTPUT_FAILED: i32 = 1;
@@ -45,6 +45,8 @@ pub enum Command {
     Check(crate::check::CheckArgs),
     /// Re-render a scene whenever it, or any file it uses, changes.
     Watch(crate::watch::WatchArgs),
+    /// Time frames of scenes per shading mode (loaded once, rendered many times).
+    Bench(crate::bench::BenchArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -78,6 +80,9 @@ pub struct RenderArgs {
     /// Shade every object this way, overriding the scene.
     #[arg(long, value_enum)]
     pub shading: Option<ShadingArg>,
+    /// Light every material with this model, overriding the scene.
+    #[arg(long, value_enum)]
+    pub model: Option<ModelArg>,
     /// Render one ingredient of the lighting instead of the lit image.
     #[arg(long, value_enum, value_name = "VIEW")]
     pub debug: Option<DebugArg>,
@@ -104,6 +109,26 @@ pub enum ShadingArg {
     Flat,
     Gouraud,
     Phong,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ModelArg {
+    /// Specular `max(R·V, 0)^n`.
+    Phong,
+    /// Specular `max(N·H, 0)^n` with the half vector.
+    BlinnPhong,
+    /// Ambient and diffuse only.
+    Lambert,
+}
+
+impl ModelArg {
+    pub fn model(self) -> LightingModel {
+        match self {
+            ModelArg::Phong => LightingModel::Phong,
+            ModelArg::BlinnPhong => LightingModel::BlinnPhong,
+            ModelArg::Lambert => LightingModel::Lambert,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -137,6 +162,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
         Command::Render(args) => run_render(&args),
         Command::Check(args) => crate::check::run(&args),
         Command::Watch(args) => crate::watch::run(&args),
+        Command::Bench(args) => crate::bench::run(&args),
     }
 }
 
@@ -162,6 +188,7 @@ fn run_render(args: &RenderArgs) -> i32 {
             ShadingArg::Gouraud => Shading::Gouraud,
             ShadingArg::Phong => Shading::Phong,
         }),
+        model: args.model.map(ModelArg::model),
     };
     let render_options = RenderOptions {
         threads: args.threads.map(usize::from),

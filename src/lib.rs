@@ -12,6 +12,7 @@
 //! by the loader as a [`diag::Diagnostic`]. See `ARCHITECTURE.md` for the code map.
 #![deny(unsafe_code)]
 
+pub mod bench;
 pub mod check;
 pub mod cli;
 pub mod diag;

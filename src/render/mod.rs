@@ -82,10 +82,20 @@ pub struct RenderStats {
     /// Triangles that reached the rasterizer (after culling, clipping and dropping zero-area ones;
     /// a clipped triangle may count more than once).
     pub raster_triangles: usize,
-    /// Transform, lighting per vertex, clipping, setup and binning.
+    /// Shadow maps, then transform, lighting per vertex, clipping and setup (wall time).
     pub geometry: Duration,
-    /// Rasterizing and shading every tile, and stitching them.
+    /// Sorting the raster triangles into tiles (wall time).
+    pub binning: Duration,
+    /// Rasterizing and shading every tile, and stitching them (wall time).
     pub raster_shade: Duration,
+    /// Of `raster_shade`: rasterizing, summed over the tiles (thread time, not wall time).
+    pub raster_thread_time: Duration,
+    /// Of `raster_shade`: shading, summed over the tiles (thread time, not wall time).
+    pub shade_thread_time: Duration,
+    /// Of `raster_shade`: copying the tiles into the frame (wall time).
+    pub resolve: Duration,
+    /// Pixels shaded (a pixel seeing several triangles through its samples counts once each).
+    pub shaded_pixels: usize,
     pub threads: usize,
 }
 
@@ -104,20 +114,30 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
     let shadows = shadow::render_shadow_maps(scene, scene.camera.eye);
     let frame = geometry::build_frame(scene, pattern, options.debug_view, shadows);
-    let tiles = bin::TileGrid::new(scene.image.width, scene.image.height);
-    let bins = bin::bin_triangles(&tiles, &frame.raster);
     let geometry_time = started.elapsed();
 
     let started = Instant::now();
-    let tile_images: Vec<shade::TileImage> = (0..tiles.count())
+    let tiles = bin::TileGrid::new(scene.image.width, scene.image.height);
+    let bins = bin::bin_triangles(&tiles, &frame.raster);
+    let binning_time = started.elapsed();
+
+    let started = Instant::now();
+    let tile_images: Vec<(shade::TileImage, Duration, Duration)> = (0..tiles.count())
         .into_par_iter()
         .map(|index| {
             let rect = tiles.rect(index);
+            let raster_started = Instant::now();
             let visibility = raster::rasterize_tile(rect, pattern, &frame.raster, &bins[index]);
-            shade::shade_tile(&frame, &visibility, scene.image.background)
+            let shade_started = Instant::now();
+            let image = shade::shade_tile(&frame, &visibility, scene.image.background);
+            (image, shade_started - raster_started, shade_started.elapsed())
         })
         .collect();
-    let mut framebuffer = resolve(&tiles, tile_images);
+    let resolve_started = Instant::now();
+    let raster_thread_time = tile_images.iter().map(|tile| tile.1).sum();
+    let shade_thread_time = tile_images.iter().map(|tile| tile.2).sum();
+    let shaded_pixels = tile_images.iter().map(|tile| tile.0.shaded).sum();
+    let mut framebuffer = resolve(&tiles, tile_images.into_iter().map(|tile| tile.0));
     if options.debug_view == Some(DebugView::Depth) {
         normalize_depth(&mut framebuffer);
     }
@@ -125,14 +145,19 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
         triangles: scene.triangle_count(),
         raster_triangles: frame.raster.len(),
         geometry: geometry_time,
+        binning: binning_time,
         raster_shade: started.elapsed(),
+        raster_thread_time,
+        shade_thread_time,
+        resolve: resolve_started.elapsed(),
+        shaded_pixels,
         threads: rayon::current_num_threads(),
     };
     (framebuffer, stats)
 }
 
 /// Copies every tile into the frame, in tile order.
-fn resolve(tiles: &bin::TileGrid, tile_images: Vec<shade::TileImage>) -> FrameBuffer {
+fn resolve(tiles: &bin::TileGrid, tile_images: impl Iterator<Item = shade::TileImage>) -> FrameBuffer {
     let (width, height) = (tiles.width, tiles.height);
     let pixel_count = width as usize * height as usize;
     let mut framebuffer = FrameBuffer {
@@ -141,7 +166,7 @@ fn resolve(tiles: &bin::TileGrid, tile_images: Vec<shade::TileImage>) -> FrameBu
         color: vec![Vec3::ZERO; pixel_count],
         covered: vec![false; pixel_count],
     };
-    for (index, tile) in tile_images.into_iter().enumerate() {
+    for (index, tile) in tile_images.enumerate() {
         let rect = tiles.rect(index);
         let tile_width = rect.width() as usize;
         for row in 0..rect.height() as usize {

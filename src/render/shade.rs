@@ -23,6 +23,8 @@ use crate::scene::{NormalInterpolation, Shading, TextureBinding};
 pub struct TileImage {
     pub color: Vec<Vec3>,
     pub covered: Vec<bool>,
+    /// Shading evaluations: one per distinct triangle seen by each covered pixel.
+    pub shaded: usize,
 }
 
 /// The Gouraud colours of the back side of the last back-facing triangle shaded.
@@ -44,6 +46,7 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
     let mut image = TileImage {
         color: vec![background; pixel_count],
         covered: vec![false; pixel_count],
+        shaded: 0,
     };
     let mut back_colors: BackColorCache = None;
     // Distinct triangles at the current pixel: id, samples covered, sum of their offsets.
@@ -74,6 +77,7 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
         let centre_y = i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
         let mut sum = Vec3::ZERO;
         let mut covered_samples = 0;
+        image.shaded += seen.len();
         for &(id, count, offset_x, offset_y) in &seen {
             let n = i64::from(count);
             let at = (

@@ -61,6 +61,8 @@ pub struct LoadOptions {
     pub shading: Option<Shading>,
     /// Replaces the scene's samples per pixel.
     pub samples: Option<u32>,
+    /// Replaces the lighting model of every material.
+    pub model: Option<LightingModel>,
 }
 
 /// A scene that loaded, with what it read and the warnings it produced.
@@ -148,7 +150,10 @@ pub fn load_scene_cached(
         textures: Vec::new(),
         texture_paths: HashMap::new(),
     };
-    let scene = loader.load(options);
+    let mut scene = loader.load(options);
+    if let (Some(scene), Some(model)) = (&mut scene, options.model) {
+        scene.override_lighting_model(model);
+    }
     let (errors, warnings): (Vec<_>, Vec<_>) = loader.diagnostics.into_iter().partition(|d| d.is_error());
     match scene {
         Some(scene) if errors.is_empty() => Ok(LoadedScene {

@@ -35,6 +35,42 @@ impl Scene {
     pub fn triangle_count(&self) -> usize {
         self.objects.iter().map(|o| o.mesh.triangle_count()).sum()
     }
+
+    /// Gives every material of every object the lighting model `model` (the command line's
+    /// `--model`): the object's own material, the mesh's materials, or the default material.
+    /// A mesh shared with a cache is copied before its materials change.
+    pub fn override_lighting_model(&mut self, model: LightingModel) {
+        for object in &mut self.objects {
+            match &mut object.material {
+                Some(material) => material.model = model,
+                None if object.mesh.materials.is_empty() => {
+                    object.material = Some(Material {
+                        model,
+                        ..presets::default_material()
+                    });
+                }
+                None => {
+                    if object
+                        .mesh
+                        .materials
+                        .iter()
+                        .any(|material| material.model != model)
+                    {
+                        for material in &mut Arc::make_mut(&mut object.mesh).materials {
+                            material.model = model;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Gives every object the shading mode `shading` (the command line's `--shading`).
+    pub fn override_shading(&mut self, shading: Shading) {
+        for object in &mut self.objects {
+            object.shading = shading;
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
