@@ -4,7 +4,8 @@
 //! times untimed and `frames` times timed, in one process, as a GL benchmark times frames in a
 //! warm context. A frame is `render::render`: geometry, binning, rasterizing, shading and the
 //! resolve into a linear-light frame buffer; loading and encoding are not part of it (the
-//! one-shot `render` command reports those). Times are medians and minimums over the frames;
+//! one-shot `render` command reports those). Binning is part of the geometry stage (each chunk
+//! of triangles bins its own). Times are medians and minimums over the frames;
 //! the stage times are medians too, with rasterizing and shading given as thread time summed
 //! over tiles (they run interleaved on every core, so they have no wall time of their own).
 //!
@@ -195,13 +196,12 @@ pub fn run(args: &BenchArgs) -> i32 {
                 args.warmup,
             );
             println!(
-                "  {:<8} {:>3} {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} {:>8} | {:>7} {:>8} {:>8}{}",
+                "  {:<8} {:>3} {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>7} {:>8} {:>8}{}",
                 "mode",
                 "thr",
                 "median",
                 "min",
                 "geometry",
-                "binning",
                 "raster*",
                 "shade*",
                 "resolve",
@@ -321,7 +321,6 @@ fn report(
             "median_ms": ms(median),
             "min_ms": ms(measurement.min()),
             "geometry_ms": ms(measurement.stage(|s| s.geometry)),
-            "binning_ms": ms(measurement.stage(|s| s.binning)),
             "raster_thread_ms": ms(measurement.stage(|s| s.raster_thread_time)),
             "shade_thread_ms": ms(measurement.stage(|s| s.shade_thread_time)),
             "resolve_ms": ms(measurement.stage(|s| s.resolve)),
@@ -338,13 +337,12 @@ fn report(
         println!("{line}");
     } else {
         let mut row = format!(
-            "  {:<8} {:>3} {:>6.2} ms {:>6.2} ms | {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} | {:>7.1} {:>8.1} {:>8}",
+            "  {:<8} {:>3} {:>6.2} ms {:>6.2} ms | {:>8.2} {:>8.2} {:>8.2} {:>8.2} | {:>7.1} {:>8.1} {:>8}",
             mode.name(),
             stats.threads,
             ms(median),
             ms(measurement.min()),
             ms(measurement.stage(|s| s.geometry)),
-            ms(measurement.stage(|s| s.binning)),
             ms(measurement.stage(|s| s.raster_thread_time)),
             ms(measurement.stage(|s| s.shade_thread_time)),
             ms(measurement.stage(|s| s.resolve)),

@@ -19,6 +19,7 @@ use std::sync::Arc;
 
 use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate_with_visibility};
 use crate::render::DebugView;
+use crate::render::bin::{self, RasterChunk, TileGrid};
 use crate::render::clip::{Clipped, clip_triangle};
 use crate::render::raster::{GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, setup_triangle};
 use crate::render::shadow::ShadowMap;
@@ -29,18 +30,27 @@ use crate::scene::{
 };
 use crate::texture::Texture;
 
-/// Triangles per parallel work item: large enough to amortise scheduling, small enough to
-/// balance two to a few dozen cores. Fixed, so that output order never depends on threads.
-const TRIANGLE_CHUNK: usize = 4096;
+/// Triangles per parallel work item: large enough to amortise scheduling and per-chunk bins,
+/// small enough to balance two to a few dozen cores. Chunks cut the scene's whole triangle
+/// stream (objects one after another), so their boundaries depend only on the scene.
+pub const TRIANGLE_CHUNK: usize = 4096;
 
 /// Everything the tiles need to rasterize and shade one frame.
 #[derive(Debug, Clone)]
 pub struct Frame {
     pub vertices: Vec<FrameVertex>,
+    /// Per vertex, the lit colours of Gouraud objects; empty when no object is Gouraud-shaded.
+    pub vertex_colors: Vec<VertexColors>,
+    /// Per vertex, texture coordinates, tint and tangent; empty when no mesh has any of them.
+    pub vertex_attributes: Vec<VertexAttributes>,
     /// One per scene triangle, in scene order; `RasterTriangle::source` indexes this.
     pub triangles: Vec<FrameTriangle>,
-    pub raster: Vec<RasterTriangle>,
+    /// The raster triangles of each chunk of the triangle stream, binned into tiles.
+    pub raster: Vec<RasterChunk>,
+    pub tiles: TileGrid,
     pub materials: Vec<Material>,
+    /// Per material, the colour of constant-shaded objects (unused for the others).
+    pub constant_colors: Vec<Vec3>,
     /// Every texture of the frame; the materials' bindings index this.
     pub textures: Vec<Arc<Texture>>,
     /// One per scene object; `FrameTriangle::object` indexes this.
@@ -58,17 +68,27 @@ pub struct Frame {
 }
 
 /// A vertex in eye-relative world space (the eye at the origin, world axes).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct FrameVertex {
     pub position: Vec3,
     /// Unit normal, or zero when the mesh gives none usable.
     pub normal: Vec3,
-    /// Gouraud objects: the vertex's lit colour (front side) for the frame's view; with a
-    /// texture, only the part the texture does not modulate (specular and emission).
+}
+
+/// A Gouraud vertex's lit colour (front side) for the frame's view.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct VertexColors {
+    /// Without a colour texture, the whole colour; with one, only the part the texture does
+    /// not modulate (specular and emission).
     pub color: Vec3,
-    /// Gouraud objects with a texture: the ambient and diffuse part, which the texture
-    /// multiplies per pixel (seeds 000 and 004).
+    /// With a colour texture: the ambient and diffuse part, which the texture multiplies per
+    /// pixel (seeds 000 and 004).
     pub color_textured: Vec3,
+}
+
+/// The attributes only textured, tinted or normal-mapped meshes have.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VertexAttributes {
     pub uv: Vec2,
     pub uv1: Vec2,
     /// The mesh's vertex colour (glTF `COLOR_0`), white where there is none: multiplies `k_d`.
@@ -77,21 +97,24 @@ pub struct FrameVertex {
     pub tangent: Vec4,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
+impl Default for VertexAttributes {
+    fn default() -> Self {
+        VertexAttributes {
+            uv: Vec2::ZERO,
+            uv1: Vec2::ZERO,
+            tint: Vec3::ONE,
+            tangent: Vec4::ZERO,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct FrameTriangle {
     /// Indices into `Frame::vertices`, counter-clockwise from the front.
     pub vertices: [u32; 3],
     pub material: u32,
     /// Index into `Frame::objects`.
     pub object: u32,
-    /// Unit geometric normal of the front side, zero for a degenerate triangle.
-    pub face_normal: Vec3,
-    /// Flat and constant objects: the colour of the side that faces the camera (with a texture:
-    /// its specular and emission part).
-    pub flat_color: Vec3,
-    /// Flat objects with a texture: the ambient and diffuse part, multiplied by the texture per
-    /// pixel.
-    pub flat_textured: Vec3,
 }
 
 /// How an object is shaded: the settings the shading stage reads per pixel.
@@ -143,6 +166,78 @@ impl Viewer {
 }
 
 impl Frame {
+    /// The raster triangle with id `id` (as stored in visibility buffers).
+    #[inline]
+    pub fn raster_triangle(&self, id: u32) -> &RasterTriangle {
+        let (chunk, index) = bin::split_raster_id(id);
+        &self.raster[chunk].triangles[index]
+    }
+
+    /// Every raster triangle, in submission order.
+    pub fn raster_triangles(&self) -> impl Iterator<Item = &RasterTriangle> {
+        self.raster.iter().flat_map(|chunk| &chunk.triangles)
+    }
+
+    pub fn raster_triangle_count(&self) -> usize {
+        self.raster.iter().map(|chunk| chunk.triangles.len()).sum()
+    }
+
+    #[inline]
+    pub fn attributes(&self, vertex: u32) -> VertexAttributes {
+        self.vertex_attributes
+            .get(vertex as usize)
+            .copied()
+            .unwrap_or_default()
+    }
+
+    #[inline]
+    pub fn colors(&self, vertex: u32) -> VertexColors {
+        self.vertex_colors
+            .get(vertex as usize)
+            .copied()
+            .unwrap_or_default()
+    }
+
+    /// Unit geometric normal of the triangle's front side, zero for a degenerate triangle.
+    #[inline]
+    pub fn face_normal(&self, triangle: &FrameTriangle) -> Vec3 {
+        let [p0, p1, p2] = triangle.vertices.map(|v| self.vertices[v as usize].position);
+        (p1 - p0).cross(p2 - p0).normalize_or_zero()
+    }
+
+    /// A flat-shaded triangle's colour, split into (the part a colour texture multiplies, the
+    /// rest): lit once at its centroid with its face normal, on the side the camera sees.
+    /// Computed when a pixel first shows the triangle, so hidden triangles cost nothing.
+    pub fn flat_colors(&self, triangle: &FrameTriangle, back_facing: bool) -> (Vec3, Vec3) {
+        let style = &self.objects[triangle.object as usize];
+        let [p0, p1, p2] = triangle.vertices.map(|v| self.vertices[v as usize].position);
+        let centroid = (p0 + p1 + p2) / 3.0;
+        let material = &self.materials[triangle.material as usize];
+        let material = if self.vertex_attributes.is_empty() {
+            *material
+        } else {
+            let tint = triangle
+                .vertices
+                .map(|v| self.attributes(v).tint)
+                .iter()
+                .sum::<Vec3>()
+                / 3.0;
+            tinted(material, tint)
+        };
+        let (textured, rest) = self.light_material(
+            &material,
+            style,
+            centroid,
+            self.face_normal(triangle),
+            back_facing,
+        );
+        if has_color_texture(&material) {
+            (textured, rest)
+        } else {
+            (Vec3::ZERO, textured + rest)
+        }
+    }
+
     /// Lights a surface point of an object with `style`, on its front or back side, and returns
     /// the colour the frame's view and the object's component ask for. `normal` is the surface's
     /// own (front) normal; the back-face mode decides what the back side uses.
@@ -266,11 +361,21 @@ fn build(
 ) -> Frame {
     let eye = camera.eye;
     let camera = CameraSetup::new(camera, width as f64 / height as f64);
+    let vertex_count: usize = scene.objects.iter().map(|o| o.mesh.positions.len()).sum();
+    let needs_colors = lit && scene.objects.iter().any(|o| o.shading == Shading::Gouraud);
+    let needs_attributes = scene.objects.iter().any(|o| {
+        let mesh = &o.mesh;
+        !mesh.uvs.is_empty() || !mesh.uvs1.is_empty() || !mesh.colors.is_empty() || !mesh.tangents.is_empty()
+    });
     let mut frame = Frame {
-        vertices: Vec::with_capacity(scene.objects.iter().map(|o| o.mesh.positions.len()).sum()),
-        triangles: Vec::with_capacity(scene.triangle_count()),
+        vertices: Vec::with_capacity(vertex_count),
+        vertex_colors: Vec::with_capacity(if needs_colors { vertex_count } else { 0 }),
+        vertex_attributes: Vec::with_capacity(if needs_attributes { vertex_count } else { 0 }),
+        triangles: Vec::new(),
         raster: Vec::new(),
+        tiles: TileGrid::new(width, height),
         materials: Vec::new(),
+        constant_colors: Vec::new(),
         textures: scene.textures.clone(),
         objects: scene.objects.iter().map(ObjectStyle::of).collect(),
         lights: scene.lights.iter().map(|l| shading_light(l, eye)).collect(),
@@ -288,9 +393,23 @@ fn build(
         guard_x: GUARD_BAND_PIXELS / width as f32,
         guard_y: GUARD_BAND_PIXELS / height as f32,
     };
-    for (index, object) in scene.objects.iter().enumerate() {
-        add_object(&mut frame, index as u32, object, &camera, &viewport);
-    }
+    let mut projected = ProjectedVertices::default();
+    let placed: Vec<PlacedObject> = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(index, object)| {
+            add_object_vertices(
+                &mut frame,
+                &mut projected,
+                index as u32,
+                object,
+                &camera,
+                &viewport,
+            )
+        })
+        .collect();
+    add_triangles(&mut frame, scene, &placed, &projected, &viewport);
     frame
 }
 
@@ -300,6 +419,25 @@ struct Viewport {
     pattern: SamplePattern,
     guard_x: f32,
     guard_y: f32,
+}
+
+/// Every vertex of the frame in clip space, and projected to the screen when it lies inside
+/// every clip plane (so triangles that need no clipping reuse it instead of projecting their
+/// corners again).
+#[derive(Default)]
+struct ProjectedVertices {
+    clip: Vec<Vec4>,
+    /// Meaningful only where `inside` is set.
+    screen: Vec<ScreenVertex>,
+    inside: Vec<bool>,
+}
+
+/// Where an object's vertices and materials landed in the frame, for its triangles.
+struct PlacedObject {
+    vertex_base: u32,
+    material_base: u32,
+    uses_mesh_materials: bool,
+    mirrored: bool,
 }
 
 /// The camera's matrices with the eye moved to the origin.
@@ -453,13 +591,15 @@ impl ObjectTransforms {
     }
 }
 
-fn add_object(
+/// Materials, and the per-vertex work of one object: transform, projection, Gouraud lighting.
+fn add_object_vertices(
     frame: &mut Frame,
+    projected: &mut ProjectedVertices,
     object_index: u32,
     object: &Object,
     camera: &CameraSetup,
     viewport: &Viewport,
-) {
+) -> PlacedObject {
     let mesh = &*object.mesh;
     let transforms = ObjectTransforms::new(object, camera);
     let style = frame.objects[object_index as usize];
@@ -488,52 +628,63 @@ fn add_object(
     }
     let material_count = frame.materials.len() as u32 - material_base;
     let uses_mesh_materials = object.material.is_none() && !mesh.materials.is_empty();
-    let triangle_material = |t: usize| -> u32 {
-        if uses_mesh_materials {
-            material_base + mesh.triangle_materials.get(t).copied().unwrap_or(0)
-        } else {
-            material_base
-        }
-    };
-
-    // Vertices: transformed once each, lit once each for Gouraud.
     let vertex_base = frame.vertices.len() as u32;
-    let vertex_materials: Vec<u32> = if object.shading == Shading::Gouraud {
-        let mut materials = vec![material_base; mesh.positions.len()];
-        for (t, triangle) in mesh.triangles.iter().enumerate().rev() {
-            for &v in triangle {
-                materials[v as usize] = triangle_material(t);
+    let vertex_count = mesh.positions.len();
+
+    // Positions and normals, transformed once per vertex (not per triangle corner).
+    frame
+        .vertices
+        .resize(vertex_base as usize + vertex_count, FrameVertex::default());
+    frame.vertices[vertex_base as usize..]
+        .par_iter_mut()
+        .zip(mesh.positions.par_iter().zip(&mesh.normals))
+        .for_each(|(vertex, (&p, &n))| {
+            *vertex = FrameVertex {
+                position: transforms.world_from_model.transform_point3(p),
+                normal: (transforms.normal_matrix * n).normalize_or_zero(),
             }
-        }
-        materials
-    } else {
-        Vec::new()
-    };
-    let clip_positions: Vec<Vec4> = mesh
-        .positions
-        .par_iter()
-        .map(|&p| transforms.clip_from_model * p.extend(1.0))
-        .collect();
-    let new_vertices: Vec<FrameVertex> = mesh
-        .positions
-        .par_iter()
-        .zip(&mesh.normals)
-        .enumerate()
-        .map(|(v, (&p, &n))| {
-            let position = transforms.world_from_model.transform_point3(p);
-            let normal = (transforms.normal_matrix * n).normalize_or_zero();
-            let tint = mesh.colors.get(v).map_or(Vec3::ONE, |c| c.truncate());
-            let (color_textured, color) = if frame.lit && style.shading == Shading::Gouraud {
-                let material = tinted(&frame.materials[vertex_materials[v] as usize], tint);
-                let (textured, rest) = frame.light_material(&material, &style, position, normal, false);
-                if has_color_texture(&material) {
-                    (textured, rest)
-                } else {
-                    (Vec3::ZERO, textured + rest)
-                }
-            } else {
-                (Vec3::ZERO, Vec3::ZERO)
-            };
+        });
+    let (width, height) = (viewport.width as f32, viewport.height as f32);
+    projected
+        .clip
+        .resize(vertex_base as usize + vertex_count, Vec4::ZERO);
+    projected.screen.resize(
+        vertex_base as usize + vertex_count,
+        ScreenVertex {
+            x: 0.0,
+            y: 0.0,
+            depth: 0.0,
+            inv_w: 0.0,
+            weights: Vec3::ZERO,
+        },
+    );
+    projected
+        .inside
+        .resize(vertex_base as usize + vertex_count, false);
+    let range = vertex_base as usize..;
+    projected.clip[range.clone()]
+        .par_iter_mut()
+        .zip(projected.screen[range.clone()].par_iter_mut())
+        .zip(projected.inside[range].par_iter_mut())
+        .zip(mesh.positions.par_iter())
+        .for_each(|(((clip, screen), inside), &p)| {
+            *clip = transforms.clip_from_model * p.extend(1.0);
+            *inside = inside_clip_volume(*clip, viewport.guard_x, viewport.guard_y);
+            if *inside {
+                *screen = project(*clip, Vec3::ZERO, width, height);
+            }
+        });
+
+    let attributes =
+        !mesh.uvs.is_empty() || !mesh.uvs1.is_empty() || !mesh.colors.is_empty() || !mesh.tangents.is_empty();
+    if frame.vertex_attributes.capacity() > 0 {
+        frame
+            .vertex_attributes
+            .resize(vertex_base as usize, VertexAttributes::default());
+        frame.vertex_attributes.extend((0..vertex_count).map(|v| {
+            if !attributes {
+                return VertexAttributes::default();
+            }
             let tangent = mesh.tangents.get(v).map_or(Vec4::ZERO, |t| {
                 let direction = transforms
                     .world_from_model
@@ -542,172 +693,209 @@ fn add_object(
                 let handedness = if transforms.mirrored { -t.w } else { t.w };
                 direction.extend(handedness)
             });
-            FrameVertex {
-                position,
-                normal,
-                color,
-                color_textured,
+            VertexAttributes {
                 uv: mesh.uvs.get(v).copied().unwrap_or(Vec2::ZERO),
                 uv1: mesh.uvs1.get(v).copied().unwrap_or(Vec2::ZERO),
-                tint,
+                tint: mesh.colors.get(v).map_or(Vec3::ONE, |c| c.truncate()),
                 tangent,
             }
-        })
-        .collect();
-    frame.vertices.extend(new_vertices);
+        }));
+    }
+
+    // Gouraud: every vertex lit once, with the material of the first triangle that uses it.
+    if frame.vertex_colors.capacity() > 0 {
+        frame
+            .vertex_colors
+            .resize(vertex_base as usize + vertex_count, VertexColors::default());
+        if style.shading == Shading::Gouraud {
+            let mut vertex_materials = vec![material_base; vertex_count];
+            if uses_mesh_materials {
+                for (t, triangle) in mesh.triangles.iter().enumerate().rev() {
+                    let material = material_base + mesh.triangle_materials.get(t).copied().unwrap_or(0);
+                    for &v in triangle {
+                        vertex_materials[v as usize] = material;
+                    }
+                }
+            }
+            let mut colors = std::mem::take(&mut frame.vertex_colors);
+            let frame_ref = &*frame;
+            colors[vertex_base as usize..]
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(v, colors)| {
+                    let vertex = &frame_ref.vertices[vertex_base as usize + v];
+                    let material = &frame_ref.materials[vertex_materials[v] as usize];
+                    let material = match mesh.colors.get(v) {
+                        Some(tint) => tinted(material, tint.truncate()),
+                        None => *material,
+                    };
+                    let (textured, rest) =
+                        frame_ref.light_material(&material, &style, vertex.position, vertex.normal, false);
+                    *colors = if has_color_texture(&material) {
+                        VertexColors {
+                            color: rest,
+                            color_textured: textured,
+                        }
+                    } else {
+                        VertexColors {
+                            color: textured + rest,
+                            color_textured: Vec3::ZERO,
+                        }
+                    };
+                });
+            frame.vertex_colors = colors;
+        }
+    }
 
     // Constant shading: one colour per material for the whole object, lit at the centre of its
     // bounds with the normal facing the viewer.
-    let constant_colors: Vec<Vec3> = if frame.lit && style.shading == Shading::Constant {
+    frame.constant_colors.resize(frame.materials.len(), Vec3::ZERO);
+    if frame.lit && style.shading == Shading::Constant {
         let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
         let center = transforms.world_from_model.transform_point3((lo + hi) / 2.0);
         let normal = frame.viewer.to_viewer(center);
-        (material_base..material_base + material_count)
-            .map(|material| frame.light(material, &style, center, normal, false))
-            .collect()
-    } else {
-        Vec::new()
-    };
+        for material in material_base..material_base + material_count {
+            frame.constant_colors[material as usize] = frame.light(material, &style, center, normal, false);
+        }
+    }
+    PlacedObject {
+        vertex_base,
+        material_base,
+        uses_mesh_materials,
+        mirrored: transforms.mirrored,
+    }
+}
 
-    // Triangles, in fixed-size chunks.
-    let triangle_base = frame.triangles.len();
+/// Whether a clip-space point lies inside the near and far planes and the guard band.
+#[inline]
+fn inside_clip_volume(p: Vec4, guard_x: f32, guard_y: f32) -> bool {
+    // Written so that NaN compares false: a NaN vertex is never inside.
+    p.z <= p.w && p.z >= 0.0 && p.x.abs() <= guard_x * p.w && p.y.abs() <= guard_y * p.w && p.w > 0.0
+}
+
+/// The perspective divide and viewport mapping of a clip-space point with `w > 0`.
+#[inline]
+fn project(position: Vec4, weights: Vec3, width: f32, height: f32) -> ScreenVertex {
+    let inv_w = 1.0 / position.w;
+    let ndc = position.xyz() * inv_w;
+    ScreenVertex {
+        x: (ndc.x + 1.0) * 0.5 * width,
+        y: (1.0 - ndc.y) * 0.5 * height,
+        depth: ndc.z,
+        inv_w,
+        weights,
+    }
+}
+
+/// The per-triangle work: one frame triangle per scene triangle, and the raster triangles of
+/// each chunk of the stream, binned into tiles by the chunk itself (in parallel).
+fn add_triangles(
+    frame: &mut Frame,
+    scene: &Scene,
+    placed: &[PlacedObject],
+    projected: &ProjectedVertices,
+    viewport: &Viewport,
+) {
+    // Where each object's triangles start in the scene's stream.
+    let mut object_starts = Vec::with_capacity(scene.objects.len() + 1);
+    let mut total = 0usize;
+    for object in &scene.objects {
+        object_starts.push(total);
+        total += object.mesh.triangles.len();
+    }
+    object_starts.push(total);
+
+    let mut triangles = std::mem::take(&mut frame.triangles);
+    triangles.resize(total, FrameTriangle::default());
     let frame_ref = &*frame;
-    let chunks: Vec<(Vec<FrameTriangle>, Vec<RasterTriangle>)> = mesh
-        .triangles
-        .par_chunks(TRIANGLE_CHUNK)
+    let raster: Vec<RasterChunk> = triangles
+        .par_chunks_mut(TRIANGLE_CHUNK)
         .enumerate()
-        .map(|(chunk, triangles)| {
-            let mut frame_triangles = Vec::with_capacity(triangles.len());
-            let mut raster = Vec::new();
-            for (offset, &corners) in triangles.iter().enumerate() {
-                let t = chunk * TRIANGLE_CHUNK + offset;
-                let corners = if transforms.mirrored {
+        .map(|(chunk, out)| {
+            let first = chunk * TRIANGLE_CHUNK;
+            let mut raster = Vec::with_capacity(out.len());
+            // The object holding the chunk's first triangle; later ones follow in order.
+            let mut object = object_starts.partition_point(|&start| start <= first) - 1;
+            for (offset, slot) in out.iter_mut().enumerate() {
+                let source = first + offset;
+                while source >= object_starts[object + 1] {
+                    object += 1;
+                }
+                let t = source - object_starts[object];
+                let mesh = &scene.objects[object].mesh;
+                let place = &placed[object];
+                let corners = mesh.triangles[t];
+                let corners = if place.mirrored {
                     [corners[0], corners[2], corners[1]]
                 } else {
                     corners
                 };
-                let source = (triangle_base + t) as u32;
-                let material = triangle_material(t);
-                let triangle = FrameTriangleInput {
-                    corners,
-                    vertex_base,
-                    material,
-                    object: object_index,
-                    constant_color: constant_colors.get((material - material_base) as usize).copied(),
-                    source,
+                let material = if place.uses_mesh_materials {
+                    place.material_base + mesh.triangle_materials.get(t).copied().unwrap_or(0)
+                } else {
+                    place.material_base
                 };
-                frame_triangles.push(process_triangle(
-                    frame_ref,
-                    &triangle,
-                    &clip_positions,
-                    viewport,
-                    &mut raster,
-                ));
+                *slot = FrameTriangle {
+                    vertices: corners.map(|v| v + place.vertex_base),
+                    material,
+                    object: object as u32,
+                };
+                add_raster_triangles(frame_ref, slot, source as u32, projected, viewport, &mut raster);
             }
-            (frame_triangles, raster)
+            RasterChunk::new(raster, &frame_ref.tiles)
         })
         .collect();
-    for (triangles, raster) in chunks {
-        frame.triangles.extend(triangles);
-        frame.raster.extend(raster);
-    }
+    frame.triangles = triangles;
+    frame.raster = raster;
 }
 
-struct FrameTriangleInput {
-    /// Mesh-local vertex indices, counter-clockwise from the front in world space.
-    corners: [u32; 3],
-    vertex_base: u32,
-    material: u32,
-    object: u32,
-    /// Constant-shaded objects: the object's colour for this material.
-    constant_color: Option<Vec3>,
-    source: u32,
-}
-
-/// Builds the frame triangle and appends its raster triangles (none if culled or invisible).
-fn process_triangle(
+/// Appends the raster triangles of one frame triangle: none if it is culled or invisible, one
+/// if it needs no clipping, a fan if it does.
+fn add_raster_triangles(
     frame: &Frame,
-    input: &FrameTriangleInput,
-    clip_positions: &[Vec4],
+    triangle: &FrameTriangle,
+    source: u32,
+    projected: &ProjectedVertices,
     viewport: &Viewport,
     raster: &mut Vec<RasterTriangle>,
-) -> FrameTriangle {
-    let vertices = input.corners.map(|v| v + input.vertex_base);
-    let [p0, p1, p2] = vertices.map(|v| frame.vertices[v as usize].position);
-    let face_normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
-    let clip = input.corners.map(|v| clip_positions[v as usize]);
-    let style = &frame.objects[input.object as usize];
-    let mut triangle = FrameTriangle {
-        vertices,
-        material: input.material,
-        object: input.object,
-        face_normal,
-        flat_color: input.constant_color.unwrap_or(Vec3::ZERO),
-        flat_textured: Vec3::ZERO,
-    };
-
+) {
+    let clip = triangle.vertices.map(|v| projected.clip[v as usize]);
     let facing = homogeneous_facing(clip);
     let back_facing = facing < 0.0;
+    let style = &frame.objects[triangle.object as usize];
     let culled = frame.lit && back_facing && style.back_faces == BackFaces::Cull;
     if facing == 0.0 || facing.is_nan() || culled {
-        return triangle; // edge-on, degenerate, non-finite, or culled
+        return; // edge-on, degenerate, non-finite, or culled
     }
-    if frame.lit && style.shading == Shading::Flat {
-        let centroid = (p0 + p1 + p2) / 3.0;
-        let tint = vertices
-            .map(|v| frame.vertices[v as usize].tint)
-            .iter()
-            .sum::<Vec3>()
-            / 3.0;
-        let material = tinted(&frame.materials[input.material as usize], tint);
-        let (textured, rest) = frame.light_material(&material, style, centroid, face_normal, back_facing);
-        if has_color_texture(&material) {
-            (triangle.flat_textured, triangle.flat_color) = (textured, rest);
-        } else {
-            triangle.flat_color = textured + rest;
-        }
-    }
-
     let (width, height) = (viewport.width, viewport.height);
-    let project = |position: Vec4, weights: Vec3| {
-        let inv_w = 1.0 / position.w;
-        let ndc = position.xyz() * inv_w;
-        ScreenVertex {
-            x: (ndc.x + 1.0) * 0.5 * width as f32,
-            y: (1.0 - ndc.y) * 0.5 * height as f32,
-            depth: ndc.z,
-            inv_w,
-            weights,
-        }
-    };
     let setup = |corners: [ScreenVertex; 3]| {
-        setup_triangle(
-            corners,
-            width,
-            height,
-            viewport.pattern,
-            input.source,
-            back_facing,
-        )
+        setup_triangle(corners, width, height, viewport.pattern, source, back_facing)
     };
+    if triangle.vertices.iter().all(|&v| projected.inside[v as usize]) {
+        let corners = [0, 1, 2].map(|i| ScreenVertex {
+            weights: Vec3::AXES[i],
+            ..projected.screen[triangle.vertices[i] as usize]
+        });
+        raster.extend(setup(corners));
+        return;
+    }
     match clip_triangle(clip, viewport.guard_x, viewport.guard_y) {
         Clipped::Outside => {}
         Clipped::Inside => {
-            let corners = [0, 1, 2].map(|i| project(clip[i], Vec3::AXES[i]));
+            let corners = [0, 1, 2].map(|i| project(clip[i], Vec3::AXES[i], width as f32, height as f32));
             raster.extend(setup(corners));
         }
         Clipped::Polygon(polygon) => {
             let projected: Vec<ScreenVertex> = polygon
                 .vertices()
                 .iter()
-                .map(|v| project(v.position, v.weights))
+                .map(|v| project(v.position, v.weights, width as f32, height as f32))
                 .collect();
             for i in 1..projected.len().saturating_sub(1) {
                 raster.extend(setup([projected[0], projected[i], projected[i + 1]]));
             }
         }
     }
-    triangle
 }
 
 /// `material` with its diffuse colour multiplied by a vertex colour (glTF `COLOR_0`).

@@ -1,10 +1,10 @@
 //! The renderer: a pure function from a validated [`Scene`] to a linear-light [`FrameBuffer`].
 //!
 //! ```text
-//! geometry (per object, parallel over vertices and triangle chunks)
-//!   transform · per-vertex lighting (Gouraud) · facing · clip · project · snap · setup
-//!     └─► RasterTriangle list, in submission order
-//! bin      every RasterTriangle into the screen tiles its bounds touch (order kept)
+//! geometry (parallel over each object's vertices, then over chunks of the triangle stream)
+//!   transform · project · per-vertex lighting (Gouraud)        once per vertex
+//!   facing · clip · snap · setup · bin into tiles               per triangle, per chunk
+//!     └─► RasterChunk list: raster triangles and their tile bins, in submission order
 //! tiles    in parallel, each tile on its own:
 //!   raster   fixed-point edge functions, top-left rule, depth test → visibility buffer
 //!   shade    each visible pixel once: flat / Gouraud / Phong
@@ -82,10 +82,8 @@ pub struct RenderStats {
     /// Triangles that reached the rasterizer (after culling, clipping and dropping zero-area ones;
     /// a clipped triangle may count more than once).
     pub raster_triangles: usize,
-    /// Shadow maps, then transform, lighting per vertex, clipping and setup (wall time).
+    /// Shadow maps, then transform, lighting per vertex, clipping, setup and binning (wall time).
     pub geometry: Duration,
-    /// Sorting the raster triangles into tiles (wall time).
-    pub binning: Duration,
     /// Rasterizing and shading every tile, and stitching them (wall time).
     pub raster_shade: Duration,
     /// Of `raster_shade`: rasterizing, summed over the tiles (thread time, not wall time).
@@ -114,12 +112,9 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
     let shadows = shadow::render_shadow_maps(scene, scene.camera.eye);
     let frame = geometry::build_frame(scene, pattern, options.debug_view, shadows);
+    let tiles = frame.tiles;
+    // Binning is done by the geometry stage's chunks, in parallel with the rest of their work.
     let geometry_time = started.elapsed();
-
-    let started = Instant::now();
-    let tiles = bin::TileGrid::new(scene.image.width, scene.image.height);
-    let bins = bin::bin_triangles(&tiles, &frame.raster);
-    let binning_time = started.elapsed();
 
     let started = Instant::now();
     let tile_images: Vec<(shade::TileImage, Duration, Duration)> = (0..tiles.count())
@@ -127,7 +122,7 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
         .map(|index| {
             let rect = tiles.rect(index);
             let raster_started = Instant::now();
-            let visibility = raster::rasterize_tile(rect, pattern, &frame.raster, &bins[index]);
+            let visibility = raster::rasterize_tile(rect, pattern, &frame.raster, index);
             let shade_started = Instant::now();
             let image = shade::shade_tile(&frame, &visibility, scene.image.background);
             (image, shade_started - raster_started, shade_started.elapsed())
@@ -137,15 +132,15 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
     let raster_thread_time = tile_images.iter().map(|tile| tile.1).sum();
     let shade_thread_time = tile_images.iter().map(|tile| tile.2).sum();
     let shaded_pixels = tile_images.iter().map(|tile| tile.0.shaded).sum();
-    let mut framebuffer = resolve(&tiles, tile_images.into_iter().map(|tile| tile.0));
+    let tile_images: Vec<shade::TileImage> = tile_images.into_iter().map(|tile| tile.0).collect();
+    let mut framebuffer = resolve(&tiles, &tile_images);
     if options.debug_view == Some(DebugView::Depth) {
         normalize_depth(&mut framebuffer);
     }
     let stats = RenderStats {
         triangles: scene.triangle_count(),
-        raster_triangles: frame.raster.len(),
+        raster_triangles: frame.raster_triangle_count(),
         geometry: geometry_time,
-        binning: binning_time,
         raster_shade: started.elapsed(),
         raster_thread_time,
         shade_thread_time,
@@ -156,8 +151,9 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
     (framebuffer, stats)
 }
 
-/// Copies every tile into the frame, in tile order.
-fn resolve(tiles: &bin::TileGrid, tile_images: impl Iterator<Item = shade::TileImage>) -> FrameBuffer {
+/// Copies every tile into the frame: each band of tile rows in parallel (the bands are disjoint
+/// slices of the frame, so no order between them matters).
+fn resolve(tiles: &bin::TileGrid, tile_images: &[shade::TileImage]) -> FrameBuffer {
     let (width, height) = (tiles.width, tiles.height);
     let pixel_count = width as usize * height as usize;
     let mut framebuffer = FrameBuffer {
@@ -166,18 +162,27 @@ fn resolve(tiles: &bin::TileGrid, tile_images: impl Iterator<Item = shade::TileI
         color: vec![Vec3::ZERO; pixel_count],
         covered: vec![false; pixel_count],
     };
-    for (index, tile) in tile_images.enumerate() {
-        let rect = tiles.rect(index);
-        let tile_width = rect.width() as usize;
-        for row in 0..rect.height() as usize {
-            let frame_start = (rect.y0 as usize + row) * width as usize + rect.x0 as usize;
-            let tile_start = row * tile_width;
-            framebuffer.color[frame_start..frame_start + tile_width]
-                .copy_from_slice(&tile.color[tile_start..tile_start + tile_width]);
-            framebuffer.covered[frame_start..frame_start + tile_width]
-                .copy_from_slice(&tile.covered[tile_start..tile_start + tile_width]);
-        }
-    }
+    let band = TILE_SIZE as usize * width as usize;
+    framebuffer
+        .color
+        .par_chunks_mut(band)
+        .zip(framebuffer.covered.par_chunks_mut(band))
+        .enumerate()
+        .for_each(|(tile_row, (color, covered))| {
+            for column in 0..tiles.columns as usize {
+                let index = tile_row * tiles.columns as usize + column;
+                let (rect, tile) = (tiles.rect(index), &tile_images[index]);
+                let tile_width = rect.width() as usize;
+                for row in 0..rect.height() as usize {
+                    let band_start = row * width as usize + rect.x0 as usize;
+                    let tile_start = row * tile_width;
+                    color[band_start..band_start + tile_width]
+                        .copy_from_slice(&tile.color[tile_start..tile_start + tile_width]);
+                    covered[band_start..band_start + tile_width]
+                        .copy_from_slice(&tile.covered[tile_start..tile_start + tile_width]);
+                }
+            }
+        });
     framebuffer
 }
 

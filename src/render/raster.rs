@@ -33,6 +33,7 @@
 //! on a tie the first triangle in submission order wins.
 
 use crate::render::TILE_SIZE;
+use crate::render::bin::{RasterChunk, raster_id};
 use glam::Vec3;
 
 /// Fractional bits of the fixed-point screen coordinates.
@@ -118,7 +119,7 @@ pub fn setup_triangle(
     source: u32,
     back_facing: bool,
 ) -> Option<RasterTriangle> {
-    let snap = |v: f32| (v * SUBPIXEL_ONE as f32).round() as i32;
+    let snap = |v: f32| round_to_i32(v * SUBPIXEL_ONE as f32);
     let mut x = corners.map(|c| snap(c.x));
     let mut y = corners.map(|c| snap(c.y));
     let mut corners = corners;
@@ -144,6 +145,15 @@ pub fn setup_triangle(
         source,
         back_facing,
     })
+}
+
+/// Rounds to the nearest integer, ties to even, for |v| < 2^31. Adding and subtracting 1.5·2^52
+/// in `f64` leaves exactly the rounded value (the sum's last bit is a unit), in two additions:
+/// `f32::round` is a call into libm on CPUs without SSE4.1, and this runs per vertex.
+#[inline]
+fn round_to_i32(v: f32) -> i32 {
+    const ROUNDING: f64 = 6_755_399_441_055_744.0; // 1.5 · 2^52
+    ((f64::from(v) + ROUNDING) - ROUNDING) as i32
 }
 
 fn doubled_area(x: [i32; 3], y: [i32; 3]) -> i64 {
@@ -304,6 +314,9 @@ impl SamplePattern {
     }
 }
 
+/// The most samples per pixel a pattern has.
+pub const MAX_SAMPLES: usize = 16;
+
 /// Sentinel triangle id of a pixel no triangle covers.
 pub const NO_TRIANGLE: u32 = u32::MAX;
 
@@ -318,13 +331,13 @@ pub struct Visibility {
     pub triangle: Vec<u32>,
 }
 
-/// Rasterizes the triangles `indices` (in order) into the tile `rect`, keeping the nearest at
-/// every sample.
+/// Rasterizes tile `tile` (the pixels `rect`): every chunk's triangles binned to it, chunk by
+/// chunk and in order within each, keeping the nearest at every sample.
 pub fn rasterize_tile(
     rect: PixelRect,
     pattern: SamplePattern,
-    triangles: &[RasterTriangle],
-    indices: &[u32],
+    chunks: &[RasterChunk],
+    tile: usize,
 ) -> Visibility {
     let samples = pattern.len();
     let sample_count = (rect.width() * rect.height()) as usize * samples;
@@ -336,17 +349,76 @@ pub fn rasterize_tile(
     };
     debug_assert!(rect.width() <= TILE_SIZE);
     let tile_width = rect.width() as usize;
-    for &index in indices {
-        let triangle = &triangles[index as usize];
-        for_each_covered_sample(triangle, rect, pattern, |px, py, sample, depth| {
-            let slot = ((py - rect.y0) as usize * tile_width + (px - rect.x0) as usize) * samples + sample;
-            if depth > visibility.depth[slot] {
-                visibility.depth[slot] = depth;
-                visibility.triangle[slot] = index;
+    if samples == 1 {
+        for (chunk_index, chunk) in chunks.iter().enumerate() {
+            for &index in chunk.tile_triangles(tile) {
+                let triangle = &chunk.triangles[index as usize];
+                let id = raster_id(chunk_index, index as usize);
+                rasterize_single_sample(triangle, id, &mut visibility);
             }
-        });
+        }
+        return visibility;
+    }
+    for (chunk_index, chunk) in chunks.iter().enumerate() {
+        for &index in chunk.tile_triangles(tile) {
+            let triangle = &chunk.triangles[index as usize];
+            let id = raster_id(chunk_index, index as usize);
+            for_each_covered_sample(triangle, rect, pattern, |px, py, sample, depth| {
+                let slot =
+                    ((py - rect.y0) as usize * tile_width + (px - rect.x0) as usize) * samples + sample;
+                if depth > visibility.depth[slot] {
+                    visibility.depth[slot] = depth;
+                    visibility.triangle[slot] = id;
+                }
+            });
+        }
     }
     visibility
+}
+
+/// The depth test of one triangle at every pixel centre of the tile: [`for_each_covered_sample`]
+/// with one sample, written for the common case. The fill rule's bias is folded into the edge
+/// values (`E − min_inside ≥ 0`), so the inside test is one sign check of their bitwise or.
+/// Depth is computed from the unbiased values, exactly as the general loop does.
+fn rasterize_single_sample(triangle: &RasterTriangle, id: u32, visibility: &mut Visibility) {
+    let rect = visibility.rect;
+    let Some(area) = triangle.bounds.intersect(&rect) else {
+        return;
+    };
+    let [x0, x1, x2] = triangle.x;
+    let [y0, y1, y2] = triangle.y;
+    let mut edges = [
+        Edge::new(x1, y1, x2, y2, area.x0, area.y0),
+        Edge::new(x2, y2, x0, y0, area.x0, area.y0),
+        Edge::new(x0, y0, x1, y1, area.x0, area.y0),
+    ];
+    let [d0, d1, d2] = triangle.depth;
+    let inv_area = triangle.inv_area;
+    let tile_width = rect.width() as usize;
+    let columns = (area.x1 - area.x0) as usize;
+    for py in area.y0..area.y1 {
+        let row = (py - rect.y0) as usize * tile_width + (area.x0 - rect.x0) as usize;
+        let depths = &mut visibility.depth[row..row + columns];
+        let ids = &mut visibility.triangle[row..row + columns];
+        let [mut e0, mut e1, mut e2] = edges.map(|e| e.row_start);
+        for (depth_slot, id_slot) in depths.iter_mut().zip(ids.iter_mut()) {
+            let inside =
+                ((e0 - edges[0].min_inside) | (e1 - edges[1].min_inside) | (e2 - edges[2].min_inside)) >= 0;
+            if inside {
+                let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
+                if depth > *depth_slot {
+                    *depth_slot = depth;
+                    *id_slot = id;
+                }
+            }
+            e0 += edges[0].step_x;
+            e1 += edges[1].step_x;
+            e2 += edges[2].step_x;
+        }
+        for edge in &mut edges {
+            edge.row_start += edge.step_y;
+        }
+    }
 }
 
 /// Calls `visit(px, py, depth)` for every pixel of `rect` whose centre `triangle` covers.
@@ -383,11 +455,11 @@ pub fn for_each_covered_sample(
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
     // Each sample's offset turned into edge-function offsets, once per triangle.
-    let sample_offsets: Vec<[i64; 3]> = pattern
-        .offsets()
-        .iter()
-        .map(|&(ox, oy)| edges.map(|e| e.along_x * i64::from(ox) + e.along_y * i64::from(oy)))
-        .collect();
+    let mut offset_storage = [[0i64; 3]; MAX_SAMPLES];
+    for (offset, &(ox, oy)) in offset_storage.iter_mut().zip(pattern.offsets()) {
+        *offset = edges.map(|e| e.along_x * i64::from(ox) + e.along_y * i64::from(oy));
+    }
+    let sample_offsets = &offset_storage[..pattern.len()];
     let min_inside = edges.map(|e| e.min_inside);
     let inside = |e: [i64; 3]| e[0] >= min_inside[0] && e[1] >= min_inside[1] && e[2] >= min_inside[2];
     for py in area.y0..area.y1 {

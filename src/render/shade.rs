@@ -4,17 +4,19 @@
 //! screen-space barycentrics λ, which are made perspective-correct (`bᵢ = (λᵢ/wᵢ) / Σ λⱼ/wⱼ`;
 //! seed 002 names plain screen-space interpolation as a flaw), then mapped through the clipper's
 //! weights to the source triangle's three vertices. Then, by the object's shading mode:
-//! - `Flat`: the triangle's colour, lit once at its centroid by the geometry stage;
+//! - `Flat`: the triangle's colour, lit once at its centroid with its face normal, when a pixel
+//!   first shows it (hidden triangles are never lit);
 //! - `Gouraud`: the vertex colours, interpolated;
 //! - `Phong`: position and normal interpolated, the normal renormalised, lit here.
 //!
 //! Back faces are lit from behind with the normal flipped. Gouraud back colours are lit lazily
-//! here, for the few back faces that are actually visible, instead of for every vertex.
+//! here, for the few back faces that are actually visible, instead of for every vertex. Colours
+//! lit per triangle are kept in a small per-tile cache, so each is lit about once per tile.
 
 use glam::{Vec3, Vec4};
 
 use crate::render::DebugView;
-use crate::render::geometry::{Frame, FrameVertex, has_color_texture, tinted};
+use crate::render::geometry::{Frame, VertexAttributes, has_color_texture, tinted};
 use crate::render::raster::{NO_TRIANGLE, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_values};
 use crate::scene::{NormalInterpolation, Shading, TextureBinding};
 
@@ -27,9 +29,42 @@ pub struct TileImage {
     pub shaded: usize,
 }
 
-/// The Gouraud colours of the back side of the last back-facing triangle shaded.
-/// Per vertex: (the part a colour texture multiplies, the rest); see `Frame::light_material`.
-type BackColorCache = Option<(u32, [(Vec3, Vec3); 3])>;
+/// Colours lit per triangle while shading a tile, so that each is lit once however many pixels
+/// show it: a small direct-mapped table keyed by the triangle's id. The neighbours of a pixel
+/// nearly always show the same few triangles, so a small table catches almost every repeat.
+struct TriangleColorCache<T: Copy> {
+    keys: [u32; TRIANGLE_CACHE_SIZE],
+    values: [T; TRIANGLE_CACHE_SIZE],
+}
+
+const TRIANGLE_CACHE_SIZE: usize = 64;
+
+impl<T: Copy + Default> TriangleColorCache<T> {
+    fn new() -> Self {
+        TriangleColorCache {
+            keys: [NO_TRIANGLE; TRIANGLE_CACHE_SIZE],
+            values: [T::default(); TRIANGLE_CACHE_SIZE],
+        }
+    }
+
+    #[inline]
+    fn get_or_insert_with(&mut self, key: u32, make: impl FnOnce() -> T) -> T {
+        let slot = key as usize % TRIANGLE_CACHE_SIZE;
+        if self.keys[slot] != key {
+            self.values[slot] = make();
+            self.keys[slot] = key;
+        }
+        self.values[slot]
+    }
+}
+
+/// Per tile: flat-shaded triangles' colours, and the Gouraud colours of back sides (lit on
+/// demand, since most back faces are never seen). Each is (the part a colour texture
+/// multiplies, the rest); see `Frame::light_material`.
+struct TileCaches {
+    flat: TriangleColorCache<(Vec3, Vec3)>,
+    back: TriangleColorCache<[(Vec3, Vec3); 3]>,
+}
 
 /// Shades every pixel of a tile.
 ///
@@ -48,10 +83,32 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
         covered: vec![false; pixel_count],
         shaded: 0,
     };
-    let mut back_colors: BackColorCache = None;
+    let mut caches = TileCaches {
+        flat: TriangleColorCache::new(),
+        back: TriangleColorCache::new(),
+    };
     // Distinct triangles at the current pixel: id, samples covered, sum of their offsets.
     let mut seen: Vec<(u32, u32, i64, i64)> = Vec::with_capacity(samples);
     let depth_view = frame.debug_view == Some(DebugView::Depth);
+    if samples == 1 {
+        // One sample at the pixel centre: the general loop below with `seen` holding one entry
+        // at offset zero, and the same result bit for bit.
+        for (slot, &id) in visibility.triangle.iter().enumerate() {
+            if id == NO_TRIANGLE {
+                continue;
+            }
+            let px = rect.x0 + slot as u32 % rect.width();
+            let py = rect.y0 + slot as u32 / rect.width();
+            let at = (
+                i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
+                i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
+            );
+            image.color[slot] = shade_sample(frame, frame.raster_triangle(id), at, &mut caches);
+            image.covered[slot] = true;
+            image.shaded += 1;
+        }
+        return image;
+    }
     for slot in 0..pixel_count {
         let ids = &visibility.triangle[slot * samples..(slot + 1) * samples];
         if ids.iter().all(|&id| id == NO_TRIANGLE) {
@@ -84,7 +141,7 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
                 centre_x + offset_x.div_euclid(n),
                 centre_y + offset_y.div_euclid(n),
             );
-            let color = shade_sample(frame, &frame.raster[id as usize], at, &mut back_colors);
+            let color = shade_sample(frame, frame.raster_triangle(id), at, &mut caches);
             sum += color * count as f32;
             covered_samples += count;
         }
@@ -111,12 +168,7 @@ pub fn source_weights(triangle: &RasterTriangle, at: (i64, i64)) -> Vec3 {
     triangle.weights[0] * corner.x + triangle.weights[1] * corner.y + triangle.weights[2] * corner.z
 }
 
-fn shade_sample(
-    frame: &Frame,
-    raster: &RasterTriangle,
-    at: (i64, i64),
-    back_colors: &mut BackColorCache,
-) -> Vec3 {
+fn shade_sample(frame: &Frame, raster: &RasterTriangle, at: (i64, i64), caches: &mut TileCaches) -> Vec3 {
     let weights = source_weights(raster, at);
     let triangle = &frame.triangles[raster.source as usize];
     let style = &frame.objects[triangle.object as usize];
@@ -129,14 +181,14 @@ fn shade_sample(
             NormalInterpolation::Nlerp => interpolate(a.normal, b.normal, c.normal),
             NormalInterpolation::Slerp => slerp_triangle([a.normal, b.normal, c.normal], weights),
         };
-        renormalize_or(interpolated, triangle.face_normal)
+        renormalize_or(interpolated, frame.face_normal(triangle))
     };
 
     match frame.debug_view {
         Some(DebugView::Depth) => return Vec3::splat(position.dot(frame.forward)),
         Some(DebugView::Normals) => {
             let normal = match style.shading {
-                Shading::Flat | Shading::Constant => triangle.face_normal,
+                Shading::Flat | Shading::Constant => frame.face_normal(triangle),
                 Shading::Gouraud | Shading::Phong => smooth_normal(),
             };
             return style.side_normal(normal, back) * 0.5 + 0.5;
@@ -158,9 +210,11 @@ fn shade_sample(
     } else {
         (weights, weights)
     };
+    let attributes = || triangle.vertices.map(|v| frame.attributes(v));
     let sample = |binding: &TextureBinding| -> Vec4 {
-        let uv_of = |v: &FrameVertex| if binding.uv_set == 1 { v.uv1 } else { v.uv };
-        let uv_at = |w: Vec3| uv_of(a) * w.x + uv_of(b) * w.y + uv_of(c) * w.z;
+        let [a, b, c] = attributes();
+        let uv_of = |v: &VertexAttributes| if binding.uv_set == 1 { v.uv1 } else { v.uv };
+        let uv_at = |w: Vec3| uv_of(&a) * w.x + uv_of(&b) * w.y + uv_of(&c) * w.z;
         let uv = uv_at(weights);
         frame.textures[binding.texture as usize].sample(
             uv,
@@ -172,31 +226,42 @@ fn shade_sample(
     let modulation = || color_texture.map_or(Vec3::ONE, |binding| sample(&binding).truncate());
 
     match style.shading {
-        Shading::Flat | Shading::Constant if color_texture.is_some() => {
-            triangle.flat_color + triangle.flat_textured * modulation()
+        Shading::Constant => frame.constant_colors[triangle.material as usize],
+        Shading::Flat => {
+            let (textured_part, rest) = caches
+                .flat
+                .get_or_insert_with(raster.source, || frame.flat_colors(triangle, back));
+            if color_texture.is_some() {
+                rest + textured_part * modulation()
+            } else {
+                rest
+            }
         }
-        Shading::Flat | Shading::Constant => triangle.flat_color,
         Shading::Gouraud => {
             let colors = if back {
-                match *back_colors {
-                    Some((source, colors)) if source == raster.source => colors,
-                    _ => {
-                        let colors = [a, b, c].map(|v| {
-                            let vertex_material = tinted(material, v.tint);
-                            let (textured_part, rest) =
-                                frame.light_material(&vertex_material, style, v.position, v.normal, true);
-                            if has_color_texture(&vertex_material) {
-                                (textured_part, rest)
-                            } else {
-                                (Vec3::ZERO, textured_part + rest)
-                            }
-                        });
-                        *back_colors = Some((raster.source, colors));
-                        colors
-                    }
-                }
+                caches.back.get_or_insert_with(raster.source, || {
+                    triangle.vertices.map(|v| {
+                        let vertex = &frame.vertices[v as usize];
+                        let vertex_material = tinted(material, frame.attributes(v).tint);
+                        let (textured_part, rest) = frame.light_material(
+                            &vertex_material,
+                            style,
+                            vertex.position,
+                            vertex.normal,
+                            true,
+                        );
+                        if has_color_texture(&vertex_material) {
+                            (textured_part, rest)
+                        } else {
+                            (Vec3::ZERO, textured_part + rest)
+                        }
+                    })
+                })
             } else {
-                [a, b, c].map(|v| (v.color_textured, v.color))
+                triangle.vertices.map(|v| {
+                    let colors = frame.colors(v);
+                    (colors.color_textured, colors.color)
+                })
             };
             let rest = interpolate(colors[0].1, colors[1].1, colors[2].1);
             if color_texture.is_some() || material.textures.ambient.is_some() {
@@ -206,7 +271,12 @@ fn shade_sample(
             }
         }
         Shading::Phong => {
-            let mut surface = tinted(material, interpolate(a.tint, b.tint, c.tint));
+            let mut surface = if frame.vertex_attributes.is_empty() {
+                *material
+            } else {
+                let [ta, tb, tc] = attributes();
+                tinted(material, interpolate(ta.tint, tb.tint, tc.tint))
+            };
             if let Some(binding) = material.textures.diffuse {
                 let texel = sample(&binding).truncate();
                 surface.diffuse *= texel;
@@ -219,7 +289,8 @@ fn shade_sample(
             }
             let mut normal = smooth_normal();
             if let Some(binding) = material.textures.normal {
-                let tangent = a.tangent * weights.x + b.tangent * weights.y + c.tangent * weights.z;
+                let [ta, tb, tc] = attributes();
+                let tangent = ta.tangent * weights.x + tb.tangent * weights.y + tc.tangent * weights.z;
                 normal = perturb_normal(normal, tangent, sample(&binding).truncate(), binding.scale);
             }
             let (textured_part, rest) = frame.light_material(&surface, style, position, normal, back);

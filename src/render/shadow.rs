@@ -25,7 +25,6 @@ use std::sync::Arc;
 use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
 use rayon::prelude::*;
 
-use crate::render::bin::{TileGrid, bin_triangles};
 use crate::render::geometry::{CameraSetup, build_depth_frame};
 use crate::render::raster::{SamplePattern, rasterize_tile};
 use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
@@ -210,18 +209,10 @@ fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32) -> Vec<(C
 /// Renders one face's depth, and its mapping from the frame's eye-relative space.
 fn render_face(scene: &Scene, camera: &Camera, size: u32, frame_eye: DVec3) -> ShadowFace {
     let frame = build_depth_frame(scene, camera, size);
-    let grid = TileGrid::new(size, size);
-    let bins = bin_triangles(&grid, &frame.raster);
+    let grid = frame.tiles;
     let tiles: Vec<_> = (0..grid.count())
         .into_par_iter()
-        .map(|index| {
-            rasterize_tile(
-                grid.rect(index),
-                SamplePattern::SINGLE,
-                &frame.raster,
-                &bins[index],
-            )
-        })
+        .map(|index| rasterize_tile(grid.rect(index), SamplePattern::SINGLE, &frame.raster, index))
         .collect();
     let mut depth = vec![f32::NEG_INFINITY; size as usize * size as usize];
     for (index, tile) in tiles.iter().enumerate() {

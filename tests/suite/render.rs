@@ -78,7 +78,7 @@ fn coverage_counts(scene: &Scene) -> Vec<u32> {
         y1: height,
     };
     let mut counts = vec![0; (width * height) as usize];
-    for triangle in &frame.raster {
+    for triangle in frame.raster_triangles() {
         for_each_covered_pixel(triangle, rect, |x, y, _| counts[(y * width + x) as usize] += 1);
     }
     counts
@@ -171,7 +171,7 @@ fn every_sample_of_every_pattern_is_covered_exactly_once() {
             y1: 48,
         };
         let mut counts = vec![0u32; 64 * 48 * samples as usize];
-        for triangle in &frame.raster {
+        for triangle in frame.raster_triangles() {
             for_each_covered_sample(triangle, rect, pattern, |x, y, sample, _| {
                 counts[(y * 64 + x) as usize * samples as usize + sample] += 1
             });
