@@ -16,6 +16,7 @@ use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ImageEncoder, RgbImage};
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::render::FrameBuffer;
 
@@ -36,12 +37,11 @@ pub enum OutputError {
     },
 }
 
-/// One channel of linear light to an 8-bit level.
+/// One channel of linear light to an 8-bit level. `f32::max` returns the other operand when one
+/// is NaN, so NaN becomes 0 without a branch (this runs for every channel of every image).
+#[inline]
 pub fn quantize_channel(value: f32) -> u8 {
-    if value.is_nan() {
-        return 0;
-    }
-    (value.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+    (value.max(0.0).min(1.0) * 255.0 + 0.5) as u8
 }
 
 /// How 8-bit output stores light.
@@ -71,14 +71,23 @@ pub fn to_rgb8(framebuffer: &FrameBuffer) -> RgbImage {
 }
 
 pub fn to_rgb8_encoded(framebuffer: &FrameBuffer, encoding: Encoding) -> RgbImage {
-    let mut bytes = Vec::with_capacity(framebuffer.color.len() * 3);
-    for color in &framebuffer.color {
-        let color = match encoding {
-            Encoding::Linear => *color,
-            Encoding::Srgb => color.clamp(Vec3::ZERO, Vec3::ONE).map(linear_to_srgb),
-        };
-        bytes.extend(color.to_array().map(quantize_channel));
-    }
+    let mut bytes = vec![0u8; framebuffer.color.len() * 3];
+    // Rows in parallel: each writes its own bytes, so the result does not depend on threads.
+    let row = framebuffer.width.max(1) as usize;
+    bytes
+        .par_chunks_mut(row * 3)
+        .zip(framebuffer.color.par_chunks(row))
+        .for_each(|(out, colors)| {
+            for (out, color) in out.chunks_exact_mut(3).zip(colors) {
+                let color = match encoding {
+                    Encoding::Linear => *color,
+                    Encoding::Srgb => color.clamp(Vec3::ZERO, Vec3::ONE).map(linear_to_srgb),
+                };
+                out[0] = quantize_channel(color.x);
+                out[1] = quantize_channel(color.y);
+                out[2] = quantize_channel(color.z);
+            }
+        });
     RgbImage::from_raw(framebuffer.width, framebuffer.height, bytes)
         .expect("a frame buffer holds width × height pixels")
 }

@@ -24,6 +24,7 @@ pub mod clip;
 pub mod geometry;
 pub mod raster;
 pub mod shade;
+pub mod shade_fast;
 pub mod shadow;
 
 use std::time::{Duration, Instant};

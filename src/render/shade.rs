@@ -18,6 +18,7 @@ use glam::{Vec3, Vec4};
 use crate::render::DebugView;
 use crate::render::geometry::{Frame, VertexAttributes, has_color_texture, tinted};
 use crate::render::raster::{NO_TRIANGLE, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_values};
+use crate::render::shade_fast::FastPhong;
 use crate::scene::{NormalInterpolation, Shading, TextureBinding};
 
 /// The shaded pixels of one tile, row-major.
@@ -92,7 +93,10 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
     let depth_view = frame.debug_view == Some(DebugView::Depth);
     if samples == 1 {
         // One sample at the pixel centre: the general loop below with `seen` holding one entry
-        // at offset zero, and the same result bit for bit.
+        // at offset zero, and the same result bit for bit. What depends only on the triangle
+        // is looked up once per run of pixels showing it.
+        let fast_allowed = FastPhong::frame_allows(frame);
+        let mut current: Option<(u32, &RasterTriangle, Option<FastPhong>)> = None;
         for (slot, &id) in visibility.triangle.iter().enumerate() {
             if id == NO_TRIANGLE {
                 continue;
@@ -103,7 +107,23 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
                 i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
                 i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
             );
-            image.color[slot] = shade_sample(frame, frame.raster_triangle(id), at, &mut caches);
+            let (_, raster, fast) = match &current {
+                Some((current_id, ..)) if *current_id == id => current.as_ref().expect("matched"),
+                _ => {
+                    let raster = frame.raster_triangle(id);
+                    let triangle = &frame.triangles[raster.source as usize];
+                    let fast = if fast_allowed {
+                        FastPhong::new(frame, triangle, raster.back_facing)
+                    } else {
+                        None
+                    };
+                    current.insert((id, raster, fast))
+                }
+            };
+            image.color[slot] = match fast {
+                Some(fast) => fast.shade(source_weights(raster, at)),
+                None => shade_sample(frame, raster, at, &mut caches),
+            };
             image.covered[slot] = true;
             image.shaded += 1;
         }
@@ -181,7 +201,7 @@ fn shade_sample(frame: &Frame, raster: &RasterTriangle, at: (i64, i64), caches: 
             NormalInterpolation::Nlerp => interpolate(a.normal, b.normal, c.normal),
             NormalInterpolation::Slerp => slerp_triangle([a.normal, b.normal, c.normal], weights),
         };
-        renormalize_or(interpolated, frame.face_normal(triangle))
+        renormalize_or_else(interpolated, || frame.face_normal(triangle))
     };
 
     match frame.debug_view {
@@ -315,13 +335,14 @@ pub fn perturb_normal(normal: Vec3, tangent: Vec4, texel: Vec3, scale: f32) -> V
 }
 
 /// `v` scaled to unit length; where it has (almost) none, as when the vertex normals of an
-/// edge point in opposite directions, `fallback` (the face normal).
-fn renormalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
+/// edge point in opposite directions, `fallback()` (the face normal).
+#[inline]
+pub(crate) fn renormalize_or_else(v: Vec3, fallback: impl FnOnce() -> Vec3) -> Vec3 {
     let length_squared = v.length_squared();
     if length_squared > 1e-12 {
         v / length_squared.sqrt()
     } else {
-        fallback
+        fallback()
     }
 }
 

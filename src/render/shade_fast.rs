@@ -1,0 +1,289 @@
+//! The common case of per-pixel shading, without the general path's branches per pixel.
+//!
+//! Most pixels of most scenes are Phong-shaded (interpolated normals, lit per pixel) with a plain
+//! Phong or Blinn-Phong material, lights without shadows, and no texture. For those, everything
+//! that does not change from pixel to pixel is decided once per triangle ([`FastPhong::new`]
+//! returns `None` for anything else, and the general path in `shade` handles it), and the
+//! lighting loop is specialised per light kind and model.
+//!
+//! The arithmetic is the general path's (`lighting::illuminate_with_visibility` followed by the
+//! split of `Frame::light_material`), operation for operation and in the same order, so a pixel
+//! has the same bits whichever path shaded it; a test holds the two together.
+
+use glam::Vec3;
+
+use crate::lighting::{ShadingLightKind, attenuate, reflect, specular_power};
+use crate::render::geometry::{Frame, FrameTriangle, ObjectStyle};
+use crate::render::shade::renormalize_or_else;
+use crate::scene::{BackFaces, LightingComponent, LightingModel, Material, NormalInterpolation, Shading};
+
+/// A lighting model the fast path evaluates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Specular {
+    /// `k_s = 0`: no specular term at all.
+    None,
+    /// `max(R·V, 0)^n`.
+    Phong,
+    /// `max(N·H, 0)^n`.
+    BlinnPhong,
+}
+
+/// One Phong-shaded triangle, ready to shade pixel after pixel.
+pub struct FastPhong<'f> {
+    frame: &'f Frame,
+    triangle: &'f FrameTriangle,
+    material: &'f Material,
+    style: &'f ObjectStyle,
+    positions: [Vec3; 3],
+    normals: [Vec3; 3],
+    back_facing: bool,
+    specular: Specular,
+}
+
+impl<'f> FastPhong<'f> {
+    /// Whether any triangle of `frame` may take the fast path: no debug view, no vertex
+    /// attributes (tints, texture coordinates), no shadows, no spot light. Asked once per tile.
+    pub fn frame_allows(frame: &Frame) -> bool {
+        frame.debug_view.is_none()
+            && frame.vertex_attributes.is_empty()
+            && frame.shadows.iter().all(Option::is_none)
+            && frame
+                .lights
+                .iter()
+                .all(|light| !matches!(light.kind, ShadingLightKind::Spot { .. }))
+    }
+
+    /// The fast path for `triangle` seen from the front or the back, or `None` when it needs the
+    /// general path: another shading mode or model, a texture, Slerp, or a single lighting
+    /// component. Only for frames that [`FastPhong::frame_allows`].
+    pub fn new(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Self> {
+        debug_assert!(Self::frame_allows(frame));
+        let style = &frame.objects[triangle.object as usize];
+        let material = &frame.materials[triangle.material as usize];
+        let textured = material.textures.diffuse.is_some()
+            || material.textures.ambient.is_some()
+            || material.textures.normal.is_some();
+        let specular = match material.model {
+            _ if material.specular == Vec3::ZERO => Specular::None,
+            LightingModel::Phong => Specular::Phong,
+            LightingModel::BlinnPhong => Specular::BlinnPhong,
+            _ => return None,
+        };
+        let eligible = style.shading == Shading::Phong
+            && style.component == LightingComponent::All
+            && style.normal_interpolation == NormalInterpolation::Nlerp
+            && matches!(material.model, LightingModel::Phong | LightingModel::BlinnPhong)
+            && !textured
+            && !(back_facing && style.back_faces == BackFaces::Unlit);
+        if !eligible {
+            return None;
+        }
+        let vertices = triangle.vertices.map(|v| &frame.vertices[v as usize]);
+        Some(FastPhong {
+            frame,
+            triangle,
+            material,
+            style,
+            positions: vertices.map(|v| v.position),
+            normals: vertices.map(|v| v.normal),
+            back_facing,
+            specular,
+        })
+    }
+
+    /// The colour at the point with source-triangle weights `weights`.
+    #[inline]
+    pub fn shade(&self, weights: Vec3) -> Vec3 {
+        let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
+        let position = interpolate(self.positions);
+        let normal = renormalize_or_else(interpolate(self.normals), || {
+            self.frame.face_normal(self.triangle)
+        });
+        let normal = self.style.side_normal(normal, self.back_facing);
+        let to_viewer = self.frame.viewer.to_viewer(position);
+        match self.specular {
+            Specular::None => self.light::<0>(position, normal, to_viewer),
+            Specular::Phong => self.light::<1>(position, normal, to_viewer),
+            Specular::BlinnPhong => self.light::<2>(position, normal, to_viewer),
+        }
+    }
+
+    /// `illuminate_with_visibility` for a Phong or Blinn-Phong material without shadows, then
+    /// `(ambient + diffuse) + (specular + emission)`. `SPECULAR` is [`Specular`] as a number so
+    /// each model gets its own loop.
+    #[inline]
+    fn light<const SPECULAR: u8>(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
+        let material = self.material;
+        let ambient = material.ambient * self.frame.ambient_light;
+        let mut diffuse = Vec3::ZERO;
+        let mut specular = Vec3::ZERO;
+        for light in &self.frame.lights {
+            let (to_light, strength) = match light.kind {
+                ShadingLightKind::Directional { to_light } => (to_light, 1.0),
+                ShadingLightKind::Point {
+                    position: light_position,
+                    attenuation,
+                } => {
+                    let offset = light_position - position;
+                    let distance = offset.length();
+                    if !(distance > 0.0 && distance.is_finite()) {
+                        continue;
+                    }
+                    (offset / distance, attenuate(attenuation, distance))
+                }
+                ShadingLightKind::Spot { .. } => unreachable!("spot lights take the general path"),
+            };
+            let n_dot_l = normal.dot(to_light);
+            if n_dot_l <= 0.0 || strength <= 0.0 {
+                continue;
+            }
+            // The general path multiplies by the shadow visibility here, which is 1.
+            let strength = strength * 1.0;
+            let irradiance = light.color * strength * n_dot_l;
+            diffuse += material.diffuse * irradiance;
+            if SPECULAR != 0 {
+                let cosine = if SPECULAR == 2 {
+                    normal.dot((to_light + to_viewer).normalize_or_zero())
+                } else {
+                    reflect(to_light, normal).dot(to_viewer)
+                };
+                let intensity = light.color * strength;
+                specular += material.specular * intensity * specular_power(cosine, material.shininess);
+            }
+        }
+        (ambient + diffuse) + (specular + material.emission)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use glam::DVec3;
+
+    use super::*;
+    use crate::mesh::primitives;
+    use crate::render::raster::SamplePattern;
+    use crate::render::{RenderOptions, geometry::build_frame, render};
+    use crate::scene::{Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene};
+
+    fn scene(model: LightingModel, specular: Vec3, back_faces: BackFaces) -> Scene {
+        let material = Material {
+            ambient: Vec3::new(0.1, 0.05, 0.0),
+            diffuse: Vec3::new(0.6, 0.3, 0.2),
+            specular,
+            shininess: 17.0,
+            emission: Vec3::new(0.01, 0.02, 0.03),
+            model,
+            textures: Default::default(),
+        };
+        let sphere = Arc::new(primitives::sphere(24));
+        let object = |x: f64| Object {
+            name: "sphere".into(),
+            mesh: sphere.clone(),
+            transform: glam::DMat4::from_translation(DVec3::new(x, 0.0, 0.0)),
+            shading: Shading::Phong,
+            material: Some(material),
+            back_faces,
+            component: LightingComponent::All,
+            normal_interpolation: NormalInterpolation::Nlerp,
+        };
+        Scene {
+            image: ImageSettings {
+                width: 96,
+                height: 64,
+                background: Vec3::ZERO,
+                samples: 1,
+            },
+            camera: Camera {
+                eye: DVec3::new(0.5, -5.0, 1.5),
+                target: DVec3::ZERO,
+                up: DVec3::Z,
+                projection: Projection::Perspective {
+                    fov_y_degrees: 40.0,
+                    near: 0.1,
+                    far: 100.0,
+                },
+            },
+            ambient_light: Vec3::splat(0.5),
+            lights: vec![
+                Light::Directional {
+                    direction: Vec3::new(-1.0, 1.0, -1.0).normalize(),
+                    color: Vec3::new(1.0, 0.9, 0.8),
+                    shadow: None,
+                },
+                Light::Point {
+                    position: DVec3::new(1.0, -3.0, 2.0),
+                    color: Vec3::ONE,
+                    attenuation: Attenuation {
+                        constant: 1.0,
+                        linear: 0.1,
+                        quadratic: 0.05,
+                    },
+                    shadow: None,
+                },
+            ],
+            objects: vec![object(-1.2), object(1.2)],
+            textures: Vec::new(),
+        }
+    }
+
+    /// Every visible pixel of the fast path's scenes against the general path (`Frame::light`
+    /// with the same interpolated normal), bit for bit.
+    #[test]
+    fn fast_path_equals_the_general_lighting_bit_for_bit() {
+        for (model, specular) in [
+            (LightingModel::Phong, Vec3::splat(0.7)),
+            (LightingModel::BlinnPhong, Vec3::splat(0.7)),
+            (LightingModel::Phong, Vec3::ZERO),
+        ] {
+            for back_faces in [BackFaces::ReverseLit, BackFaces::Lit] {
+                let scene = scene(model, specular, back_faces);
+                let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+                let mut checked = 0;
+                for triangle in &frame.triangles {
+                    for back_facing in [false, true] {
+                        let fast = FastPhong::new(&frame, triangle, back_facing).expect("eligible");
+                        for weights in [Vec3::new(0.2, 0.3, 0.5), Vec3::splat(1.0 / 3.0), Vec3::X] {
+                            let [a, b, c] = triangle.vertices.map(|v| frame.vertices[v as usize]);
+                            let position =
+                                a.position * weights.x + b.position * weights.y + c.position * weights.z;
+                            let normal = renormalize_or_else(
+                                a.normal * weights.x + b.normal * weights.y + c.normal * weights.z,
+                                || frame.face_normal(triangle),
+                            );
+                            let style = &frame.objects[triangle.object as usize];
+                            let general =
+                                frame.light(triangle.material, style, position, normal, back_facing);
+                            assert_eq!(fast.shade(weights), general, "{model:?} {back_faces:?}");
+                            checked += 1;
+                        }
+                    }
+                }
+                assert!(checked > 1000);
+            }
+        }
+    }
+
+    #[test]
+    fn textures_slerp_and_debug_views_take_the_general_path() {
+        let mut scene = scene(LightingModel::Phong, Vec3::ONE, BackFaces::ReverseLit);
+        scene.objects[0].normal_interpolation = NormalInterpolation::Slerp;
+        let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+        assert!(FastPhong::frame_allows(&frame));
+        let first = &frame.triangles[0];
+        assert!(FastPhong::new(&frame, first, false).is_none());
+        let last = frame.triangles.last().expect("triangles");
+        assert!(FastPhong::new(&frame, last, false).is_some());
+        let debug = build_frame(
+            &scene,
+            SamplePattern::SINGLE,
+            Some(crate::render::DebugView::Specular),
+            vec![None, None],
+        );
+        assert!(!FastPhong::frame_allows(&debug));
+        // The whole image is the same either way (the renderer picks per triangle).
+        let (image, _) = render(&scene, &RenderOptions::default());
+        assert!(image.covered.iter().any(|&c| c));
+    }
+}
