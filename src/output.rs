@@ -38,8 +38,10 @@ pub enum OutputError {
 }
 
 /// One channel of linear light to an 8-bit level. `f32::max` returns the other operand when one
-/// is NaN, so NaN becomes 0 without a branch (this runs for every channel of every image).
+/// is NaN, so NaN becomes 0 without a branch (this runs for every channel of every image);
+/// `clamp` would keep the NaN.
 #[inline]
+#[allow(clippy::manual_clamp)]
 pub fn quantize_channel(value: f32) -> u8 {
     (value.max(0.0).min(1.0) * 255.0 + 0.5) as u8
 }
