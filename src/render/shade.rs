@@ -16,10 +16,12 @@
 use glam::{Vec3, Vec4};
 
 use crate::render::DebugView;
-use crate::render::geometry::{Frame, VertexAttributes, has_color_texture, tinted};
+use crate::render::geometry::{
+    Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted,
+};
 use crate::render::raster::{NO_TRIANGLE, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_values};
 use crate::render::shade_fast::FastPhong;
-use crate::scene::{NormalInterpolation, Shading, TextureBinding};
+use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
 /// The shaded pixels of one tile, row-major.
 #[derive(Debug, Clone, PartialEq)]
@@ -95,8 +97,8 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
         // One sample at the pixel centre: the general loop below with `seen` holding one entry
         // at offset zero, and the same result bit for bit. What depends only on the triangle
         // is looked up once per run of pixels showing it.
-        let fast_allowed = FastPhong::frame_allows(frame);
-        let mut current: Option<(u32, &RasterTriangle, Option<FastPhong>)> = None;
+        let phong_allowed = FastPhong::frame_allows(frame);
+        let mut current: Option<(u32, &RasterTriangle, RunShader)> = None;
         for (slot, &id) in visibility.triangle.iter().enumerate() {
             if id == NO_TRIANGLE {
                 continue;
@@ -107,22 +109,22 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
                 i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
                 i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
             );
-            let (_, raster, fast) = match &current {
+            let (_, raster, shader) = match &current {
                 Some((current_id, ..)) if *current_id == id => current.as_ref().expect("matched"),
                 _ => {
                     let raster = frame.raster_triangle(id);
-                    let triangle = &frame.triangles[raster.source as usize];
-                    let fast = if fast_allowed {
-                        FastPhong::new(frame, triangle, raster.back_facing)
-                    } else {
-                        None
-                    };
-                    current.insert((id, raster, fast))
+                    let shader = RunShader::new(frame, raster, phong_allowed, &mut caches);
+                    current.insert((id, raster, shader))
                 }
             };
-            image.color[slot] = match fast {
-                Some(fast) => fast.shade(source_weights(raster, at)),
-                None => shade_sample(frame, raster, at, &mut caches),
+            image.color[slot] = match shader {
+                RunShader::Solid(color) => *color,
+                RunShader::Gouraud([a, b, c]) => {
+                    let weights = source_weights(raster, at);
+                    *a * weights.x + *b * weights.y + *c * weights.z
+                }
+                RunShader::Phong(fast) => fast.shade(source_weights(raster, at)),
+                RunShader::General => shade_sample(frame, raster, at, &mut caches),
             };
             image.covered[slot] = true;
             image.shaded += 1;
@@ -174,6 +176,70 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
         image.covered[slot] = true;
     }
     image
+}
+
+/// How the pixels of one run (consecutive pixels showing the same triangle) are shaded, decided
+/// once for the run. Each case computes exactly what [`shade_sample`] would, in the same order.
+enum RunShader<'f> {
+    /// Flat or constant shading without a colour texture: one colour for the whole triangle.
+    Solid(Vec3),
+    /// Gouraud shading without a colour texture: the three vertex colours, interpolated.
+    Gouraud([Vec3; 3]),
+    /// Phong shading in the common case (see [`FastPhong`]).
+    Phong(FastPhong<'f>),
+    /// Everything else.
+    General,
+}
+
+impl<'f> RunShader<'f> {
+    fn new(frame: &'f Frame, raster: &RasterTriangle, phong_allowed: bool, caches: &mut TileCaches) -> Self {
+        let triangle = &frame.triangles[raster.source as usize];
+        let style = &frame.objects[triangle.object as usize];
+        let material = &frame.materials[triangle.material as usize];
+        let plain = frame.debug_view.is_none()
+            && material.textures.diffuse.is_none()
+            && material.textures.ambient.is_none();
+        match style.shading {
+            Shading::Constant if plain => RunShader::Solid(frame.constant_colors[triangle.material as usize]),
+            Shading::Flat if plain => {
+                let (_, rest) = caches
+                    .flat
+                    .get_or_insert_with(raster.source, || frame.flat_colors(triangle, raster.back_facing));
+                RunShader::Solid(rest)
+            }
+            Shading::Gouraud if plain && raster.back_facing => {
+                let colors = caches.back.get_or_insert_with(raster.source, || {
+                    back_gouraud_colors(frame, triangle, material, style)
+                });
+                RunShader::Gouraud(colors.map(|(_, rest)| rest))
+            }
+            Shading::Gouraud if plain => RunShader::Gouraud(triangle.vertices.map(|v| frame.colors(v).color)),
+            Shading::Phong if phong_allowed => FastPhong::new(frame, triangle, raster.back_facing)
+                .map_or(RunShader::General, RunShader::Phong),
+            _ => RunShader::General,
+        }
+    }
+}
+
+/// The Gouraud colours of a triangle's back side, lit per vertex (on demand: most back faces
+/// are never seen). Per vertex: (the part a colour texture multiplies, the rest).
+fn back_gouraud_colors(
+    frame: &Frame,
+    triangle: &FrameTriangle,
+    material: &Material,
+    style: &ObjectStyle,
+) -> [(Vec3, Vec3); 3] {
+    triangle.vertices.map(|v| {
+        let vertex = &frame.vertices[v as usize];
+        let vertex_material = tinted(material, frame.attributes(v).tint);
+        let (textured_part, rest) =
+            frame.light_material(&vertex_material, style, vertex.position, vertex.normal, true);
+        if has_color_texture(&vertex_material) {
+            (textured_part, rest)
+        } else {
+            (Vec3::ZERO, textured_part + rest)
+        }
+    })
 }
 
 /// Perspective-correct barycentric weights of the source triangle's vertices at the fixed-point
@@ -388,6 +454,87 @@ pub fn slerp(n0: Vec3, n1: Vec3, t: f32) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::raster::{SamplePattern, rasterize_tile};
+    use crate::render::{DebugView, geometry::build_frame, shade_fast};
+    use crate::scene::{BackFaces, LightingModel};
+
+    /// Every visible pixel, shaded by the per-run shaders and by the general `shade_sample`:
+    /// the same bits, for each shading mode and back-face mode.
+    #[test]
+    fn run_shaders_equal_the_general_path_bit_for_bit() {
+        for shading in [Shading::Constant, Shading::Flat, Shading::Gouraud, Shading::Phong] {
+            for (back_faces, view) in [
+                (BackFaces::ReverseLit, None),
+                (BackFaces::Lit, None),
+                (BackFaces::Unlit, None),
+                // Debug views take the general path; nothing to compare but that nothing breaks.
+                (BackFaces::Cull, Some(DebugView::Diffuse)),
+            ] {
+                let mut scene =
+                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces);
+                scene.override_shading(shading);
+                // Cut the spheres open so that back faces are seen too.
+                scene.camera.projection = crate::scene::Projection::Perspective {
+                    fov_y_degrees: 40.0,
+                    near: 4.9,
+                    far: 100.0,
+                };
+                let frame = build_frame(&scene, SamplePattern::SINGLE, view, vec![None, None]);
+                let phong_allowed = FastPhong::frame_allows(&frame);
+                let mut run_caches = TileCaches {
+                    flat: TriangleColorCache::new(),
+                    back: TriangleColorCache::new(),
+                };
+                let mut general_caches = TileCaches {
+                    flat: TriangleColorCache::new(),
+                    back: TriangleColorCache::new(),
+                };
+                let (mut shaded, mut back_seen) = (0, 0);
+                for tile in 0..frame.tiles.count() {
+                    let rect = frame.tiles.rect(tile);
+                    let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+                    for (slot, &id) in visibility.triangle.iter().enumerate() {
+                        if id == NO_TRIANGLE {
+                            continue;
+                        }
+                        let px = i64::from(rect.x0 + slot as u32 % rect.width());
+                        let py = i64::from(rect.y0 + slot as u32 / rect.width());
+                        let at = (
+                            px * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
+                            py * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
+                        );
+                        let raster = frame.raster_triangle(id);
+                        let general = shade_sample(&frame, raster, at, &mut general_caches);
+                        let run = match RunShader::new(&frame, raster, phong_allowed, &mut run_caches) {
+                            RunShader::Solid(color) => color,
+                            RunShader::Gouraud([a, b, c]) => {
+                                let w = source_weights(raster, at);
+                                a * w.x + b * w.y + c * w.z
+                            }
+                            RunShader::Phong(fast) => fast.shade(source_weights(raster, at)),
+                            RunShader::General => continue,
+                        };
+                        assert_eq!(run, general, "{shading:?} {back_faces:?} {view:?} at {px}, {py}");
+                        shaded += 1;
+                        back_seen += usize::from(raster.back_facing);
+                    }
+                }
+                if view.is_some() {
+                    continue;
+                }
+                assert!(shaded > 100, "{shading:?}: {shaded} pixels compared");
+                // Culled back faces are not drawn; unlit Phong back faces take the general path.
+                let back_fast = back_faces != BackFaces::Cull
+                    && !(shading == Shading::Phong && back_faces == BackFaces::Unlit);
+                if back_fast {
+                    assert!(
+                        back_seen > 20,
+                        "{shading:?}: {back_seen} back-facing pixels compared"
+                    );
+                }
+            }
+        }
+    }
 
     fn angle(a: Vec3, b: Vec3) -> f32 {
         a.cross(b).length().atan2(a.dot(b))

@@ -156,7 +156,7 @@ impl<'f> FastPhong<'f> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use std::sync::Arc;
 
     use glam::DVec3;
@@ -167,7 +167,7 @@ mod tests {
     use crate::render::{RenderOptions, geometry::build_frame, render};
     use crate::scene::{Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene};
 
-    fn scene(model: LightingModel, specular: Vec3, back_faces: BackFaces) -> Scene {
+    pub(crate) fn scene(model: LightingModel, specular: Vec3, back_faces: BackFaces) -> Scene {
         let material = Material {
             ambient: Vec3::new(0.1, 0.05, 0.0),
             diffuse: Vec3::new(0.6, 0.3, 0.2),
