@@ -21,7 +21,10 @@ use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate_
 use crate::render::DebugView;
 use crate::render::bin::{self, RasterChunk, TileGrid};
 use crate::render::clip::{Clipped, clip_triangle};
-use crate::render::raster::{GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, setup_triangle};
+use crate::render::raster::{
+    GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, setup_snapped,
+    setup_triangle,
+};
 use crate::render::shadow::ShadowMap;
 use crate::scene::presets::default_material;
 use crate::scene::{
@@ -427,8 +430,8 @@ struct Viewport {
 #[derive(Default)]
 struct ProjectedVertices {
     clip: Vec<Vec4>,
-    /// Meaningful only where `inside` is set.
-    screen: Vec<ScreenVertex>,
+    /// Snapped to fixed point; meaningful only where `inside` is set.
+    screen: Vec<SnappedVertex>,
     inside: Vec<bool>,
 }
 
@@ -648,16 +651,9 @@ fn add_object_vertices(
     projected
         .clip
         .resize(vertex_base as usize + vertex_count, Vec4::ZERO);
-    projected.screen.resize(
-        vertex_base as usize + vertex_count,
-        ScreenVertex {
-            x: 0.0,
-            y: 0.0,
-            depth: 0.0,
-            inv_w: 0.0,
-            weights: Vec3::ZERO,
-        },
-    );
+    projected
+        .screen
+        .resize(vertex_base as usize + vertex_count, SnappedVertex::default());
     projected
         .inside
         .resize(vertex_base as usize + vertex_count, false);
@@ -671,7 +667,7 @@ fn add_object_vertices(
             *clip = transforms.clip_from_model * p.extend(1.0);
             *inside = inside_clip_volume(*clip, viewport.guard_x, viewport.guard_y);
             if *inside {
-                *screen = project(*clip, Vec3::ZERO, width, height);
+                *screen = SnappedVertex::snap(&project(*clip, Vec3::ZERO, width, height)).0;
             }
         });
 
@@ -872,11 +868,16 @@ fn add_raster_triangles(
         setup_triangle(corners, width, height, viewport.pattern, source, back_facing)
     };
     if triangle.vertices.iter().all(|&v| projected.inside[v as usize]) {
-        let corners = [0, 1, 2].map(|i| ScreenVertex {
-            weights: Vec3::AXES[i],
-            ..projected.screen[triangle.vertices[i] as usize]
-        });
-        raster.extend(setup(corners));
+        let corners = triangle.vertices.map(|v| projected.screen[v as usize]);
+        raster.extend(setup_snapped(
+            corners,
+            Vec3::AXES,
+            width,
+            height,
+            viewport.pattern,
+            source,
+            back_facing,
+        ));
         return;
     }
     match clip_triangle(clip, viewport.guard_x, viewport.guard_y) {

@@ -119,27 +119,75 @@ pub fn setup_triangle(
     source: u32,
     back_facing: bool,
 ) -> Option<RasterTriangle> {
-    let snap = |v: f32| round_to_i32(v * SUBPIXEL_ONE as f32);
-    let mut x = corners.map(|c| snap(c.x));
-    let mut y = corners.map(|c| snap(c.y));
-    let mut corners = corners;
-    let mut area = doubled_area(x, y);
+    let corners = corners.map(|c| SnappedVertex::snap(&c));
+    let weights = [corners[0].1, corners[1].1, corners[2].1];
+    setup_snapped(
+        corners.map(|c| c.0),
+        weights,
+        width,
+        height,
+        pattern,
+        source,
+        back_facing,
+    )
+}
+
+/// A projected vertex snapped to fixed point: what setup needs of it besides its weights.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SnappedVertex {
+    /// 1/256 pixel.
+    pub x: i32,
+    pub y: i32,
+    pub depth: f32,
+    pub inv_w: f32,
+}
+
+impl SnappedVertex {
+    /// The vertex snapped, and its weights.
+    #[inline]
+    pub fn snap(vertex: &ScreenVertex) -> (SnappedVertex, Vec3) {
+        let snap = |v: f32| round_to_i32(v * SUBPIXEL_ONE as f32);
+        (
+            SnappedVertex {
+                x: snap(vertex.x),
+                y: snap(vertex.y),
+                depth: vertex.depth,
+                inv_w: vertex.inv_w,
+            },
+            vertex.weights,
+        )
+    }
+}
+
+/// [`setup_triangle`] for corners already snapped (the geometry stage snaps each vertex once,
+/// not once per triangle that uses it).
+pub fn setup_snapped(
+    corners: [SnappedVertex; 3],
+    weights: [Vec3; 3],
+    width: u32,
+    height: u32,
+    pattern: SamplePattern,
+    source: u32,
+    back_facing: bool,
+) -> Option<RasterTriangle> {
+    let (mut corners, mut weights) = (corners, weights);
+    let mut area = doubled_area(corners.map(|c| c.x), corners.map(|c| c.y));
     if area == 0 {
         return None;
     }
     if area < 0 {
-        x.swap(1, 2);
-        y.swap(1, 2);
         corners.swap(1, 2);
+        weights.swap(1, 2);
         area = -area;
     }
+    let (x, y) = (corners.map(|c| c.x), corners.map(|c| c.y));
     let bounds = pixel_bounds(x, y, width, height, pattern.reach())?;
     Some(RasterTriangle {
         x,
         y,
         depth: corners.map(|c| c.depth),
         inv_w: corners.map(|c| c.inv_w),
-        weights: corners.map(|c| c.weights),
+        weights,
         inv_area: 1.0 / area as f32,
         bounds,
         source,
@@ -170,10 +218,10 @@ fn pixel_bounds(x: [i32; 3], y: [i32; 3], width: u32, height: u32, reach: i64) -
     // floor((hi − 128 + reach) / 256).
     let first = |lo: i32| -(SUBPIXEL_HALF + reach - i64::from(lo)).div_euclid(SUBPIXEL_ONE);
     let last = |hi: i32| (i64::from(hi) - SUBPIXEL_HALF + reach).div_euclid(SUBPIXEL_ONE);
-    let x0 = first(*x.iter().min()?).max(0);
-    let y0 = first(*y.iter().min()?).max(0);
-    let x1 = (last(*x.iter().max()?) + 1).min(i64::from(width));
-    let y1 = (last(*y.iter().max()?) + 1).min(i64::from(height));
+    let x0 = first(x[0].min(x[1]).min(x[2])).max(0);
+    let y0 = first(y[0].min(y[1]).min(y[2])).max(0);
+    let x1 = (last(x[0].max(x[1]).max(x[2])) + 1).min(i64::from(width));
+    let y1 = (last(y[0].max(y[1]).max(y[2])) + 1).min(i64::from(height));
     (x0 < x1 && y0 < y1).then_some(PixelRect {
         x0: x0 as u32,
         y0: y0 as u32,
