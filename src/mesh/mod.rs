@@ -61,6 +61,10 @@ pub struct Mesh {
     pub tangents: Vec<Vec4>,
     /// Textures the materials' `TextureBinding`s index.
     pub textures: Vec<Arc<Texture>>,
+    /// The surface is known to be closed (it bounds a volume, every front face seen from
+    /// outside): seen from outside its bounds, its back faces are always hidden behind its
+    /// front faces. Set by the primitives that are; false for mesh files (unknown).
+    pub closed: bool,
 }
 
 impl Mesh {

@@ -79,6 +79,7 @@ pub fn sphere(segments: u32) -> Mesh {
         positions,
         normals,
         triangles,
+        closed: true,
         ..Mesh::default()
     }
 }
@@ -104,7 +105,10 @@ pub fn cube() -> Mesh {
         (Vec3::X, Vec3::Y),
         (Vec3::Y, Vec3::X),
     ];
-    let mut mesh = Mesh::default();
+    let mut mesh = Mesh {
+        closed: true,
+        ..Mesh::default()
+    };
     for (u, v) in faces {
         push_square(&mut mesh, u.cross(v), u, v);
     }

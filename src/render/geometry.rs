@@ -441,11 +441,15 @@ struct PlacedObject {
     material_base: u32,
     uses_mesh_materials: bool,
     mirrored: bool,
+    /// Back faces can never be seen: skip them (see [`back_faces_hidden`]).
+    skip_back_faces: bool,
 }
 
 /// The camera's matrices with the eye moved to the origin.
 pub(crate) struct CameraSetup {
     pub(crate) eye: DVec3,
+    /// Distance from the eye to the near plane, along `forward`.
+    pub(crate) near: f64,
     /// From eye-relative world space to clip space.
     pub(crate) clip_from_world: DMat4,
     pub(crate) forward: DVec3,
@@ -472,8 +476,12 @@ impl CameraSetup {
                 },
             ),
         };
+        let near = match camera.projection {
+            Projection::Perspective { near, .. } | Projection::Orthographic { near, .. } => near,
+        };
         CameraSetup {
             eye: camera.eye,
+            near,
             clip_from_world: projection * view,
             forward,
             viewer,
@@ -759,7 +767,30 @@ fn add_object_vertices(
         material_base,
         uses_mesh_materials,
         mirrored: transforms.mirrored,
+        skip_back_faces: frame.lit && back_faces_hidden(object, camera),
     }
+}
+
+/// Whether no back face of `object` can be seen: its mesh is closed and its bounding sphere lies
+/// wholly beyond the near plane. Then the eye is outside the surface and no clipping plane cuts
+/// it open (the far plane only removes what lies behind the front faces), so every ray meets a
+/// front face before any back face, and skipping back faces changes no pixel but those where
+/// rounding let a back face win at the silhouette. OpenGL programs enable face culling for such
+/// meshes; this does it only when it is safe.
+fn back_faces_hidden(object: &Object, camera: &CameraSetup) -> bool {
+    let mesh = &object.mesh;
+    let Some((lo, hi)) = mesh.bounds().filter(|_| mesh.closed) else {
+        return false;
+    };
+    let center = object.transform.transform_point3(((lo + hi) / 2.0).as_dvec3()) - camera.eye;
+    let linear = DMat3::from_mat4(object.transform);
+    let largest_scale = [linear.x_axis, linear.y_axis, linear.z_axis]
+        .map(DVec3::length)
+        .into_iter()
+        .fold(0.0, f64::max);
+    let radius = f64::from((hi - lo).length() / 2.0) * largest_scale;
+    // A little margin for the rounding of the transforms to f32.
+    center.dot(camera.forward) - radius * 1.001 > camera.near
 }
 
 /// Whether a clip-space point lies inside the near and far planes and the guard band.
@@ -836,7 +867,15 @@ fn add_triangles(
                     material,
                     object: object as u32,
                 };
-                add_raster_triangles(frame_ref, slot, source as u32, projected, viewport, &mut raster);
+                add_raster_triangles(
+                    frame_ref,
+                    slot,
+                    place.skip_back_faces,
+                    source as u32,
+                    projected,
+                    viewport,
+                    &mut raster,
+                );
             }
             RasterChunk::new(raster, &frame_ref.tiles)
         })
@@ -850,6 +889,7 @@ fn add_triangles(
 fn add_raster_triangles(
     frame: &Frame,
     triangle: &FrameTriangle,
+    skip_back_faces: bool,
     source: u32,
     projected: &ProjectedVertices,
     viewport: &Viewport,
@@ -859,7 +899,7 @@ fn add_raster_triangles(
     let facing = homogeneous_facing(clip);
     let back_facing = facing < 0.0;
     let style = &frame.objects[triangle.object as usize];
-    let culled = frame.lit && back_facing && style.back_faces == BackFaces::Cull;
+    let culled = frame.lit && back_facing && (style.back_faces == BackFaces::Cull || skip_back_faces);
     if facing == 0.0 || facing.is_nan() || culled {
         return; // edge-on, degenerate, non-finite, or culled
     }
@@ -943,6 +983,68 @@ mod tests {
         let clip = |z: f64| m * glam::DVec4::new(1.0, 1.0, z, 1.0);
         assert!((clip(-1.0).z - 1.0).abs() < 1e-12 && clip(-11.0).z.abs() < 1e-12);
         assert!((clip(-1.0).x - 0.5).abs() < 1e-12 && (clip(-1.0).y - 1.0).abs() < 1e-12);
+    }
+
+    fn sphere_object(center: DVec3, scale: f64, mesh: crate::mesh::Mesh) -> Object {
+        Object {
+            name: "object".into(),
+            mesh: Arc::new(mesh),
+            transform: DMat4::from_translation(center) * DMat4::from_scale(DVec3::splat(scale)),
+            shading: Shading::Phong,
+            material: None,
+            back_faces: BackFaces::ReverseLit,
+            component: LightingComponent::All,
+            normal_interpolation: NormalInterpolation::Nlerp,
+        }
+    }
+
+    fn camera(near: f64) -> CameraSetup {
+        let camera = Camera {
+            eye: DVec3::new(0.0, 0.0, 10.0),
+            target: DVec3::ZERO,
+            up: DVec3::Y,
+            projection: Projection::Perspective {
+                fov_y_degrees: 60.0,
+                near,
+                far: 100.0,
+            },
+        };
+        CameraSetup::new(&camera, 1.5)
+    }
+
+    #[test]
+    fn back_faces_are_skipped_only_when_they_cannot_be_seen() {
+        use crate::mesh::primitives;
+        let sphere = || primitives::sphere(8);
+        // A closed sphere well beyond the near plane: its back faces are hidden.
+        assert!(back_faces_hidden(
+            &sphere_object(DVec3::ZERO, 1.0, sphere()),
+            &camera(0.1)
+        ));
+        assert!(back_faces_hidden(
+            &sphere_object(DVec3::ZERO, 1.0, primitives::cube()),
+            &camera(0.1)
+        ));
+        // The near plane cuts it open: the inside shows.
+        assert!(!back_faces_hidden(
+            &sphere_object(DVec3::ZERO, 1.0, sphere()),
+            &camera(9.5)
+        ));
+        // The eye is inside it.
+        assert!(!back_faces_hidden(
+            &sphere_object(DVec3::ZERO, 20.0, sphere()),
+            &camera(0.1)
+        ));
+        // Behind the eye: nothing of it is drawn anyway, and it is not beyond the near plane.
+        assert!(!back_faces_hidden(
+            &sphere_object(DVec3::new(0.0, 0.0, 20.0), 1.0, sphere()),
+            &camera(0.1)
+        ));
+        // A plane is open: its back is seen from the other side.
+        assert!(!back_faces_hidden(
+            &sphere_object(DVec3::ZERO, 1.0, primitives::plane()),
+            &camera(0.1)
+        ));
     }
 
     #[test]
