@@ -202,9 +202,15 @@ impl<'f> RunShader<'f> {
         match style.shading {
             Shading::Constant if plain => RunShader::Solid(frame.constant_colors[triangle.material as usize]),
             Shading::Flat if plain => {
-                let (_, rest) = caches
-                    .flat
-                    .get_or_insert_with(raster.source, || frame.flat_colors(triangle, raster.back_facing));
+                let (_, rest) = caches.flat.get_or_insert_with(raster.source, || {
+                    let fast = phong_allowed
+                        .then(|| FastPhong::flat_color(frame, triangle, raster.back_facing))
+                        .flatten();
+                    match fast {
+                        Some(color) => (Vec3::ZERO, color),
+                        None => frame.flat_colors(triangle, raster.back_facing),
+                    }
+                });
                 RunShader::Solid(rest)
             }
             Shading::Gouraud if plain && raster.back_facing => {

@@ -57,25 +57,8 @@ impl<'f> FastPhong<'f> {
     /// general path: another shading mode or model, a texture, Slerp, or a single lighting
     /// component. Only for frames that [`FastPhong::frame_allows`].
     pub fn new(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Self> {
-        debug_assert!(Self::frame_allows(frame));
-        let style = &frame.objects[triangle.object as usize];
-        let material = &frame.materials[triangle.material as usize];
-        let textured = material.textures.diffuse.is_some()
-            || material.textures.ambient.is_some()
-            || material.textures.normal.is_some();
-        let specular = match material.model {
-            _ if material.specular == Vec3::ZERO => Specular::None,
-            LightingModel::Phong => Specular::Phong,
-            LightingModel::BlinnPhong => Specular::BlinnPhong,
-            _ => return None,
-        };
-        let eligible = style.shading == Shading::Phong
-            && style.component == LightingComponent::All
-            && style.normal_interpolation == NormalInterpolation::Nlerp
-            && matches!(material.model, LightingModel::Phong | LightingModel::BlinnPhong)
-            && !textured
-            && !(back_facing && style.back_faces == BackFaces::Unlit);
-        if !eligible {
+        let (material, style, specular) = Self::eligible(frame, triangle, back_facing, Shading::Phong)?;
+        if style.normal_interpolation != NormalInterpolation::Nlerp {
             return None;
         }
         let vertices = triangle.vertices.map(|v| &frame.vertices[v as usize]);
@@ -91,6 +74,55 @@ impl<'f> FastPhong<'f> {
         })
     }
 
+    /// The material, style and specular term of `triangle` when it may take a fast path for
+    /// `shading`: a Phong or Blinn-Phong material without textures, all lighting components, and
+    /// a side that is lit.
+    fn eligible(
+        frame: &'f Frame,
+        triangle: &FrameTriangle,
+        back_facing: bool,
+        shading: Shading,
+    ) -> Option<(&'f Material, &'f ObjectStyle, Specular)> {
+        debug_assert!(Self::frame_allows(frame));
+        let style = &frame.objects[triangle.object as usize];
+        let material = &frame.materials[triangle.material as usize];
+        let textured = material.textures.diffuse.is_some()
+            || material.textures.ambient.is_some()
+            || material.textures.normal.is_some();
+        let specular = match material.model {
+            _ if material.specular == Vec3::ZERO => Specular::None,
+            LightingModel::Phong => Specular::Phong,
+            LightingModel::BlinnPhong => Specular::BlinnPhong,
+            _ => return None,
+        };
+        let eligible = style.shading == shading
+            && style.component == LightingComponent::All
+            && matches!(material.model, LightingModel::Phong | LightingModel::BlinnPhong)
+            && !textured
+            && !(back_facing && style.back_faces == BackFaces::Unlit);
+        eligible.then_some((material, style, specular))
+    }
+
+    /// A flat-shaded triangle's colour, as `Frame::flat_colors` computes it (lit once at the
+    /// centroid with the face normal), or `None` when it needs the general path.
+    pub fn flat_color(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Vec3> {
+        let (material, style, specular) = Self::eligible(frame, triangle, back_facing, Shading::Flat)?;
+        let [p0, p1, p2] = triangle.vertices.map(|v| frame.vertices[v as usize].position);
+        let centroid = (p0 + p1 + p2) / 3.0;
+        let fast = FastPhong {
+            frame,
+            triangle,
+            material,
+            style,
+            positions: [p0, p1, p2],
+            normals: [Vec3::ZERO; 3],
+            back_facing,
+            specular,
+        };
+        let normal = style.side_normal(frame.face_normal(triangle), back_facing);
+        Some(fast.light_with(centroid, normal, frame.viewer.to_viewer(centroid)))
+    }
+
     /// The colour at the point with source-triangle weights `weights`.
     #[inline]
     pub fn shade(&self, weights: Vec3) -> Vec3 {
@@ -100,7 +132,12 @@ impl<'f> FastPhong<'f> {
             self.frame.face_normal(self.triangle)
         });
         let normal = self.style.side_normal(normal, self.back_facing);
-        let to_viewer = self.frame.viewer.to_viewer(position);
+        self.light_with(position, normal, self.frame.viewer.to_viewer(position))
+    }
+
+    /// The lighting at `position` with the (side) normal `normal`.
+    #[inline]
+    fn light_with(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
         match self.specular {
             Specular::None => self.light::<0>(position, normal, to_viewer),
             Specular::Phong => self.light::<1>(position, normal, to_viewer),
