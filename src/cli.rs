@@ -45,6 +45,8 @@ pub enum Command {
     Check(crate::check::CheckArgs),
     /// Re-render a scene whenever it, or any file it uses, changes.
     Watch(crate::watch::WatchArgs),
+    /// Measurements of the renderer: `report speed-error` (time against error).
+    Report(crate::report::ReportArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -141,6 +143,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
         Command::Render(args) => run_render(&args),
         Command::Check(args) => crate::check::run(&args),
         Command::Watch(args) => crate::watch::run(&args),
+        Command::Report(args) => crate::report::run(&args),
     }
 }
 

@@ -22,6 +22,7 @@ pub mod output;
 pub mod pipeline;
 pub mod reference;
 pub mod render;
+pub mod report;
 pub mod scene;
 pub mod texture;
 pub mod watch;

@@ -234,11 +234,24 @@ impl Surface {
     }
 }
 
+/// The arithmetic of the reference's lighting (the geometry is always `f64`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum LightingPrecision {
+    /// [`exact_lighting`]: the reference proper.
+    #[default]
+    F64,
+    /// The renderer's own [`crate::lighting`] in `f32`, at the exact point and normal (rounded
+    /// to `f32`, eye-relative as the renderer has them): measures what `f32` lighting costs.
+    F32,
+}
+
 /// What the reference renders: the scene with its camera and lights, and the surfaces.
 struct ReferenceScene<'a> {
     scene: &'a Scene,
     surfaces: Vec<Surface>,
     lights: Vec<ExactLight>,
+    lights_f32: Vec<crate::lighting::ShadingLight>,
+    precision: LightingPrecision,
     /// From NDC (x, y, depth) to eye-relative world space.
     world_from_clip: DMat4,
     viewer: Viewer,
@@ -300,6 +313,19 @@ impl ReferenceScene<'_> {
             Viewer::Local => (-position).normalize_or_zero(),
             Viewer::Infinite { to_viewer } => to_viewer.as_dvec3(),
         };
+        if self.precision == LightingPrecision::F32 {
+            let terms = crate::lighting::illuminate(
+                &surface.material,
+                if unlit { &[] } else { &self.lights_f32 },
+                self.scene.ambient_light,
+                position.as_vec3(),
+                normal.as_vec3(),
+                to_viewer.as_vec3(),
+            );
+            let (textured, rest) =
+                crate::render::geometry::select_component_split(None, surface.component, &terms);
+            return Some((textured + rest).as_dvec3());
+        }
         let terms = illuminate_exact(
             &surface.material,
             if unlit { &[] } else { &self.lights },
@@ -346,17 +372,29 @@ fn select_exact(component: LightingComponent, terms: &exact_lighting::ExactTerms
 /// says which objects it cannot render. Rows are computed independently, so the image is the
 /// same for any thread count.
 pub fn render_reference(scene: &Scene, threads: Option<usize>) -> Result<FrameBuffer, Vec<Unsupported>> {
+    render_reference_with(scene, threads, LightingPrecision::F64)
+}
+
+/// [`render_reference`] with the lighting evaluated at `precision`.
+pub fn render_reference_with(
+    scene: &Scene,
+    threads: Option<usize>,
+    precision: LightingPrecision,
+) -> Result<FrameBuffer, Vec<Unsupported>> {
     let surfaces = surfaces(scene)?;
+    let lights: Vec<ExactLight> = scene
+        .lights
+        .iter()
+        .map(|light| ExactLight::new(light, scene.camera.eye))
+        .collect();
     let (width, height) = (scene.image.width, scene.image.height);
     let camera = CameraSetup::new(&scene.camera, f64::from(width) / f64::from(height));
     let reference = ReferenceScene {
         scene,
         surfaces,
-        lights: scene
-            .lights
-            .iter()
-            .map(|light| ExactLight::new(light, scene.camera.eye))
-            .collect(),
+        lights_f32: lights.iter().map(ExactLight::to_f32).collect(),
+        lights,
+        precision,
         world_from_clip: camera.clip_from_world.inverse(),
         viewer: camera.viewer,
         pattern: SamplePattern::new(scene.image.samples).unwrap_or(SamplePattern::SINGLE),

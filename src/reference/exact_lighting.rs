@@ -13,7 +13,7 @@
 
 use glam::{DVec3, Vec3};
 
-use crate::lighting::MIN_ATTENUATION_DENOMINATOR;
+use crate::lighting::{MIN_ATTENUATION_DENOMINATOR, ShadingLight, ShadingLightKind};
 use crate::scene::{Attenuation, Light, LightingModel, Material, Microfacet, MicrofacetDistribution};
 
 /// A light prepared for exact shading: eye-relative position, unit directions, in `f64`.
@@ -79,6 +79,38 @@ impl ExactLight {
                     axis: direction.as_dvec3().normalize_or_zero(),
                     cos_cutoff: f64::from(cutoff_degrees).to_radians().cos(),
                     exponent: f64::from(exponent),
+                    attenuation,
+                },
+            },
+        }
+    }
+
+    /// The same light rounded to the renderer's `f32` form (to measure `f32` lighting).
+    pub fn to_f32(&self) -> ShadingLight {
+        ShadingLight {
+            color: self.color.as_vec3(),
+            kind: match self.kind {
+                ExactLightKind::Directional { to_light } => ShadingLightKind::Directional {
+                    to_light: to_light.as_vec3(),
+                },
+                ExactLightKind::Point {
+                    position,
+                    attenuation,
+                } => ShadingLightKind::Point {
+                    position: position.as_vec3(),
+                    attenuation,
+                },
+                ExactLightKind::Spot {
+                    position,
+                    axis,
+                    cos_cutoff,
+                    exponent,
+                    attenuation,
+                } => ShadingLightKind::Spot {
+                    position: position.as_vec3(),
+                    axis: axis.as_vec3(),
+                    cos_cutoff: cos_cutoff as f32,
+                    exponent: exponent as f32,
                     attenuation,
                 },
             },
@@ -241,7 +273,7 @@ fn attenuate(attenuation: Attenuation, distance: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lighting::{ShadingLight, ShadingLightKind, illuminate};
+    use crate::lighting::{ShadingLightKind, illuminate};
     use crate::scene::MaterialTextures;
 
     /// A small deterministic generator (xorshift), so the cross-check is the same on every run.
@@ -271,37 +303,6 @@ mod tests {
         }
         fn color(&mut self) -> Vec3 {
             Vec3::new(self.next() as f32, self.next() as f32, self.next() as f32)
-        }
-    }
-
-    fn f32_light(light: &ExactLight) -> ShadingLight {
-        ShadingLight {
-            color: light.color.as_vec3(),
-            kind: match light.kind {
-                ExactLightKind::Directional { to_light } => ShadingLightKind::Directional {
-                    to_light: to_light.as_vec3(),
-                },
-                ExactLightKind::Point {
-                    position,
-                    attenuation,
-                } => ShadingLightKind::Point {
-                    position: position.as_vec3(),
-                    attenuation,
-                },
-                ExactLightKind::Spot {
-                    position,
-                    axis,
-                    cos_cutoff,
-                    exponent,
-                    attenuation,
-                } => ShadingLightKind::Spot {
-                    position: position.as_vec3(),
-                    axis: axis.as_vec3(),
-                    cos_cutoff: cos_cutoff as f32,
-                    exponent: exponent as f32,
-                    attenuation,
-                },
-            },
         }
     }
 
@@ -374,7 +375,7 @@ mod tests {
             // Round the inputs to f32 first, so both evaluate the same point.
             let (normal, to_viewer) = (random.unit().as_vec3(), random.unit().as_vec3());
             let ambient = random.color();
-            let light32 = f32_light(&exact_light);
+            let light32 = exact_light.to_f32();
             let exact_light = ExactLight {
                 color: light32.color.as_dvec3(),
                 kind: f64_kind(light32.kind),
