@@ -180,17 +180,27 @@ impl Surface {
         };
         match self.shape {
             Shape::Sphere => {
-                // |o + t·d|² = 1, with the cancellation-free form of the two roots.
-                let a = d.dot(d);
-                let b = o.dot(d);
-                let c = o.dot(o) - 1.0;
-                let discriminant = b * b - a * c;
-                if discriminant < 0.0 || a == 0.0 {
+                // |o + s·u|² = 1 along the unit direction u: s² − 2bs + c = 0 with b = −o·u,
+                // c = |o|² − 1. The discriminant b² − c is computed as 1 − |o + b·u|² (the
+                // squared distance of the ray from the centre), which does not cancel when the
+                // origin is far away or the shape very flat; the roots are q and c/q with
+                // q = b + sign(b)·√(b² − c) (Ray Tracing Gems, chapter 7).
+                let length = d.length();
+                if length == 0.0 {
                     return;
                 }
-                let q = -(b + b.signum() * discriminant.sqrt());
-                let roots = if q == 0.0 { [0.0, 0.0] } else { [q / a, c / q] };
-                for t in roots {
+                let unit = d / length;
+                let b = -o.dot(unit);
+                let closest = o + b * unit;
+                let discriminant = 1.0 - closest.dot(closest);
+                if discriminant < 0.0 {
+                    return;
+                }
+                let c = o.dot(o) - 1.0;
+                let q = b + if b < 0.0 { -1.0 } else { 1.0 } * discriminant.sqrt();
+                let distances = if q == 0.0 { [0.0, 0.0] } else { [q, c / q] };
+                for distance in distances {
+                    let t = distance / length;
                     report(t, o + t * d);
                 }
             }
