@@ -8,6 +8,9 @@
 //! - RMSE over all channels, and PSNR = 20·log10(255 / RMSE) (infinite for identical images);
 //! - the share of pixels with a channel off by more than 2 and by more than 8 levels (the
 //!   anchor table's columns);
+//! - the highlight's peak loss: how much dimmer the test's brightest pixel is than the
+//!   reference's (mean of the three channels), which says whether a highlight survived where
+//!   the mean error, diluted over the whole surface, cannot;
 //! - FLIP (NVIDIA's perceptual metric, feature `flip`): mean and 99th percentile of the
 //!   per-pixel error, over the same pixels. FLIP itself looks at the whole image (its filters
 //!   need the neighbourhood); only the pooling is restricted to the covered pixels.
@@ -36,6 +39,9 @@ pub struct ErrorMetrics {
     pub share_over_2: f64,
     /// Share of compared pixels with some channel off by more than 8 levels.
     pub share_over_8: f64,
+    /// The brightest compared pixel of the reference minus that of the test, in levels (mean
+    /// of the channels): positive when the test lost part of the highlight.
+    pub peak_loss: f64,
     /// FLIP error over the compared pixels, when the `flip` feature is built.
     pub flip: Option<FlipError>,
 }
@@ -76,6 +82,7 @@ pub fn compare(reference: &FrameBuffer, test: &FrameBuffer) -> Option<ErrorMetri
     let mut max_abs = [0u8; 3];
     let mut sum_squares = 0u64;
     let (mut over_2, mut over_8) = (0usize, 0usize);
+    let (mut expected_peak, mut actual_peak) = (0u32, 0u32);
     let mask: Vec<bool> = reference
         .covered
         .iter()
@@ -91,6 +98,9 @@ pub fn compare(reference: &FrameBuffer, test: &FrameBuffer) -> Option<ErrorMetri
     {
         pixels += 1;
         let (expected, actual) = (quantize(*expected), quantize(*actual));
+        let brightness = |c: [u8; 3]| c.iter().map(|&v| u32::from(v)).sum::<u32>();
+        expected_peak = expected_peak.max(brightness(expected));
+        actual_peak = actual_peak.max(brightness(actual));
         let mut largest = 0;
         for channel in 0..3 {
             let difference = expected[channel].abs_diff(actual[channel]);
@@ -116,6 +126,7 @@ pub fn compare(reference: &FrameBuffer, test: &FrameBuffer) -> Option<ErrorMetri
         },
         share_over_2: over_2 as f64 / count,
         share_over_8: over_8 as f64 / count,
+        peak_loss: (f64::from(expected_peak) - f64::from(actual_peak)) / 3.0,
         flip: flip(reference, test, &mask),
     })
 }
@@ -185,6 +196,7 @@ mod tests {
         assert_eq!(m.mean_abs, [0.0; 3]);
         assert_eq!(m.max_abs, [0; 3]);
         assert_eq!(m.psnr_db, f64::INFINITY);
+        assert_eq!(m.peak_loss, 0.0);
         assert_eq!((m.share_over_2, m.share_over_8), (0.0, 0.0));
         if let Some(flip) = m.flip {
             assert_eq!((flip.mean, flip.percentile_99), (0.0, 0.0));
@@ -206,6 +218,8 @@ mod tests {
         assert!((m.rmse - rmse).abs() < 1e-12);
         assert!((m.psnr_db - 20.0 * (255.0 / rmse).log10()).abs() < 1e-9);
         assert_eq!((m.share_over_2, m.share_over_8), (1.0 / 16.0, 1.0 / 16.0));
+        // The test's brightest pixel is 51 levels of red brighter than the reference's black.
+        assert_eq!(m.peak_loss, -17.0);
         assert!((m.mean_abs_all() - 51.0 / 48.0).abs() < 1e-12);
         assert_eq!(m.max_abs_all(), 51);
     }

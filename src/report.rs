@@ -288,14 +288,14 @@ fn flip_fields(error: &ErrorMetrics) -> (String, String) {
 /// Every point as CSV, one line each, with a header.
 pub fn csv(points: &[SweepPoint]) -> String {
     let mut out = String::from(
-        "method,segments,triangles,shininess,samples,time_ms,mean_abs,mean_abs_r,mean_abs_g,mean_abs_b,max_abs,rmse,psnr_db,share_over_2,share_over_8,flip_mean,flip_p99,pareto,pixels\n",
+        "method,segments,triangles,shininess,samples,time_ms,mean_abs,mean_abs_r,mean_abs_g,mean_abs_b,max_abs,rmse,psnr_db,share_over_2,share_over_8,peak_loss,flip_mean,flip_p99,pareto,pixels\n",
     );
     for p in points {
         let e = &p.error;
         let (flip_mean, flip_p99) = flip_fields(e);
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.2},{:.6},{:.6},{},{},{},{}",
+            "{},{},{},{},{},{:.3},{:.4},{:.4},{:.4},{:.4},{},{:.4},{:.2},{:.6},{:.6},{:.2},{},{},{},{}",
             p.method,
             p.segments,
             p.triangles,
@@ -311,6 +311,7 @@ pub fn csv(points: &[SweepPoint]) -> String {
             e.psnr_db,
             e.share_over_2,
             e.share_over_8,
+            e.peak_loss,
             flip_mean,
             flip_p99,
             p.pareto,
@@ -335,9 +336,10 @@ pub fn markdown(
         out,
         "{width}×{height} px, {threads} threads, median of {} runs per point. Errors on the 0..255 scale \
          against the exact reference (`lampshade render --reference`), over the pixels covered in either \
-         image; FLIP mean and 99th percentile over the same pixels. **P** marks the Pareto front (no other \
+         image; *peak loss* is how many levels dimmer the brightest pixel (the highlight) is than the \
+         reference's; FLIP mean and 99th percentile over the same pixels. **P** marks the Pareto front (no other \
          point is both faster and more accurate, by mean absolute error). Reproduce with \
-         `cargo run --release -- report speed-error --out DIR`.\n",
+         `cargo run --release -- report speed-error --out docs/speed-error`.\n",
         plan.runs
     );
     for &shininess in &plan.shininess {
@@ -345,9 +347,12 @@ pub fn markdown(
             let _ = writeln!(out, "## Shininess {shininess}, {samples} sample(s) per pixel\n");
             let _ = writeln!(
                 out,
-                "| method | sphere(N) | triangles | ms | mean abs | max abs | PSNR dB | > 2 | > 8 | FLIP mean | FLIP p99 | P |"
+                "| method | sphere(N) | triangles | ms | mean abs | max abs | PSNR dB | > 2 | > 8 | peak loss | FLIP mean | FLIP p99 | P |"
             );
-            let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|");
+            let _ = writeln!(
+                out,
+                "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:-:|"
+            );
             for p in points
                 .iter()
                 .filter(|p| p.shininess == shininess && p.samples == samples)
@@ -356,7 +361,7 @@ pub fn markdown(
                 let (flip_mean, flip_p99) = flip_fields(e);
                 let _ = writeln!(
                     out,
-                    "| {} | {} | {} | {:.1} | {:.3} | {} | {:.1} | {:.2}% | {:.2}% | {} | {} | {} |",
+                    "| {} | {} | {} | {:.1} | {:.3} | {} | {:.1} | {:.2}% | {:.2}% | {:.1} | {} | {} | {} |",
                     p.method,
                     if p.segments == 0 {
                         "exact".to_string()
@@ -370,6 +375,7 @@ pub fn markdown(
                     e.psnr_db,
                     100.0 * e.share_over_2,
                     100.0 * e.share_over_8,
+                    e.peak_loss,
                     flip_mean,
                     flip_p99,
                     if p.pareto { "P" } else { "" },
@@ -588,6 +594,7 @@ mod tests {
                 psnr_db: 0.0,
                 share_over_2: 0.0,
                 share_over_8: 0.0,
+                peak_loss: 0.0,
                 flip: None,
             },
             pareto: false,
