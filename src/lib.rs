@@ -10,6 +10,10 @@
 //!
 //! After `scene::load` succeeds, rendering cannot fail: every user-input problem is reported
 //! by the loader as a [`diag::Diagnostic`]. See `ARCHITECTURE.md` for the code map.
+//!
+//! Beside the pipeline, for accuracy: [`reference`] renders analytic shapes exactly (ray cast
+//! and lit in `f64`), [`metrics`] measures an image against it, and [`report`] sweeps shading
+//! modes and tessellations for the speed/error report.
 #![deny(unsafe_code)]
 
 pub mod check;

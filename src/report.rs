@@ -394,8 +394,8 @@ pub fn plot_svg(points: &[SweepPoint], title: &str) -> Result<String, String> {
     if shown.is_empty() {
         return Err("nothing to plot".to_string());
     }
-    // Zero errors cannot sit on a log axis: floor them at a hundredth of a level.
-    let error_of = |p: &SweepPoint| p.error.mean_abs_all().max(0.01);
+    // Zero errors cannot sit on a log axis: floor them at a thousandth of a level.
+    let error_of = |p: &SweepPoint| p.error.mean_abs_all().max(0.001);
     let (mut t_lo, mut t_hi, mut e_lo, mut e_hi) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
     for p in &shown {
         t_lo = t_lo.min(milliseconds(p.time));
@@ -420,6 +420,8 @@ pub fn plot_svg(points: &[SweepPoint], title: &str) -> Result<String, String> {
             .map_err(|e| failed(&e))?;
         chart
             .configure_mesh()
+            .x_labels(8)
+            .y_labels(8)
             .x_desc("render time, ms (median)")
             .y_desc("mean absolute error, levels of 255")
             .draw()

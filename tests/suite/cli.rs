@@ -228,3 +228,59 @@ fn an_unwritable_output_exits_1() {
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(stderr(&output).contains("out.png"));
 }
+
+/// `render --reference` writes the exact image through the same output path; a mesh file is an
+/// error at the object's `mesh` with exit 2 and no image; shadows are a warning.
+#[test]
+fn render_reference_writes_the_exact_image_or_names_what_it_cannot_render() {
+    let work = tempfile::tempdir().unwrap();
+    std::fs::write(
+        work.path().join("s.ron"),
+        "(image: (width: 40, height: 30), \
+         lights: [Directional(direction: (0, 0, -1), shadows: true)], \
+         objects: [(mesh: Sphere(segments: 8))])",
+    )
+    .unwrap();
+    let output = lampshade(
+        &["render", "--reference", "s.ron", "-o", "exact.png"],
+        work.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("does not compute shadows"),
+        "{}",
+        stderr(&output)
+    );
+    let exact = image::open(work.path().join("exact.png")).unwrap().to_rgb8();
+    let output = lampshade(&["render", "s.ron", "-o", "raster.png"], work.path());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let raster = image::open(work.path().join("raster.png")).unwrap().to_rgb8();
+    assert_eq!(exact.dimensions(), (40, 30));
+    // Sphere(8) is coarse: the exact silhouette is round, the raster one a polygon inside it.
+    let covered = |image: &image::RgbImage| image.pixels().filter(|p| p.0 != [0, 0, 0]).count();
+    assert!(
+        covered(&exact) > covered(&raster),
+        "{} {}",
+        covered(&exact),
+        covered(&raster)
+    );
+
+    std::fs::write(
+        work.path().join("mesh.ron"),
+        "(objects: [\n    (name: \"box\", mesh: Obj(\"box.obj\")),\n])",
+    )
+    .unwrap();
+    std::fs::write(
+        work.path().join("box.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let output = lampshade(&["render", "--reference", "mesh.ron"], work.path());
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("mesh.ron:2:25") && stderr(&output).contains("`box`"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(!work.path().join("mesh.png").exists());
+}
