@@ -67,6 +67,8 @@ pub enum Shape {
 pub struct Unsupported {
     /// Index in the scene's `objects`.
     pub object: usize,
+    /// The object's field at fault (`mesh` or `material`), where the diagnostic points.
+    pub field: &'static str,
     pub message: String,
     pub hint: String,
 }
@@ -120,8 +122,9 @@ fn surfaces(scene: &Scene) -> Result<Vec<Surface>, Vec<Unsupported>> {
     for (index, object) in scene.objects.iter().enumerate() {
         match surface(scene.camera.eye, object) {
             Ok(surface) => prepared.push(surface),
-            Err((message, hint)) => problems.push(Unsupported {
+            Err((field, message, hint)) => problems.push(Unsupported {
                 object: index,
+                field,
                 message,
                 hint,
             }),
@@ -134,9 +137,11 @@ fn surfaces(scene: &Scene) -> Result<Vec<Surface>, Vec<Unsupported>> {
     }
 }
 
-fn surface(eye: DVec3, object: &Object) -> Result<Surface, (String, String)> {
+/// The object ready for rays, or (the field at fault, the message, a hint).
+fn surface(eye: DVec3, object: &Object) -> Result<Surface, (&'static str, String, String)> {
     let Some(shape) = recognize_shape(&object.mesh) else {
         return Err((
+            "mesh",
             format!(
                 "`{}` is drawn from a mesh file, which has no exact surface for the reference",
                 object.name
@@ -148,6 +153,7 @@ fn surface(eye: DVec3, object: &Object) -> Result<Surface, (String, String)> {
     let textures = material.textures;
     if textures.diffuse.is_some() || textures.ambient.is_some() || textures.normal.is_some() {
         return Err((
+            "material",
             format!(
                 "`{}` has a textured material, which the reference does not support",
                 object.name
@@ -463,13 +469,8 @@ pub fn render_reference_file(
             let diagnostics = problems
                 .into_iter()
                 .map(|problem| {
-                    let field = if problem.message.contains("textured") {
-                        "material"
-                    } else {
-                        "mesh"
-                    };
                     let diagnostic = Diagnostic::error(path, problem.message).with_hint(problem.hint);
-                    located(diagnostic, field, problem.object)
+                    located(diagnostic, problem.field, problem.object)
                 })
                 .collect();
             return Err(LoadError {
@@ -665,7 +666,7 @@ mod tests {
         scene.objects[1].mesh = std::sync::Arc::new(triangle);
         let problems = render_reference(&scene, None).unwrap_err();
         assert_eq!(problems.len(), 1);
-        assert_eq!(problems[0].object, 1);
+        assert_eq!((problems[0].object, problems[0].field), (1, "mesh"));
         assert!(problems[0].message.contains("`tri`"), "{problems:?}");
     }
 }
