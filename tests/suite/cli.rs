@@ -284,3 +284,54 @@ fn render_reference_writes_the_exact_image_or_names_what_it_cannot_render() {
     );
     assert!(!work.path().join("mesh.png").exists());
 }
+
+/// `report speed-error --quick` writes its table, CSV and well-formed SVG plots; a scene with no
+/// sphere to sweep is bad input.
+#[test]
+fn report_speed_error_writes_its_table_and_plots() {
+    let work = tempfile::tempdir().unwrap();
+    let scene = repo().join("scenes/matlab-shiny.ron");
+    let scene = scene.to_str().unwrap();
+    let output = lampshade(
+        &[
+            "report",
+            "speed-error",
+            "--quick",
+            "--scene",
+            scene,
+            "--out",
+            "out",
+        ],
+        work.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let out = work.path().join("out");
+    let csv = std::fs::read_to_string(out.join("speed-error.csv")).unwrap();
+    // A header, then per shininess (5 and 50) two reference rows and 4 modes × 2 tessellations.
+    assert_eq!(csv.lines().count(), 1 + 2 * (2 + 4 * 2), "{csv}");
+    let table = std::fs::read_to_string(out.join("speed-error.md")).unwrap();
+    assert!(
+        table.contains("## Shininess 50, 1 sample(s) per pixel"),
+        "{table}"
+    );
+    for plot in ["speed-error-s5-x1.svg", "speed-error-s50-x1.svg"] {
+        let svg = std::fs::read_to_string(out.join(plot)).unwrap();
+        roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{plot}: {e}"));
+    }
+
+    std::fs::write(work.path().join("cube.ron"), "(objects: [(mesh: Cube)])").unwrap();
+    let output = lampshade(
+        &[
+            "report",
+            "speed-error",
+            "--quick",
+            "--scene",
+            "cube.ron",
+            "--out",
+            "cube",
+        ],
+        work.path(),
+    );
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(stderr(&output).contains("no `Sphere`"), "{}", stderr(&output));
+}
