@@ -270,7 +270,9 @@ struct ReferenceScene<'a> {
     precision: LightingPrecision,
     /// From NDC (x, y, depth) to eye-relative world space.
     world_from_clip: DMat4,
-    viewer: Viewer,
+    /// `V` for an orthographic camera (the viewer at infinity, in `f64`); `None` for a
+    /// perspective one, where `V` points to the eye.
+    infinite_viewer: Option<DVec3>,
     pattern: SamplePattern,
 }
 
@@ -325,10 +327,9 @@ impl ReferenceScene<'_> {
             hit.normal
         };
         let unlit = back_facing && surface.back_faces == BackFaces::Unlit;
-        let to_viewer = match self.viewer {
-            Viewer::Local => (-position).normalize_or_zero(),
-            Viewer::Infinite { to_viewer } => to_viewer.as_dvec3(),
-        };
+        let to_viewer = self
+            .infinite_viewer
+            .unwrap_or_else(|| (-position).normalize_or_zero());
         if self.precision == LightingPrecision::F32 {
             let terms = crate::lighting::illuminate(
                 &surface.material,
@@ -412,7 +413,10 @@ pub fn render_reference_with(
         lights,
         precision,
         world_from_clip: camera.clip_from_world.inverse(),
-        viewer: camera.viewer,
+        infinite_viewer: match camera.viewer {
+            Viewer::Local => None,
+            Viewer::Infinite { .. } => Some(-camera.forward),
+        },
         pattern: SamplePattern::new(scene.image.samples).unwrap_or(SamplePattern::SINGLE),
     };
     let run = || {
