@@ -65,8 +65,23 @@ impl ErrorMetrics {
     }
 }
 
-/// Compares `test` with `reference`; `None` when their sizes differ.
+/// Which pixels are compared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Compared {
+    /// Covered in either image: a missing or extra silhouette pixel counts (the default).
+    EitherCovered,
+    /// Covered in both: the llvmpipe anchor's convention, which leaves silhouettes out.
+    BothCovered,
+}
+
+/// Compares `test` with `reference` over the pixels either covers; `None` when their sizes
+/// differ.
 pub fn compare(reference: &FrameBuffer, test: &FrameBuffer) -> Option<ErrorMetrics> {
+    compare_over(reference, test, Compared::EitherCovered)
+}
+
+/// [`compare`] over the pixels `compared` selects.
+pub fn compare_over(reference: &FrameBuffer, test: &FrameBuffer, compared: Compared) -> Option<ErrorMetrics> {
     if (reference.width, reference.height) != (test.width, test.height) {
         return None;
     }
@@ -87,7 +102,10 @@ pub fn compare(reference: &FrameBuffer, test: &FrameBuffer) -> Option<ErrorMetri
         .covered
         .iter()
         .zip(&test.covered)
-        .map(|(&a, &b)| a || b)
+        .map(|(&a, &b)| match compared {
+            Compared::EitherCovered => a || b,
+            Compared::BothCovered => a && b,
+        })
         .collect();
     for ((expected, actual), _) in reference
         .color
@@ -239,6 +257,11 @@ mod tests {
         assert_eq!(m.max_abs, [10; 3]);
         assert_eq!(m.mean_abs, [5.0; 3]);
         assert_eq!((m.share_over_2, m.share_over_8), (0.5, 0.5));
+        // Covered in both: pixel 2 only, where the two agree.
+        reference.covered[2] = true;
+        test.covered[2] = true;
+        let both = compare_over(&reference, &test, Compared::BothCovered).unwrap();
+        assert_eq!((both.pixels, both.max_abs), (1, [0; 3]));
     }
 
     /// Values above 1 are compared as the PNG stores them: clamped.

@@ -31,11 +31,11 @@ use clap::Subcommand;
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, use_color};
 use crate::diag::render_diagnostics;
 use crate::mesh::{Mesh, primitives};
-use crate::metrics::{ErrorMetrics, compare};
+use crate::metrics::{Compared, ErrorMetrics, compare, compare_over};
 use crate::reference::{LightingPrecision, Shape, recognize_shape, render_reference_with};
 use crate::render::{RenderOptions, render};
 use crate::scene::load::{LoadOptions, load_scene};
-use crate::scene::{NormalInterpolation, Scene, Shading, presets};
+use crate::scene::{LightingModel, NormalInterpolation, Scene, Shading, presets};
 
 #[derive(Debug, clap::Args)]
 pub struct ReportArgs {
@@ -49,6 +49,22 @@ pub enum ReportKind {
     /// point and measure its error against the exact reference. Writes a CSV and a Markdown
     /// table and SVG plots with the Pareto front.
     SpeedError(SpeedErrorArgs),
+    /// The llvmpipe anchor's accuracy table for a scene (by default seed 002's MATLAB demo at
+    /// 1920×1080): flat, Gouraud and Blinn with the half vector, Phong with R·V, each against
+    /// the exact reference of the same model, over the pixels both images cover. Prints
+    /// Markdown.
+    Accuracy(AccuracyArgs),
+}
+
+#[derive(Debug, clap::Args)]
+pub struct AccuracyArgs {
+    /// The scene; every object is shaded in each mode in turn.
+    #[arg(long, value_name = "SCENE", default_value = "scenes/matlab-shiny.ron")]
+    pub scene: PathBuf,
+    #[arg(long, default_value_t = 1920)]
+    pub width: u32,
+    #[arg(long, default_value_t = 1080)]
+    pub height: u32,
 }
 
 #[derive(Debug, clap::Args)]
@@ -484,7 +500,78 @@ pub fn plot_svg(points: &[SweepPoint], title: &str) -> Result<String, String> {
 pub fn run(args: &ReportArgs) -> i32 {
     match &args.report {
         ReportKind::SpeedError(args) => run_speed_error(args),
+        ReportKind::Accuracy(args) => run_accuracy(args),
     }
+}
+
+/// The anchor table's rows: (name, shading, lighting model). As in the anchor, flat, Gouraud
+/// and "blinn" use the half vector and "phong" uses R·V; note that lampshade's flat lights the
+/// face normal at the centroid where OpenGL's lights the provoking vertex.
+const ACCURACY_ROWS: [(&str, Shading, LightingModel); 4] = [
+    ("phong (per pixel, R·V)", Shading::Phong, LightingModel::Phong),
+    (
+        "blinn (per pixel, N·H)",
+        Shading::Phong,
+        LightingModel::BlinnPhong,
+    ),
+    (
+        "gouraud (per vertex, N·H)",
+        Shading::Gouraud,
+        LightingModel::BlinnPhong,
+    ),
+    ("flat (per face, N·H)", Shading::Flat, LightingModel::BlinnPhong),
+];
+
+fn run_accuracy(args: &AccuracyArgs) -> i32 {
+    let options = LoadOptions {
+        width: Some(args.width),
+        height: Some(args.height),
+        ..LoadOptions::default()
+    };
+    let loaded = match load_scene(&args.scene, &options) {
+        Ok(loaded) => loaded,
+        Err(error) => {
+            eprint!(
+                "{}",
+                render_diagnostics(&error.diagnostics, &error.sources, use_color())
+            );
+            return EXIT_BAD_INPUT;
+        }
+    };
+    println!(
+        "| {} {}×{} | mean abs | max abs | PSNR dB | pixels off by > 2 | pixels off by > 8 |",
+        args.scene.display(),
+        args.width,
+        args.height
+    );
+    println!("|---|---:|---:|---:|---:|---:|");
+    for (name, shading, model) in ACCURACY_ROWS {
+        let mut scene = loaded.scene.clone();
+        for object in &mut scene.objects {
+            let mut material = object.material.unwrap_or_else(presets::default_material);
+            material.model = model;
+            object.material = Some(material);
+            object.shading = shading;
+        }
+        let reference = match render_reference_with(&scene, None, LightingPrecision::F64) {
+            Ok(reference) => reference,
+            Err(problems) => {
+                eprintln!("error: {}: {}", args.scene.display(), problems[0].message);
+                return EXIT_BAD_INPUT;
+            }
+        };
+        let (image, _) = render(&scene, &RenderOptions::default());
+        let e = compare_over(&reference, &image, Compared::BothCovered).expect("same size");
+        println!(
+            "| {name} | {:.4} | {} | {:.1} | {:.3}% | {:.3}% |",
+            e.mean_abs_all(),
+            e.max_abs_all(),
+            e.psnr_db,
+            100.0 * e.share_over_2,
+            100.0 * e.share_over_8
+        );
+    }
+    EXIT_OK
 }
 
 fn run_speed_error(args: &SpeedErrorArgs) -> i32 {

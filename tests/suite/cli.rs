@@ -335,3 +335,33 @@ fn report_speed_error_writes_its_table_and_plots() {
     assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
     assert!(stderr(&output).contains("no `Sphere`"), "{}", stderr(&output));
 }
+
+/// `report accuracy` prints the anchor's table: four modes, Phong the most accurate.
+#[test]
+fn report_accuracy_prints_the_anchor_table() {
+    let scene = repo().join("scenes/matlab-shiny.ron");
+    let output = lampshade(
+        &[
+            "report",
+            "accuracy",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--width",
+            "160",
+            "--height",
+            "120",
+        ],
+        &repo(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let table = String::from_utf8_lossy(&output.stdout).into_owned();
+    let mean_of = |row: &str| -> f64 {
+        let line = table
+            .lines()
+            .find(|l| l.starts_with(&format!("| {row}")))
+            .unwrap();
+        line.split('|').nth(2).unwrap().trim().parse().unwrap()
+    };
+    assert!(mean_of("phong") < mean_of("gouraud"), "{table}");
+    assert!(mean_of("gouraud") < mean_of("flat"), "{table}");
+}
