@@ -351,7 +351,7 @@ fn report_accuracy_prints_the_anchor_table() {
             "--height",
             "120",
         ],
-        &repo(),
+        repo(),
     );
     assert!(output.status.success(), "{}", stderr(&output));
     let table = String::from_utf8_lossy(&output.stdout).into_owned();
