@@ -47,6 +47,8 @@ pub enum Command {
     Watch(crate::watch::WatchArgs),
     /// Time frames of scenes per shading mode (loaded once, rendered many times).
     Bench(crate::bench::BenchArgs),
+    /// Measurements of the renderer: `report speed-error` (time against error).
+    Report(crate::report::ReportArgs),
 }
 
 #[derive(Debug, clap::Args)]
@@ -89,6 +91,10 @@ pub struct RenderArgs {
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Render the exact reference instead: analytic shapes ray-cast and lit in f64 (see
+    /// `reference`). Mesh files and textures are errors; shadows are ignored.
+    #[arg(long, conflicts_with = "debug")]
+    pub reference: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -163,6 +169,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
         Command::Check(args) => crate::check::run(&args),
         Command::Watch(args) => crate::watch::run(&args),
         Command::Bench(args) => crate::bench::run(&args),
+        Command::Report(args) => crate::report::run(&args),
     }
 }
 
@@ -239,6 +246,7 @@ fn run_render(args: &RenderArgs) -> i32 {
             &render_options,
             output_settings,
             args.quiet,
+            args.reference,
         ) {
             Ok(()) => {}
             Err(RenderFailure::BadInput) => bad_inputs.push(scene_path),
@@ -281,13 +289,19 @@ fn render_one(
     render_options: &RenderOptions,
     output_settings: OutputSettings,
     quiet: bool,
+    reference: bool,
 ) -> Result<(), RenderFailure> {
-    let rendered = match render_scene_file(
-        scene_path,
-        load_options,
-        render_options,
-        &mut MeshCache::default(),
-    ) {
+    let rendered = if reference {
+        crate::reference::render_reference_file(scene_path, load_options, render_options.threads)
+    } else {
+        render_scene_file(
+            scene_path,
+            load_options,
+            render_options,
+            &mut MeshCache::default(),
+        )
+    };
+    let rendered = match rendered {
         Ok(rendered) => rendered,
         Err(error) => {
             eprint!(

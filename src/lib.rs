@@ -10,6 +10,10 @@
 //!
 //! After `scene::load` succeeds, rendering cannot fail: every user-input problem is reported
 //! by the loader as a [`diag::Diagnostic`]. See `ARCHITECTURE.md` for the code map.
+//!
+//! Beside the pipeline, for accuracy: [`reference`] renders analytic shapes exactly (ray cast
+//! and lit in `f64`), [`metrics`] measures an image against it, and [`report`] sweeps shading
+//! modes and tessellations for the speed/error report.
 #![deny(unsafe_code)]
 
 pub mod bench;
@@ -18,9 +22,12 @@ pub mod cli;
 pub mod diag;
 pub mod lighting;
 pub mod mesh;
+pub mod metrics;
 pub mod output;
 pub mod pipeline;
+pub mod reference;
 pub mod render;
+pub mod report;
 pub mod scene;
 pub mod texture;
 pub mod watch;

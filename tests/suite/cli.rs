@@ -228,3 +228,140 @@ fn an_unwritable_output_exits_1() {
     assert_eq!(output.status.code(), Some(1), "{}", stderr(&output));
     assert!(stderr(&output).contains("out.png"));
 }
+
+/// `render --reference` writes the exact image through the same output path; a mesh file is an
+/// error at the object's `mesh` with exit 2 and no image; shadows are a warning.
+#[test]
+fn render_reference_writes_the_exact_image_or_names_what_it_cannot_render() {
+    let work = tempfile::tempdir().unwrap();
+    std::fs::write(
+        work.path().join("s.ron"),
+        "(image: (width: 40, height: 30), \
+         lights: [Directional(direction: (0, 0, -1), shadows: true)], \
+         objects: [(mesh: Sphere(segments: 8))])",
+    )
+    .unwrap();
+    let output = lampshade(
+        &["render", "--reference", "s.ron", "-o", "exact.png"],
+        work.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("does not compute shadows"),
+        "{}",
+        stderr(&output)
+    );
+    let exact = image::open(work.path().join("exact.png")).unwrap().to_rgb8();
+    let output = lampshade(&["render", "s.ron", "-o", "raster.png"], work.path());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let raster = image::open(work.path().join("raster.png")).unwrap().to_rgb8();
+    assert_eq!(exact.dimensions(), (40, 30));
+    // Sphere(8) is coarse: the exact silhouette is round, the raster one a polygon inside it.
+    let covered = |image: &image::RgbImage| image.pixels().filter(|p| p.0 != [0, 0, 0]).count();
+    assert!(
+        covered(&exact) > covered(&raster),
+        "{} {}",
+        covered(&exact),
+        covered(&raster)
+    );
+
+    std::fs::write(
+        work.path().join("mesh.ron"),
+        "(objects: [\n    (name: \"box\", mesh: Obj(\"box.obj\")),\n])",
+    )
+    .unwrap();
+    std::fs::write(
+        work.path().join("box.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let output = lampshade(&["render", "--reference", "mesh.ron"], work.path());
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(
+        stderr(&output).contains("mesh.ron:2:25") && stderr(&output).contains("`box`"),
+        "{}",
+        stderr(&output)
+    );
+    assert!(!work.path().join("mesh.png").exists());
+}
+
+/// `report speed-error --quick` writes its table, CSV and well-formed SVG plots; a scene with no
+/// sphere to sweep is bad input.
+#[test]
+fn report_speed_error_writes_its_table_and_plots() {
+    let work = tempfile::tempdir().unwrap();
+    let scene = repo().join("scenes/matlab-shiny.ron");
+    let scene = scene.to_str().unwrap();
+    let output = lampshade(
+        &[
+            "report",
+            "speed-error",
+            "--quick",
+            "--scene",
+            scene,
+            "--out",
+            "out",
+        ],
+        work.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let out = work.path().join("out");
+    let csv = std::fs::read_to_string(out.join("speed-error.csv")).unwrap();
+    // A header, then per shininess (5 and 50) two reference rows and 4 modes × 2 tessellations.
+    assert_eq!(csv.lines().count(), 1 + 2 * (2 + 4 * 2), "{csv}");
+    let table = std::fs::read_to_string(out.join("speed-error.md")).unwrap();
+    assert!(
+        table.contains("## Shininess 50, 1 sample(s) per pixel"),
+        "{table}"
+    );
+    for plot in ["speed-error-s5-x1.svg", "speed-error-s50-x1.svg"] {
+        let svg = std::fs::read_to_string(out.join(plot)).unwrap();
+        roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{plot}: {e}"));
+    }
+
+    std::fs::write(work.path().join("cube.ron"), "(objects: [(mesh: Cube)])").unwrap();
+    let output = lampshade(
+        &[
+            "report",
+            "speed-error",
+            "--quick",
+            "--scene",
+            "cube.ron",
+            "--out",
+            "cube",
+        ],
+        work.path(),
+    );
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(stderr(&output).contains("no `Sphere`"), "{}", stderr(&output));
+}
+
+/// `report accuracy` prints the anchor's table: four modes, Phong the most accurate.
+#[test]
+fn report_accuracy_prints_the_anchor_table() {
+    let scene = repo().join("scenes/matlab-shiny.ron");
+    let output = lampshade(
+        &[
+            "report",
+            "accuracy",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--width",
+            "160",
+            "--height",
+            "120",
+        ],
+        repo(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let table = String::from_utf8_lossy(&output.stdout).into_owned();
+    let mean_of = |row: &str| -> f64 {
+        let line = table
+            .lines()
+            .find(|l| l.starts_with(&format!("| {row}")))
+            .unwrap();
+        line.split('|').nth(2).unwrap().trim().parse().unwrap()
+    };
+    assert!(mean_of("phong") < mean_of("gouraud"), "{table}");
+    assert!(mean_of("gouraud") < mean_of("flat"), "{table}");
+}

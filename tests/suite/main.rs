@@ -2,6 +2,9 @@
 //! - `render`: the rasterizer's contract on scenes built in code;
 //! - `check`: `lampshade check` on small suites (verdicts, exit codes, bless, shards, reports);
 //! - `cli`: the command line on good and bad scene files (`tests/bad-scenes/`);
+//! - `hard_cases`: numerical hard cases on the scenes of `scenes/hard/` (watertightness,
+//!   degenerate triangles, the eye plane, large coordinates and images, depth precision, broken
+//!   normals, extreme lighting), against the exact reference where one exists;
 //! - `golden`: every bundled scene against its reference image (`scenes/refs/`), through the
 //!   library behind `lampshade check`;
 //! - `watch`: `lampshade watch` as a process on a temporary folder (save styles, includes, meshes,
@@ -11,6 +14,7 @@
 mod check;
 mod cli;
 mod golden;
+mod hard_cases;
 mod loading;
 mod render;
 mod watch;
