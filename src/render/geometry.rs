@@ -396,7 +396,7 @@ fn build(
         guard_x: GUARD_BAND_PIXELS / width as f32,
         guard_y: GUARD_BAND_PIXELS / height as f32,
     };
-    let mut projected = ProjectedVertices::default();
+    let mut projected: Vec<ProjectedVertex> = Vec::with_capacity(vertex_count);
     let placed: Vec<PlacedObject> = scene
         .objects
         .iter()
@@ -424,16 +424,19 @@ struct Viewport {
     guard_y: f32,
 }
 
-/// Every vertex of the frame in clip space, and projected to the screen when it lies inside
-/// every clip plane (so triangles that need no clipping reuse it instead of projecting their
-/// corners again).
-#[derive(Default)]
-struct ProjectedVertices {
-    clip: Vec<Vec4>,
-    /// Snapped to fixed point; meaningful only where `inside` is set.
-    screen: Vec<SnappedVertex>,
-    inside: Vec<bool>,
+/// A vertex of the frame in clip space, and projected to the screen when it lies inside every
+/// clip plane (so triangles that need no clipping reuse it instead of projecting their corners
+/// again).
+#[derive(Debug, Clone, Copy, Default)]
+struct ProjectedVertex {
+    clip: Vec4,
+    /// Snapped to fixed point; meaningful only when `inside`.
+    screen: SnappedVertex,
+    inside: bool,
 }
+
+/// Vertices per parallel work item of the vertex pass.
+const VERTEX_CHUNK: usize = 4096;
 
 /// Where an object's vertices and materials landed in the frame, for its triangles.
 struct PlacedObject {
@@ -605,7 +608,7 @@ impl ObjectTransforms {
 /// Materials, and the per-vertex work of one object: transform, projection, Gouraud lighting.
 fn add_object_vertices(
     frame: &mut Frame,
-    projected: &mut ProjectedVertices,
+    projected: &mut Vec<ProjectedVertex>,
     object_index: u32,
     object: &Object,
     camera: &CameraSetup,
@@ -642,40 +645,35 @@ fn add_object_vertices(
     let vertex_base = frame.vertices.len() as u32;
     let vertex_count = mesh.positions.len();
 
-    // Positions and normals, transformed once per vertex (not per triangle corner).
-    frame
-        .vertices
-        .resize(vertex_base as usize + vertex_count, FrameVertex::default());
-    frame.vertices[vertex_base as usize..]
-        .par_iter_mut()
-        .zip(mesh.positions.par_iter().zip(&mesh.normals))
-        .for_each(|(vertex, (&p, &n))| {
-            *vertex = FrameVertex {
-                position: transforms.world_from_model.transform_point3(p),
-                normal: (transforms.normal_matrix * n).normalize_or_zero(),
-            }
-        });
+    // Positions and normals, transformed and projected once per vertex (not per triangle
+    // corner), in chunks: one parallel pass over the object's vertices.
+    let end = vertex_base as usize + vertex_count;
+    frame.vertices.resize(end, FrameVertex::default());
+    projected.resize(end, ProjectedVertex::default());
     let (width, height) = (viewport.width as f32, viewport.height as f32);
-    projected
-        .clip
-        .resize(vertex_base as usize + vertex_count, Vec4::ZERO);
-    projected
-        .screen
-        .resize(vertex_base as usize + vertex_count, SnappedVertex::default());
-    projected
-        .inside
-        .resize(vertex_base as usize + vertex_count, false);
-    let range = vertex_base as usize..;
-    projected.clip[range.clone()]
-        .par_iter_mut()
-        .zip(projected.screen[range.clone()].par_iter_mut())
-        .zip(projected.inside[range].par_iter_mut())
-        .zip(mesh.positions.par_iter())
-        .for_each(|(((clip, screen), inside), &p)| {
-            *clip = transforms.clip_from_model * p.extend(1.0);
-            *inside = inside_clip_volume(*clip, viewport.guard_x, viewport.guard_y);
-            if *inside {
-                *screen = SnappedVertex::snap(&project(*clip, Vec3::ZERO, width, height)).0;
+    frame.vertices[vertex_base as usize..]
+        .par_chunks_mut(VERTEX_CHUNK)
+        .zip(projected[vertex_base as usize..].par_chunks_mut(VERTEX_CHUNK))
+        .enumerate()
+        .for_each(|(chunk, (vertices, projected))| {
+            let first = chunk * VERTEX_CHUNK;
+            let sources = mesh.positions[first..].iter().zip(&mesh.normals[first..]);
+            for ((vertex, projected), (&p, &n)) in vertices.iter_mut().zip(projected).zip(sources) {
+                *vertex = FrameVertex {
+                    position: transforms.world_from_model.transform_point3(p),
+                    normal: (transforms.normal_matrix * n).normalize_or_zero(),
+                };
+                let clip = transforms.clip_from_model * p.extend(1.0);
+                let inside = inside_clip_volume(clip, viewport.guard_x, viewport.guard_y);
+                *projected = ProjectedVertex {
+                    clip,
+                    screen: if inside {
+                        SnappedVertex::snap(&project(clip, Vec3::ZERO, width, height)).0
+                    } else {
+                        SnappedVertex::default()
+                    },
+                    inside,
+                };
             }
         });
 
@@ -820,7 +818,7 @@ fn add_triangles(
     frame: &mut Frame,
     scene: &Scene,
     placed: &[PlacedObject],
-    projected: &ProjectedVertices,
+    projected: &[ProjectedVertex],
     viewport: &Viewport,
 ) {
     // Where each object's triangles start in the scene's stream.
@@ -891,11 +889,12 @@ fn add_raster_triangles(
     triangle: &FrameTriangle,
     skip_back_faces: bool,
     source: u32,
-    projected: &ProjectedVertices,
+    projected: &[ProjectedVertex],
     viewport: &Viewport,
     raster: &mut Vec<RasterTriangle>,
 ) {
-    let clip = triangle.vertices.map(|v| projected.clip[v as usize]);
+    let corners = triangle.vertices.map(|v| &projected[v as usize]);
+    let clip = corners.map(|v| v.clip);
     let facing = homogeneous_facing(clip);
     let back_facing = facing < 0.0;
     let style = &frame.objects[triangle.object as usize];
@@ -907,10 +906,9 @@ fn add_raster_triangles(
     let setup = |corners: [ScreenVertex; 3]| {
         setup_triangle(corners, width, height, viewport.pattern, source, back_facing)
     };
-    if triangle.vertices.iter().all(|&v| projected.inside[v as usize]) {
-        let corners = triangle.vertices.map(|v| projected.screen[v as usize]);
+    if corners.iter().all(|v| v.inside) {
         raster.extend(setup_snapped(
-            corners,
+            corners.map(|v| v.screen),
             Vec3::AXES,
             width,
             height,
