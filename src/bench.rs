@@ -13,6 +13,9 @@
 //! per vertex with the half vector as fixed-function OpenGL does, `phong` lights per pixel with
 //! `R·V`, `blinn` per pixel with `N·H`. `scene` leaves the file's own modes alone.
 //!
+//! `cores` is the process's CPU time per timed frame over the median frame time: how many cores
+//! the frame kept busy on average.
+//!
 //! This is a benchmark, not a test: it asserts nothing about time.
 
 use std::path::{Path, PathBuf};
@@ -117,6 +120,8 @@ struct Measurement {
     frames: Vec<Duration>,
     stats: Vec<RenderStats>,
     peak_memory: Option<u64>,
+    /// Process CPU time (all threads) over the timed frames, per frame.
+    cpu_per_frame: Option<Duration>,
 }
 
 impl Measurement {
@@ -196,7 +201,7 @@ pub fn run(args: &BenchArgs) -> i32 {
                 args.warmup,
             );
             println!(
-                "  {:<8} {:>3} {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>7} {:>8} {:>8}{}",
+                "  {:<8} {:>3} {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>7} {:>8} {:>8} {:>5}{}",
                 "mode",
                 "thr",
                 "median",
@@ -208,6 +213,7 @@ pub fn run(args: &BenchArgs) -> i32 {
                 "Mtri/s",
                 "Mpix/s",
                 "peak MiB",
+                "cores",
                 if args.anchors.is_some() {
                     "  | vs llvmpipe: mean   max  >2/255"
                 } else {
@@ -275,7 +281,9 @@ fn measure(
             frames: Vec::new(),
             stats: Vec::new(),
             peak_memory: None,
+            cpu_per_frame: None,
         };
+        let cpu_before = process_cpu_time();
         for _ in 0..frames {
             let started = std::time::Instant::now();
             let (framebuffer, stats) = render(scene, &pooled);
@@ -284,6 +292,9 @@ fn measure(
             frame = Some(framebuffer);
         }
         measurement.peak_memory = peak_memory();
+        if let (Some(before), Some(after)) = (cpu_before, process_cpu_time()) {
+            measurement.cpu_per_frame = Some(after.saturating_sub(before) / frames.max(1));
+        }
         (measurement, frame.expect("at least one frame is rendered"))
     };
     match &pool {
@@ -328,6 +339,8 @@ fn report(
             "shaded_pixels": shaded,
             "shaded_pixels_per_s": per_second(shaded),
             "peak_memory_mib": mib,
+            "cpu_ms_per_frame": measurement.cpu_per_frame.map(ms),
+            "cores_busy": measurement.cpu_per_frame.map(|cpu| cpu.as_secs_f64() / median.as_secs_f64().max(1e-9)),
         });
         if let Some(anchor) = anchor {
             line["llvmpipe_mean_abs"] = json!(anchor.mean);
@@ -337,7 +350,7 @@ fn report(
         println!("{line}");
     } else {
         let mut row = format!(
-            "  {:<8} {:>3} {:>6.2} ms {:>6.2} ms | {:>8.2} {:>8.2} {:>8.2} {:>8.2} | {:>7.1} {:>8.1} {:>8}",
+            "  {:<8} {:>3} {:>6.2} ms {:>6.2} ms | {:>8.2} {:>8.2} {:>8.2} {:>8.2} | {:>7.1} {:>8.1} {:>8} {:>5}",
             mode.name(),
             stats.threads,
             ms(median),
@@ -349,6 +362,10 @@ fn report(
             per_second(stats.triangles) / 1e6,
             per_second(shaded) / 1e6,
             mib.map_or_else(|| "?".to_string(), |mib| format!("{mib:.0}")),
+            measurement.cpu_per_frame.map_or_else(
+                || "?".to_string(),
+                |cpu| format!("{:.2}", cpu.as_secs_f64() / median.as_secs_f64().max(1e-9))
+            ),
         );
         if let Some(anchor) = anchor {
             row += &format!(
@@ -433,6 +450,20 @@ fn reset_peak_memory() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
+/// Linux: the CPU time the process has used, all threads, user and system (`/proc/self/stat`,
+/// in clock ticks of 10 ms: meaningful over many frames, not one).
+fn process_cpu_time() -> Option<Duration> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The command name (field 2) may hold spaces; the fields after its closing parenthesis are
+    // plain: utime and stime are the 12th and 13th of them.
+    let after_name = &stat[stat.rfind(')')? + 1..];
+    let mut fields = after_name.split_whitespace().skip(11);
+    let user: u64 = fields.next()?.parse().ok()?;
+    let system: u64 = fields.next()?.parse().ok()?;
+    const TICKS_PER_SECOND: u64 = 100;
+    Some(Duration::from_millis((user + system) * 1000 / TICKS_PER_SECOND))
+}
+
 /// Linux: the process's peak resident memory (`VmHWM`) in bytes.
 fn peak_memory() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -454,6 +485,30 @@ mod tests {
             Duration::from_micros(2500)
         );
         assert_eq!(median(std::iter::empty()), Duration::ZERO);
+    }
+
+    #[test]
+    fn process_cpu_time_grows_with_work() {
+        let Some(before) = process_cpu_time() else {
+            return; // not Linux
+        };
+        // Spin until the process has used 30 ms more (however loaded the machine is), but not
+        // forever: a clock that does not move fails.
+        let started = std::time::Instant::now();
+        let mut x = 0u64;
+        loop {
+            for _ in 0..100_000 {
+                x = std::hint::black_box(x.wrapping_add(1));
+            }
+            let now = process_cpu_time().expect("readable a moment ago");
+            if now >= before + Duration::from_millis(30) {
+                break;
+            }
+            assert!(
+                started.elapsed() < Duration::from_secs(20),
+                "CPU time stuck at {now:?}"
+            );
+        }
     }
 
     #[test]
