@@ -19,6 +19,8 @@ use crate::output::{self, Encoding, OutputFormat, PngCompression};
 use crate::pipeline::{RenderedScene, render_scene_file};
 use crate::render::{DebugView, RenderOptions};
 use crate::scene::Shading;
+use crate::scene::access::FileAccess;
+use crate::scene::limits::parse_memory_size;
 use crate::scene::load::{LoadOptions, MeshCache};
 
 pub const EXIT_OK: i32 = 0;
@@ -84,6 +86,41 @@ pub struct RenderArgs {
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub limits: InputLimits,
+}
+
+/// What scenes may read and how much memory they may take: `--sandbox` and `--max-memory`,
+/// shared by `render`, `check` and `watch`.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct InputLimits {
+    /// Read nothing outside DIR: every file a scene names (includes, meshes, MTL libraries,
+    /// textures, glTF buffers and images) must resolve inside it, after symlinks and `..`.
+    #[arg(long, value_name = "DIR")]
+    pub sandbox: Option<PathBuf>,
+    /// Refuse scenes whose render would need more memory than this (e.g. 512M, 16G;
+    /// default 8G).
+    #[arg(long, value_name = "SIZE", value_parser = parse_memory_size)]
+    pub max_memory: Option<u64>,
+}
+
+impl InputLimits {
+    /// The file access `--sandbox` asks for.
+    pub fn file_access(&self) -> Result<FileAccess, String> {
+        match &self.sandbox {
+            Some(folder) => FileAccess::sandboxed(folder),
+            None => Ok(FileAccess::unrestricted()),
+        }
+    }
+
+    /// Load options with these limits and nothing overridden.
+    pub fn load_options(&self) -> Result<LoadOptions, String> {
+        Ok(LoadOptions {
+            access: self.file_access()?,
+            max_memory: self.max_memory,
+            ..LoadOptions::default()
+        })
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -153,7 +190,16 @@ fn run_render(args: &RenderArgs) -> i32 {
         );
         return EXIT_BAD_INPUT;
     }
+    let access = match args.limits.file_access() {
+        Ok(access) => access,
+        Err(message) => {
+            eprintln!("error: {message}");
+            return EXIT_BAD_INPUT;
+        }
+    };
     let load_options = LoadOptions {
+        access,
+        max_memory: args.limits.max_memory,
         width: args.width,
         height: args.height,
         samples: args.samples,

@@ -92,6 +92,8 @@ pub struct WatchArgs {
     /// The preview's port; 0, or a port in use, picks a free one (the address is printed).
     #[arg(long, default_value_t = DEFAULT_PORT, requires = "serve")]
     pub port: u16,
+    #[command(flatten)]
+    pub limits: crate::cli::InputLimits,
 }
 
 /// Runs `lampshade watch` until Ctrl-C; returns the exit code.
@@ -159,10 +161,16 @@ pub fn run(args: &WatchArgs) -> i32 {
         None
     };
 
-    let load_options = LoadOptions {
-        width: args.width,
-        height: args.height,
-        ..LoadOptions::default()
+    let load_options = match args.limits.load_options() {
+        Ok(limited) => LoadOptions {
+            width: args.width,
+            height: args.height,
+            ..limited
+        },
+        Err(message) => {
+            eprintln!("error: {message}");
+            return EXIT_BAD_INPUT;
+        }
     };
     let render_options = RenderOptions {
         threads: args.threads.map(usize::from),
