@@ -118,7 +118,10 @@ pub fn scene(data: &[u8]) {
             render_diagnostics(&loaded.warnings, &loaded.sources, false);
         }
         Err(error) => {
-            assert!(!error.diagnostics.is_empty(), "a failed load without a diagnostic");
+            assert!(
+                !error.diagnostics.is_empty(),
+                "a failed load without a diagnostic"
+            );
             assert!(error.diagnostics.iter().any(|d| d.is_error()));
             let text = render_diagnostics(&error.diagnostics, &error.sources, false);
             assert!(text.contains("error"), "{text}");

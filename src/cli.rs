@@ -171,9 +171,24 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
         }
     };
     match cli.command {
-        Command::Render(args) => run_render(&args),
-        Command::Check(args) => crate::check::run(&args),
+        Command::Render(args) => {
+            exit_on_ctrl_c();
+            run_render(&args)
+        }
+        Command::Check(args) => {
+            exit_on_ctrl_c();
+            crate::check::run(&args)
+        }
         Command::Watch(args) => crate::watch::run(&args),
+    }
+}
+
+/// Ctrl-C (or SIGTERM) ends `render` and `check` with 130 at once, except that an output being
+/// written is finished and renamed first: no truncated image and no stray temporary file.
+/// (`watch` has its own handler, which finishes the current render.)
+fn exit_on_ctrl_c() {
+    if let Err(error) = ctrlc::set_handler(|| output::exit_when_no_write_is_in_progress(130)) {
+        eprintln!("warning: cannot catch Ctrl-C ({error}); an interrupted write may leave a temporary file");
     }
 }
 

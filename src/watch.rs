@@ -192,8 +192,9 @@ fn stop_on_ctrl_c(signals: Sender<Signal>) -> Result<(), ctrlc::Error> {
     let mut asked_already = false;
     ctrlc::set_handler(move || {
         if asked_already {
-            // 128 + SIGINT, the shell's convention for "interrupted".
-            std::process::exit(130);
+            // 128 + SIGINT, the shell's convention for "interrupted"; an image being written
+            // is finished first, so no temporary file is left behind.
+            crate::output::exit_when_no_write_is_in_progress(130);
         }
         asked_already = true;
         eprintln!("stopping after the current render (Ctrl-C again to stop now)");

@@ -13,6 +13,7 @@ mod cli;
 mod golden;
 mod loading;
 mod render;
+mod robustness;
 mod watch;
 mod watch_browser;
 
