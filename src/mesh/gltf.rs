@@ -25,7 +25,8 @@
 //!   which keeps alternate strip triangles facing the same way. POINTS and LINES
 //!   primitives are skipped with a warning. A mesh used by two nodes is baked twice, so
 //!   the triangle count is per node instance.
-//! * **Normals** are handled per primitive instance: file normals are repaired
+//! * **Normals** are handled per primitive instance: a non-finite file normal is an error (as
+//!   a non-finite position is), zero ones are repaired
 //!   ([`normals::repair_normals`]), missing ones computed with the crease angle
 //!   ([`normals::compute_vertex_normals`]) after the transform, so the crease angle applies
 //!   to what is drawn.
@@ -290,7 +291,7 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
     }
     if repaired_normals > 0 {
         warnings.push(format!(
-            "{repaired_normals} vertex normals in the file were zero or not finite and were recomputed"
+            "{repaired_normals} vertex normals in the file were zero and were recomputed"
         ));
     }
 
@@ -685,9 +686,17 @@ impl Baker<'_> {
                     linear.z_axis.cross(linear.x_axis),
                     linear.x_axis.cross(linear.y_axis),
                 ) * if mirrored { -1.0 } else { 1.0 };
-                let normals: Vec<Vec3> = reader
+                let raw: Vec<[f32; 3]> = reader
                     .read_normals()
                     .ok_or_else(|| format!("{here}: NORMAL data lies outside its buffer"))?
+                    .collect();
+                // Rejected like a non-finite position (issue 6), not repaired: a NaN normal is a
+                // broken export. (Zero normals, which some exporters write, are recomputed.)
+                if raw.iter().flatten().any(|c| !c.is_finite()) {
+                    return Err(format!("{here}: a NORMAL is not finite (NaN or infinity)"));
+                }
+                let normals: Vec<Vec3> = raw
+                    .into_iter()
                     .map(|n| normals::unit_or_zero((cofactor * DVec3::from(n.map(f64::from))).as_vec3()))
                     .collect();
                 if normals.len() == vertex_count {
