@@ -138,6 +138,13 @@ fn several_scenes_render_past_a_bad_one_and_exit_2() {
     assert!(work.path().join("a.png").exists() && work.path().join("c.png").exists());
     assert!(!work.path().join("b.png").exists());
     assert!(stderr(&output).contains("b.ron:1:19"), "{}", stderr(&output));
+    // All the errors again at the end, after the scenes that rendered.
+    let summary = stderr(&output);
+    let last_line = summary.lines().last().unwrap_or_default();
+    assert_eq!(
+        last_line, "error: 1 of 3 scenes could not be rendered: b.ron",
+        "{summary}"
+    );
 }
 
 #[test]

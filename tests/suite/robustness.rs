@@ -58,6 +58,35 @@ fn ctrl_c_during_a_render_keeps_the_previous_image_and_leaves_no_temporary_file(
     assert_eq!(temporary_files(work.path()), Vec::<String>::new());
 }
 
+#[cfg(unix)]
+#[test]
+fn an_unreadable_include_or_mesh_is_a_located_error() {
+    use std::os::unix::fs::PermissionsExt;
+    let work = tempfile::tempdir().unwrap();
+    let locked = work.path().join("locked.ron");
+    std::fs::write(&locked, "Materials(materials: {})").unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o000)).unwrap();
+    if std::fs::read(&locked).is_ok() {
+        // Root (as in some containers) reads any file: there is no unreadable file to test with.
+        eprintln!("skipped: this user can read a file with mode 000");
+        return;
+    }
+    std::fs::write(
+        work.path().join("s.ron"),
+        "(include: [\"locked.ron\"], objects: [(mesh: Cube)])",
+    )
+    .unwrap();
+    let output = lampshade(work.path()).args(["render", "s.ron"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("s.ron:1:12"), "{stderr}");
+    assert!(
+        stderr.contains("cannot read the file: permission denied"),
+        "{stderr}"
+    );
+    assert!(!work.path().join("s.png").exists());
+}
+
 /// A suite folder with a good scene and one that reads a mesh outside the sandbox.
 fn escaping_suite() -> tempfile::TempDir {
     let work = tempfile::tempdir().unwrap();
