@@ -99,7 +99,7 @@ pub struct InputLimits {
     #[arg(long, value_name = "DIR")]
     pub sandbox: Option<PathBuf>,
     /// Refuse scenes whose render would need more memory than this (e.g. 512M, 16G;
-    /// default 8G).
+    /// default 12G).
     #[arg(long, value_name = "SIZE", value_parser = parse_memory_size)]
     pub max_memory: Option<u64>,
 }
