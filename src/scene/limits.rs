@@ -17,6 +17,12 @@ use glam::{Vec2, Vec3, Vec4};
 use crate::render::geometry::{FrameTriangle, FrameVertex};
 use crate::render::raster::RasterTriangle;
 
+/// How far from the origin objects may reach (world units, after their transforms). The
+/// renderer works in `f32` eye-relative coordinates and squares distances: at 10¹⁵ a square is
+/// 10³⁰, far from `f32`'s 3.4·10³⁸, while a sphere scaled by 10³⁷ gave NaN pixels (found by
+/// the `render` fuzz target). Scenes translated by 10⁶ (issue 6) are well inside.
+pub const MAX_WORLD_EXTENT: f64 = 1e15;
+
 /// The memory a render may need when `--max-memory` is not given: the largest image
 /// (16384 × 16384, 8 GiB) with a few million triangles, or some 30 million triangles at a
 /// usual size. A scene above it is almost certainly a typo (an extra zero in a size or a

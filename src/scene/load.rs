@@ -254,6 +254,20 @@ impl Loader<'_> {
             }));
         }
         let bounds = bounding_sphere(&objects);
+        let extent = bounds.center.length() + bounds.radius;
+        if !(extent <= limits::MAX_WORLD_EXTENT) {
+            self.diagnostics.push(
+                Diagnostic::error(
+                    &scene_path,
+                    format!(
+                        "the objects reach {extent:.3e} units from the origin; lampshade draws scenes within {:e} units",
+                        limits::MAX_WORLD_EXTENT
+                    ),
+                )
+                .with_hint("check the objects' `scale` and `translate`, and the mesh files' coordinates"),
+            );
+            return None;
+        }
         let camera = match &file.camera {
             Some(CameraFile::Gltf { object, camera }) => self.gltf_camera(
                 object.as_ref(),
