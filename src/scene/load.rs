@@ -255,7 +255,7 @@ impl Loader<'_> {
         }
         let bounds = bounding_sphere(&objects);
         let extent = bounds.center.length() + bounds.radius;
-        if !(extent <= limits::MAX_WORLD_EXTENT) {
+        if extent.is_nan() || extent > limits::MAX_WORLD_EXTENT {
             self.diagnostics.push(
                 Diagnostic::error(
                     &scene_path,
