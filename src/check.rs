@@ -109,6 +109,8 @@ pub struct CheckArgs {
     /// Print only failures, errors and the final counts.
     #[arg(short, long)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub limits: crate::cli::InputLimits,
 }
 
 /// Runs `lampshade check`; returns the exit code.
@@ -188,6 +190,13 @@ pub fn run(args: &CheckArgs) -> i32 {
         flip: args.flip,
         pictures,
         fail_fast: args.fail_fast,
+        load_options: match args.limits.load_options() {
+            Ok(options) => options,
+            Err(message) => {
+                eprintln!("error: {message}");
+                return EXIT_BAD_INPUT;
+            }
+        },
     };
     let pool = match rayon::ThreadPoolBuilder::new()
         .num_threads(args.jobs.map_or(0, usize::from))

@@ -18,6 +18,8 @@ use crate::diag::render_diagnostics;
 use crate::output::{self, Encoding, OutputFormat, PngCompression};
 use crate::pipeline::{RenderedScene, render_scene_file};
 use crate::render::{DebugView, RenderOptions};
+use crate::scene::access::FileAccess;
+use crate::scene::limits::parse_memory_size;
 use crate::scene::load::{LoadOptions, MeshCache};
 use crate::scene::{LightingModel, Shading};
 
@@ -95,6 +97,41 @@ pub struct RenderArgs {
     /// `reference`). Mesh files and textures are errors; shadows are ignored.
     #[arg(long, conflicts_with = "debug")]
     pub reference: bool,
+    #[command(flatten)]
+    pub limits: InputLimits,
+}
+
+/// What scenes may read and how much memory they may take: `--sandbox` and `--max-memory`,
+/// shared by `render`, `check` and `watch`.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct InputLimits {
+    /// Read nothing outside DIR: every file a scene names (includes, meshes, MTL libraries,
+    /// textures, glTF buffers and images) must resolve inside it, after symlinks and `..`.
+    #[arg(long, value_name = "DIR")]
+    pub sandbox: Option<PathBuf>,
+    /// Refuse scenes whose render would need more memory than this (e.g. 512M, 16G;
+    /// default 12G).
+    #[arg(long, value_name = "SIZE", value_parser = parse_memory_size)]
+    pub max_memory: Option<u64>,
+}
+
+impl InputLimits {
+    /// The file access `--sandbox` asks for.
+    pub fn file_access(&self) -> Result<FileAccess, String> {
+        match &self.sandbox {
+            Some(folder) => FileAccess::sandboxed(folder),
+            None => Ok(FileAccess::unrestricted()),
+        }
+    }
+
+    /// Load options with these limits and nothing overridden.
+    pub fn load_options(&self) -> Result<LoadOptions, String> {
+        Ok(LoadOptions {
+            access: self.file_access()?,
+            max_memory: self.max_memory,
+            ..LoadOptions::default()
+        })
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -165,11 +202,26 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
         }
     };
     match cli.command {
-        Command::Render(args) => run_render(&args),
-        Command::Check(args) => crate::check::run(&args),
+        Command::Render(args) => {
+            exit_on_ctrl_c();
+            run_render(&args)
+        }
+        Command::Check(args) => {
+            exit_on_ctrl_c();
+            crate::check::run(&args)
+        }
         Command::Watch(args) => crate::watch::run(&args),
         Command::Bench(args) => crate::bench::run(&args),
         Command::Report(args) => crate::report::run(&args),
+    }
+}
+
+/// Ctrl-C (or SIGTERM) ends `render` and `check` with 130 at once, except that an output being
+/// written is finished and renamed first: no truncated image and no stray temporary file.
+/// (`watch` has its own handler, which finishes the current render.)
+fn exit_on_ctrl_c() {
+    if let Err(error) = ctrlc::set_handler(|| output::exit_when_no_write_is_in_progress(130)) {
+        eprintln!("warning: cannot catch Ctrl-C ({error}); an interrupted write may leave a temporary file");
     }
 }
 
@@ -186,7 +238,16 @@ fn run_render(args: &RenderArgs) -> i32 {
         );
         return EXIT_BAD_INPUT;
     }
+    let access = match args.limits.file_access() {
+        Ok(access) => access,
+        Err(message) => {
+            eprintln!("error: {message}");
+            return EXIT_BAD_INPUT;
+        }
+    };
     let load_options = LoadOptions {
+        access,
+        max_memory: args.limits.max_memory,
         width: args.width,
         height: args.height,
         samples: args.samples,

@@ -8,9 +8,17 @@
 //! Architecture invariant: an image is written to a temporary file in the destination folder and
 //! renamed over the destination only once complete, so a failed or interrupted write never leaves
 //! a truncated PNG or clobbers the previous one, and a viewer never reads half a file.
+//!
+//! Interruption: a failed write removes its temporary file (dropping `NamedTempFile`), but a
+//! process killed by Ctrl-C runs no destructors. So the commands route Ctrl-C through
+//! [`exit_when_no_write_is_in_progress`]: every write holds a shared lock for its whole
+//! duration, and the exit takes the lock exclusively, so it waits for the writes under way to be
+//! renamed into place and no new one starts. Rendering itself writes nothing, so an interrupted
+//! render stops at once and leaves the previous image as it was.
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::RwLock;
 
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ImageEncoder, RgbImage};
@@ -187,11 +195,23 @@ pub fn write_png(path: &Path, image: &RgbImage, compression: PngCompression) -> 
     })
 }
 
+/// Held shared by every write in progress, exclusively by an exit on Ctrl-C.
+static WRITES: RwLock<()> = RwLock::new(());
+
+/// Ends the process with `code` once no output is half-written: waits for the writes in
+/// progress to be renamed into place, and lets no new one start. For Ctrl-C handlers.
+pub fn exit_when_no_write_is_in_progress(code: i32) -> ! {
+    // A writer that panicked poisons the lock; its temporary file is gone already.
+    let _no_writes = WRITES.write().unwrap_or_else(|poisoned| poisoned.into_inner());
+    std::process::exit(code)
+}
+
 /// Writes through `write` into a temporary file beside `path`, then renames it into place.
 pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
+    let _writing = WRITES.read().unwrap_or_else(|poisoned| poisoned.into_inner());
     let io_error = |source| OutputError::Io {
         path: path.to_path_buf(),
         source,

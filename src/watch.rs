@@ -92,6 +92,8 @@ pub struct WatchArgs {
     /// The preview's port; 0, or a port in use, picks a free one (the address is printed).
     #[arg(long, default_value_t = DEFAULT_PORT, requires = "serve")]
     pub port: u16,
+    #[command(flatten)]
+    pub limits: crate::cli::InputLimits,
 }
 
 /// Runs `lampshade watch` until Ctrl-C; returns the exit code.
@@ -159,10 +161,16 @@ pub fn run(args: &WatchArgs) -> i32 {
         None
     };
 
-    let load_options = LoadOptions {
-        width: args.width,
-        height: args.height,
-        ..LoadOptions::default()
+    let load_options = match args.limits.load_options() {
+        Ok(limited) => LoadOptions {
+            width: args.width,
+            height: args.height,
+            ..limited
+        },
+        Err(message) => {
+            eprintln!("error: {message}");
+            return EXIT_BAD_INPUT;
+        }
     };
     let render_options = RenderOptions {
         threads: args.threads.map(usize::from),
@@ -184,8 +192,9 @@ fn stop_on_ctrl_c(signals: Sender<Signal>) -> Result<(), ctrlc::Error> {
     let mut asked_already = false;
     ctrlc::set_handler(move || {
         if asked_already {
-            // 128 + SIGINT, the shell's convention for "interrupted".
-            std::process::exit(130);
+            // 128 + SIGINT, the shell's convention for "interrupted"; an image being written
+            // is finished first, so no temporary file is left behind.
+            crate::output::exit_when_no_write_is_in_progress(130);
         }
         asked_already = true;
         eprintln!("stopping after the current render (Ctrl-C again to stop now)");

@@ -47,6 +47,8 @@ pub struct RunOptions {
     pub pictures: Option<PathBuf>,
     /// Stop starting scenes after the first failure or error.
     pub fail_fast: bool,
+    /// `--sandbox` and `--max-memory`.
+    pub load_options: LoadOptions,
 }
 
 /// Where one scene's time went.
@@ -239,7 +241,7 @@ pub fn check_scene(scene: &SuiteScene, index: usize, options: &RunOptions) -> Sc
     let started = Instant::now();
     let rendered = match render_scene_file(
         &scene.path,
-        &LoadOptions::default(),
+        &options.load_options,
         &RenderOptions::default(),
         &mut MeshCache::default(),
     ) {

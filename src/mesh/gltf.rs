@@ -25,7 +25,8 @@
 //!   which keeps alternate strip triangles facing the same way. POINTS and LINES
 //!   primitives are skipped with a warning. A mesh used by two nodes is baked twice, so
 //!   the triangle count is per node instance.
-//! * **Normals** are handled per primitive instance: file normals are repaired
+//! * **Normals** are handled per primitive instance: a non-finite file normal is an error (as
+//!   a non-finite position is), zero ones are repaired
 //!   ([`normals::repair_normals`]), missing ones computed with the crease angle
 //!   ([`normals::compute_vertex_normals`]) after the transform, so the crease angle applies
 //!   to what is drawn.
@@ -109,8 +110,9 @@ use gltf::mesh::Mode;
 use super::normals::VertexAttributes;
 use super::{
     ImportedCamera, ImportedLight, ImportedLightKind, ImportedProjection, LoadedMesh, Mesh, MeshError,
-    MeshOptions, io_error_text, normals, tangents,
+    MeshOptions, normals, tangents,
 };
+use crate::scene::access::{FileAccess, ReadError};
 use crate::scene::{LightingModel, Material, Microfacet, MicrofacetDistribution, TextureBinding};
 use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 
@@ -179,8 +181,22 @@ pub fn default_material() -> Material {
 
 /// Loads a `.gltf` or `.glb` file into one [`Mesh`]; see the module documentation.
 pub fn load_gltf(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
-    let bytes = std::fs::read(path).map_err(|error| MeshError::cannot_read(path, &error))?;
-    catch_unwind(AssertUnwindSafe(|| load_gltf_bytes(path, &bytes, options))).unwrap_or_else(|panic| {
+    let bytes = options
+        .access
+        .read(path)
+        .map_err(|error| MeshError::new(path, format!("cannot read mesh file: {error}")))?;
+    load_gltf_from_bytes(path, &bytes, options)
+}
+
+/// [`load_gltf`] on the bytes of the file at `path`, already read (external buffers and images
+/// are still read relative to `path`): the entry point of the fuzzer and of tests that build
+/// files in memory. The same code path as `load_gltf`, panics contained the same way.
+pub fn load_gltf_from_bytes(
+    path: &Path,
+    bytes: &[u8],
+    options: &MeshOptions,
+) -> Result<LoadedMesh, MeshError> {
+    catch_unwind(AssertUnwindSafe(|| load_gltf_bytes(path, bytes, options))).unwrap_or_else(|panic| {
         let reason = panic
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
@@ -195,7 +211,7 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
     let (document, blob) = parse_document(bytes).map_err(fail)?;
     let mut files_read = vec![path.to_path_buf()];
     let directory = path.parent().unwrap_or(Path::new(""));
-    let buffers = load_buffers(&document, blob, directory, &mut files_read).map_err(fail)?;
+    let buffers = load_buffers(&document, blob, directory, &options.access, &mut files_read).map_err(fail)?;
 
     let mut baker = Baker {
         buffers: &buffers,
@@ -275,7 +291,7 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
     }
     if repaired_normals > 0 {
         warnings.push(format!(
-            "{repaired_normals} vertex normals in the file were zero or not finite and were recomputed"
+            "{repaired_normals} vertex normals in the file were zero and were recomputed"
         ));
     }
 
@@ -292,6 +308,8 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
 
     let mut images = ImageLoader {
         buffers: &buffers,
+        access: &options.access,
+        refused: None,
         directory,
         index_by_image: HashMap::new(),
         textures: Vec::new(),
@@ -308,6 +326,10 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         .collect();
     if mesh.triangle_materials.contains(&default_material_index) {
         mesh.materials.push(default_material());
+    }
+    // An image outside the sandbox is an error, not the warning of a missing one.
+    if let Some(problem) = images.refused {
+        return Err(fail(problem));
     }
     mesh.textures = images.textures;
     files_read.extend(images.files_read);
@@ -470,6 +492,7 @@ fn load_buffers(
     document: &gltf::Document,
     mut blob: Option<Vec<u8>>,
     directory: &Path,
+    access: &FileAccess,
     files_read: &mut Vec<PathBuf>,
 ) -> Result<Vec<Vec<u8>>, String> {
     let mut buffers = Vec::new();
@@ -494,12 +517,11 @@ fn load_buffers(
                 }
                 let file = directory.join(relative);
                 files_read.push(file.clone());
-                std::fs::read(&file).map_err(|error| {
-                    format!(
-                        "cannot read buffer file {}: {}",
-                        file.display(),
-                        io_error_text(&error)
-                    )
+                access.read(&file).map_err(|error| match error {
+                    ReadError::OutsideSandbox { .. } => {
+                        format!("buffer {index} `{uri}`: refused: {error}")
+                    }
+                    _ => format!("cannot read buffer file {}: {error}", file.display()),
                 })?
             }
         };
@@ -664,9 +686,17 @@ impl Baker<'_> {
                     linear.z_axis.cross(linear.x_axis),
                     linear.x_axis.cross(linear.y_axis),
                 ) * if mirrored { -1.0 } else { 1.0 };
-                let normals: Vec<Vec3> = reader
+                let raw: Vec<[f32; 3]> = reader
                     .read_normals()
                     .ok_or_else(|| format!("{here}: NORMAL data lies outside its buffer"))?
+                    .collect();
+                // Rejected like a non-finite position (issue 6), not repaired: a NaN normal is a
+                // broken export. (Zero normals, which some exporters write, are recomputed.)
+                if raw.iter().flatten().any(|c| !c.is_finite()) {
+                    return Err(format!("{here}: a NORMAL is not finite (NaN or infinity)"));
+                }
+                let normals: Vec<Vec3> = raw
+                    .into_iter()
                     .map(|n| normals::unit_or_zero((cofactor * DVec3::from(n.map(f64::from))).as_vec3()))
                     .collect();
                 if normals.len() == vertex_count {
@@ -1173,6 +1203,9 @@ fn wrap_from_gltf(mode: gltf::texture::WrappingMode) -> Wrap {
 /// read or looked for.
 struct ImageLoader<'a> {
     buffers: &'a [Vec<u8>],
+    access: &'a FileAccess,
+    /// The first image the sandbox refused: an error, not a warning.
+    refused: Option<String>,
     /// The glTF file's folder, which relative URIs start from.
     directory: &'a Path,
     /// For each (image, colour space) tried: its index in `textures`, or `None` when it
@@ -1242,8 +1275,16 @@ impl ImageLoader<'_> {
                 if !self.files_read.contains(&file) {
                     self.files_read.push(file.clone());
                 }
-                return Texture::load(&file, color_space)
-                    .map_err(|problem| format!("texture image {}: {problem}", file.display()));
+                return match self.access.read(&file) {
+                    Ok(bytes) => Texture::from_encoded(&bytes, color_space),
+                    Err(error @ ReadError::OutsideSandbox { .. }) => {
+                        let problem = format!("{label} `{uri}`: refused: {error}");
+                        self.refused.get_or_insert_with(|| problem.clone());
+                        Err(problem)
+                    }
+                    Err(error) => Err(format!("cannot read it: {error}")),
+                }
+                .map_err(|problem| format!("texture image {}: {problem}", file.display()));
             }
         };
         Texture::from_encoded(&bytes, color_space).map_err(|problem| format!("{source}: {problem}"))
@@ -1568,7 +1609,7 @@ mod tests {
         check_error(&not_gltf, "malformed glTF");
         check_error(
             &dir.path().join("missing.glb"),
-            "cannot read mesh file: No such file or directory",
+            "cannot read mesh file: no such file",
         );
     }
 
@@ -1862,7 +1903,7 @@ mod tests {
         );
         std::fs::remove_file(dir.path().join("fixture.bin")).unwrap_or_else(|e| panic!("{e}"));
         check_error(&path, "cannot read buffer file");
-        check_error(&path, "fixture.bin: No such file or directory");
+        check_error(&path, "fixture.bin: no such file");
     }
 
     #[test]
@@ -2224,7 +2265,7 @@ mod tests {
         std::fs::write(dir.path().join("broken.png"), b"\x89PNG\r\n\x1a\n garbage")
             .unwrap_or_else(|e| panic!("{e}"));
         for (uri, problem) in [
-            ("missing%20file.png", "No such file"),
+            ("missing%20file.png", "no such file"),
             ("broken.png", "cannot decode"),
         ] {
             let material = r#"{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}"#;

@@ -195,17 +195,20 @@ impl Mesh {
 
 /// How a mesh file is turned into a [`Mesh`]: the settings that change the result,
 /// so that a cache keyed by path and options is exact.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct MeshOptions {
     /// Faces meeting at more than this angle keep separate vertex normals (a hard edge)
     /// when normals are computed because the file has none.
     pub crease_angle_degrees: f32,
+    /// How the files the mesh names (MTL libraries, textures, buffers, images) may be read.
+    pub access: crate::scene::access::FileAccess,
 }
 
 impl Default for MeshOptions {
     fn default() -> Self {
         MeshOptions {
             crease_angle_degrees: normals::DEFAULT_CREASE_ANGLE_DEGREES,
+            access: Default::default(),
         }
     }
 }

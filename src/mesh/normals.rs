@@ -210,9 +210,16 @@ pub fn repair_normals(
     let replaced_count = is_broken.iter().filter(|&&broken| broken).count();
 
     let mesh = if replaced_count == 0 {
+        // Only vertices that some triangle uses were checked: one that none uses is never
+        // drawn, but a zero file normal there would still break the unit-normal invariant
+        // (found by the `gltf` fuzz target), so it gets any unit normal.
+        let kept_normal = |vertex: usize| match file_normal(vertex) {
+            Vec3::ZERO => Vec3::Z,
+            normal => normal,
+        };
         let mut mesh = Mesh {
             positions: positions.to_vec(),
-            normals: (0..positions.len()).map(file_normal).collect(),
+            normals: (0..positions.len()).map(kept_normal).collect(),
             triangles: triangles.to_vec(),
             ..Mesh::default()
         };
@@ -777,6 +784,22 @@ mod tests {
         keys.sort_unstable();
         keys.dedup();
         keys.len()
+    }
+
+    #[test]
+    fn repair_gives_an_unused_vertex_with_a_zero_normal_a_unit_one() {
+        // Vertex 3 is in no triangle and has a zero file normal (fuzz regression, gltf target).
+        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::ONE];
+        let normals = [Vec3::Z, Vec3::Z, Vec3::Z, Vec3::ZERO];
+        let repaired = repair_normals(
+            &positions,
+            &normals,
+            VertexAttributes::default(),
+            &[[0, 1, 2]],
+            DEFAULT_CREASE_ANGLE_DEGREES,
+        );
+        assert_eq!(repaired.replaced_count, 0);
+        assert_eq!(repaired.mesh.check_invariant(), Ok(()));
     }
 
     #[test]

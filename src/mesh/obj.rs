@@ -8,7 +8,8 @@
 //!    rejects, with the line number: face indices that are 0, malformed, or out of range
 //!    (OBJ indices are 1-based, negative ones count back from the last element defined so
 //!    far, and an index may only refer to an element defined above it); vertex lines
-//!    without three numbers or with a non-finite one; `w = 0`. It also blanks polyline
+//!    without three numbers or with a non-finite one, and `vt`/`vn` lines with a non-finite
+//!    number (issue 6: non-finite input is rejected, not repaired); `w = 0`. It also blanks polyline
 //!    (`l`) lines, which `tobj` would otherwise turn into triangles, and warns about them and
 //!    about faces with fewer than three vertices (dropped).
 //! 2. **Parse.** `tobj::load_obj_buf` with `triangulate` (fans, so convex polygons only),
@@ -25,7 +26,7 @@
 //!    watcher reloads the mesh when it appears.
 //! 4. **Texture coordinates.** `vt` values become [`Mesh::uvs`] with v flipped to the glTF
 //!    convention the renderer uses (v' = 1 − v: OBJ's v = 0 is the bottom of the image,
-//!    glTF's the top); non-finite ones become 0. A model where only some face vertices have
+//!    glTF's the top; non-finite ones were rejected by the pre-scan). A model where only some face vertices have
 //!    one cannot be trusted (`tobj` then packs them without gaps, so they no longer line up
 //!    with the vertices): its coordinates are dropped with a warning. Models without any get
 //!    zeros when another model has some, so the array stays one per vertex.
@@ -74,7 +75,8 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 
 use super::normals::VertexAttributes;
-use super::{LoadedMesh, Mesh, MeshError, MeshOptions, io_error_text, normals};
+use super::{LoadedMesh, Mesh, MeshError, MeshOptions, normals};
+use crate::scene::access::FileAccess;
 use crate::scene::{LightingModel, Material, TextureBinding};
 use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 
@@ -102,13 +104,28 @@ pub fn default_material() -> Material {
 /// Loads an OBJ file and the MTL files it names into one [`Mesh`]; see the module
 /// documentation for what is checked, computed and defaulted.
 pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
-    let bytes = std::fs::read(path).map_err(|error| MeshError::cannot_read(path, &error))?;
+    let bytes = options
+        .access
+        .read(path)
+        .map_err(|error| MeshError::new(path, format!("cannot read mesh file: {error}")))?;
+    load_obj_from_bytes(path, &bytes, options)
+}
+
+/// [`load_obj`] on the bytes of the file at `path`, already read (MTL files and textures are
+/// still read relative to `path`): the entry point of the fuzzer. The same code path.
+pub fn load_obj_from_bytes(
+    path: &Path,
+    bytes: &[u8],
+    options: &MeshOptions,
+) -> Result<LoadedMesh, MeshError> {
     // OBJ is ASCII in practice; a stray Latin-1 byte in a comment or name should not
     // reject the file.
-    let text = String::from_utf8_lossy(&bytes);
+    let text = String::from_utf8_lossy(bytes);
     let scan = scan_obj(&text).map_err(|(line, message)| MeshError::at_line(path, line, message))?;
 
     let libraries = MaterialLibraries {
+        access: &options.access,
+        refused: RefCell::new(None),
         directory: path.parent().unwrap_or(Path::new("")).to_path_buf(),
         files_read: RefCell::new(Vec::new()),
         warnings: RefCell::new(Vec::new()),
@@ -140,6 +157,19 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
             ));
         }
     };
+    // A library outside the sandbox is an error, not the warning of a missing one: the
+    // sandbox must never be silently worked around.
+    if let Some((library, problem)) = libraries.refused.into_inner() {
+        let line = scan
+            .text
+            .lines()
+            .position(|line| line.trim_start().starts_with("mtllib") && line.contains(library.as_str()));
+        let message = format!("mtllib `{library}`: refused: {problem}");
+        return Err(match line {
+            Some(index) => MeshError::at_line(path, index + 1, message),
+            None => MeshError::new(path, message),
+        });
+    }
     // A library that failed has already left a warning; tobj only reports an error here
     // when no library loaded at all.
     let library_materials = library_materials.unwrap_or_default();
@@ -195,11 +225,17 @@ pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshEr
         &mut warnings,
     );
     // `assign_materials` keeps the libraries' order: material i is library material i.
-    let mut textures = TextureFiles::default();
+    let mut textures = TextureFiles {
+        access: options.access.clone(),
+        ..TextureFiles::default()
+    };
     let has_uvs = !mesh.uvs.is_empty();
     let with_directories = library_materials.iter().zip(&material_directories);
     for (material, (mtl, directory)) in mesh.materials.iter_mut().zip(with_directories) {
         bind_textures(material, mtl, directory, has_uvs, &mut textures, &mut warnings);
+    }
+    if let Some(problem) = textures.refused {
+        return Err(MeshError::new(path, problem));
     }
     mesh.textures = textures.loaded;
     files_read.extend(textures.files_read);
@@ -345,11 +381,16 @@ fn check_vertex_line(words: &[&str]) -> Result<(), String> {
 
 /// The first `count` words must be numbers (more are allowed and ignored, as `tobj` does).
 fn check_numbers<'a>(words: impl Iterator<Item = &'a str>, count: usize, what: &str) -> Result<(), String> {
-    let parsed = words.take(count).filter(|w| w.parse::<f32>().is_ok()).count();
-    if parsed == count {
+    let numbers: Vec<Option<f32>> = words.take(count).map(|w| w.parse::<f32>().ok()).collect();
+    if numbers.len() < count || numbers.iter().any(Option::is_none) {
+        return Err(format!("a {what} needs {count} numbers"));
+    }
+    // `1e39` parses as infinity in `f32`; a NaN or infinite normal or texture coordinate is a
+    // broken export, rejected like a non-finite position rather than silently repaired.
+    if numbers.iter().flatten().all(|n| n.is_finite()) {
         Ok(())
     } else {
-        Err(format!("a {what} needs {count} numbers"))
+        Err(format!("{what} is not finite (NaN or infinity)"))
     }
 }
 
@@ -364,6 +405,13 @@ fn check_face_vertex(word: &str, defined: [usize; 3]) -> Result<(), String> {
     let parts: Vec<&str> = word.split('/').collect();
     if parts.len() > 3 || parts[0].is_empty() {
         return Err(format!("malformed face vertex '{word}'"));
+    }
+    // `3/` or `3/1/`: `tobj` reads these silently as if the last index were absent; they are
+    // what a file cut off in the middle of a face looks like.
+    if parts.len() > 1 && parts.last().is_some_and(|last| last.is_empty()) {
+        return Err(format!(
+            "face vertex '{word}' ends with '/': the file is truncated or malformed"
+        ));
     }
     for ((part, (kind, kinds)), count) in parts.iter().zip(KINDS).zip(defined) {
         if part.is_empty() {
@@ -390,7 +438,10 @@ fn check_face_vertex(word: &str, defined: [usize; 3]) -> Result<(), String> {
 
 /// Reads the MTL files `tobj` asks for, relative to the OBJ's directory, recording what
 /// was read and what went wrong (the loader callback cannot return anything else).
-struct MaterialLibraries {
+struct MaterialLibraries<'a> {
+    access: &'a FileAccess,
+    /// A library the sandbox refused (as named in the OBJ file) and why: an error.
+    refused: RefCell<Option<(String, String)>>,
     directory: PathBuf,
     /// Libraries read, and libraries named but missing (for a watcher).
     files_read: RefCell<Vec<PathBuf>>,
@@ -401,7 +452,7 @@ struct MaterialLibraries {
     material_directories: RefCell<Vec<PathBuf>>,
 }
 
-impl MaterialLibraries {
+impl MaterialLibraries<'_> {
     fn load(&self, library: &Path) -> tobj::MTLLoadResult {
         let path = self.directory.join(library);
         let warn = |problem: String| {
@@ -417,10 +468,16 @@ impl MaterialLibraries {
                 files_read.push(path.clone());
             }
         }
-        let bytes = match std::fs::read(&path) {
+        let bytes = match self.access.read(&path) {
             Ok(bytes) => bytes,
+            Err(error) if error.is_sandbox() => {
+                self.refused
+                    .borrow_mut()
+                    .get_or_insert_with(|| (library.display().to_string(), error.to_string()));
+                return Err(tobj::LoadError::OpenFileFailed);
+            }
             Err(error) => {
-                warn(format!("cannot read it: {}", io_error_text(&error)));
+                warn(format!("cannot read it: {error}"));
                 return Err(tobj::LoadError::OpenFileFailed);
             }
         };
@@ -692,6 +749,9 @@ struct TextureFiles {
     index_by_path: HashMap<PathBuf, Option<u32>>,
     /// Every texture file tried, found or not, in order.
     files_read: Vec<PathBuf>,
+    access: FileAccess,
+    /// The first texture the sandbox refused: an error, not a warning.
+    refused: Option<String>,
 }
 
 impl TextureFiles {
@@ -708,7 +768,20 @@ impl TextureFiles {
             return known;
         }
         self.files_read.push(path.to_path_buf());
-        let index = match Texture::load(path, ColorSpace::Srgb) {
+        let loaded = match self.access.read(path) {
+            Ok(bytes) => Texture::from_encoded(&bytes, ColorSpace::Srgb),
+            Err(error) if error.is_sandbox() => {
+                self.refused.get_or_insert_with(|| {
+                    format!(
+                        "texture {} ({statement} of material '{material}'): refused: {error}",
+                        path.display()
+                    )
+                });
+                Err(error.to_string())
+            }
+            Err(error) => Err(format!("cannot read it: {error}")),
+        };
+        let index = match loaded {
             Ok(texture) => {
                 self.loaded.push(Arc::new(texture));
                 Some((self.loaded.len() - 1) as u32)
@@ -1186,6 +1259,25 @@ mod tests {
     fn bad_positions_are_errors_with_lines() {
         check_error("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", Some(2), "not finite");
         check_error("v 0 0 0\nv 1 1e39 0\n", Some(2), "not finite");
+        // Normals and texture coordinates too (issue 6): rejected, not repaired.
+        check_error("v 0 0 0\nvn 0 NaN 1\n", Some(2), "normal is not finite");
+        check_error("v 0 0 0\nvn 0 0 -inf\n", Some(2), "normal is not finite");
+        check_error(
+            "vt 0.5 0.5\nvt 1e39 0\n",
+            Some(2),
+            "texture coordinate is not finite",
+        );
+        // A face cut off after a slash, which tobj accepts.
+        check_error(
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/",
+            Some(5),
+            "ends with '/'",
+        );
+        check_error(
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1/ 2/1 3/1\n",
+            Some(5),
+            "truncated",
+        );
         check_error("v 0 0\n", Some(1), "three numbers");
         check_error("v 0 0 1 0\n", Some(1), "w must be non-zero");
     }
@@ -1198,7 +1290,7 @@ mod tests {
         let error = load(&missing).err();
         assert_eq!(
             error.map(|e| e.message),
-            Some("cannot read mesh file: No such file or directory".to_string())
+            Some("cannot read mesh file: no such file".to_string())
         );
     }
 
@@ -1380,7 +1472,7 @@ mod tests {
             let warned = loaded
                 .warnings
                 .iter()
-                .filter(|w| w.contains(&file.display().to_string()) && w.contains("No such file"))
+                .filter(|w| w.contains(&file.display().to_string()) && w.contains("no such file"))
                 .count();
             assert_eq!(warned, 1, "one warning for {name}: {:?}", loaded.warnings);
         }
@@ -1427,7 +1519,7 @@ mod tests {
     #[test]
     fn texture_coordinates_are_flipped_sanitised_and_padded() {
         // Two objects, the second without vt: its vertices get zeros.
-        let obj = format!("{TRIANGLE}vt 0.25 0.75\nvt 1 nan\nvt 0 1\no a\nf 1/1 2/2 3/3\no b\nf 1 3 2\n");
+        let obj = format!("{TRIANGLE}vt 0.25 0.75\nvt 1 1\nvt 0 1\no a\nf 1/1 2/2 3/3\no b\nf 1 3 2\n");
         let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
         let mesh = &loaded.mesh;
         check_invariant(mesh);

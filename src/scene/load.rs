@@ -24,11 +24,13 @@ use crate::mesh::{
 };
 use crate::render::raster::SamplePattern;
 use crate::ron_path;
+use crate::scene::access::{FileAccess, ReadError};
 use crate::scene::format::{
     self, AttenuationFile, BackFacesFile, CameraFile, ComponentFile, DistributionFile, LightFile,
     LightingModelFile, MaterialFile, MaterialLibraryFile, MaterialRefFile, MeshFile, NameOrIndexFile,
     NormalInterpolationFile, OrderedMap, ScaleFile, SceneFile, ShadingFile, ShadowMapFile,
 };
+use crate::scene::limits;
 use crate::scene::locate::{PathSegment, locate, locate_keys};
 use crate::scene::presets::{self, DEFAULT_RECIPE, MaterialRecipe};
 use crate::scene::{
@@ -53,8 +55,12 @@ pub const DEFAULT_SPOT_CUTOFF_DEGREES: f32 = 30.0;
 pub const MAX_INCLUDE_DEPTH: usize = 16;
 
 /// Settings from the command line that override the scene file.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct LoadOptions {
+    /// How the scene's files may be read (`--sandbox`).
+    pub access: FileAccess,
+    /// The memory budget in bytes (`--max-memory`); `None` is [`limits::DEFAULT_MEMORY_BUDGET`].
+    pub max_memory: Option<u64>,
     pub width: Option<u32>,
     pub height: Option<u32>,
     /// Replaces every object's shading mode.
@@ -135,13 +141,32 @@ pub fn load_scene(path: &Path, options: &LoadOptions) -> Result<LoadedScene, Loa
     load_scene_cached(path, options, &mut MeshCache::default())
 }
 
+/// Loads a scene whose text is `text`, as if it were the file at `path` (includes and meshes
+/// are read relative to `path`): the entry point of the fuzzer. The same code path as
+/// [`load_scene`] once the scene file is read.
+pub fn load_scene_from_str(path: &Path, text: &str, options: &LoadOptions) -> Result<LoadedScene, LoadError> {
+    load_scene_with(path, Some(text), options, &mut MeshCache::default())
+}
+
 /// Loads the scene at `path`, reusing unchanged meshes from `cache`.
 pub fn load_scene_cached(
     path: &Path,
     options: &LoadOptions,
     cache: &mut MeshCache,
 ) -> Result<LoadedScene, LoadError> {
+    load_scene_with(path, None, options, cache)
+}
+
+fn load_scene_with(
+    path: &Path,
+    text: Option<&str>,
+    options: &LoadOptions,
+    cache: &mut MeshCache,
+) -> Result<LoadedScene, LoadError> {
     let mut loader = Loader {
+        access: options.access.clone(),
+        memory_budget: options.max_memory.unwrap_or(limits::DEFAULT_MEMORY_BUDGET),
+        scene_text: text.map(str::to_owned),
         scene_path: path.to_path_buf(),
         sources: Sources::new(),
         diagnostics: Vec::new(),
@@ -171,6 +196,12 @@ pub fn load_scene_cached(
 }
 
 struct Loader<'c> {
+    /// Every file is read through it (`--sandbox`, regular files only).
+    access: FileAccess,
+    /// Bytes the render may need (`--max-memory`).
+    memory_budget: u64,
+    /// The scene's text when it was given rather than read from `scene_path`.
+    scene_text: Option<String>,
     scene_path: PathBuf,
     sources: Sources,
     diagnostics: Vec<Diagnostic>,
@@ -228,6 +259,20 @@ impl Loader<'_> {
             }));
         }
         let bounds = bounding_sphere(&objects);
+        let extent = bounds.center.length() + bounds.radius;
+        if extent.is_nan() || extent > limits::MAX_WORLD_EXTENT {
+            self.diagnostics.push(
+                Diagnostic::error(
+                    &scene_path,
+                    format!(
+                        "the objects reach {extent:.3e} units from the origin; lampshade draws scenes within {:e} units",
+                        limits::MAX_WORLD_EXTENT
+                    ),
+                )
+                .with_hint("check the objects' `scale` and `translate`, and the mesh files' coordinates"),
+            );
+            return None;
+        }
         let camera = match &file.camera {
             Some(CameraFile::Gltf { object, camera }) => self.gltf_camera(
                 object.as_ref(),
@@ -271,6 +316,9 @@ impl Loader<'_> {
             }],
             (_, None) => Vec::new(),
         };
+        if let Some(image) = image {
+            self.check_memory(image, &lights, &objects, source);
+        }
         if file.objects.is_empty() {
             self.diagnostics.push(
                 Diagnostic::warning(&scene_path, "the scene has no objects: the image will be empty")
@@ -292,7 +340,12 @@ impl Loader<'_> {
     /// Reads a text file into `sources`. `referenced_at` is where another file named it.
     fn read_source(&mut self, path: &Path, referenced_at: Option<At>) -> Option<SourceId> {
         self.files_read.push(path.to_path_buf());
-        let problem = match std::fs::read(path) {
+        if referenced_at.is_none()
+            && let Some(text) = self.scene_text.take()
+        {
+            return Some(self.sources.add(path.to_path_buf(), text));
+        }
+        let problem = match self.access.read(path) {
             Ok(bytes) => match String::from_utf8(bytes) {
                 Ok(text) => return Some(self.sources.add(path.to_path_buf(), text)),
                 Err(error) => {
@@ -303,11 +356,12 @@ impl Loader<'_> {
                         .with_hint("scene files are UTF-8 text; was a binary file given by mistake?")
                 }
             },
-            Err(error) if path.is_dir() => {
-                let _ = error;
-                Diagnostic::error(path, "this is a directory, not a file")
+            Err(ReadError::IsDirectory) => Diagnostic::error(path, "this is a directory, not a file"),
+            Err(error @ ReadError::OutsideSandbox { .. }) => {
+                Diagnostic::error(path, format!("refused to read `{}`: {error}", path.display()))
+                    .with_hint("--sandbox allows only files inside its folder")
             }
-            Err(error) => Diagnostic::error(path, format!("cannot read the file: {}", io_reason(&error))),
+            Err(error) => Diagnostic::error(path, format!("cannot read the file: {error}")),
         };
         let problem = match referenced_at {
             Some(at) => self.locate(problem, at),
@@ -771,7 +825,12 @@ impl Loader<'_> {
             return Some(index);
         }
         self.files_read.push(path.clone());
-        match Texture::load(&path, color_space) {
+        let loaded = match self.access.read(&path) {
+            Ok(bytes) => Texture::from_encoded(&bytes, color_space),
+            Err(error @ ReadError::OutsideSandbox { .. }) => Err(format!("refused: {error}")),
+            Err(error) => Err(format!("cannot read it: {error}")),
+        };
+        match loaded {
             Ok(texture) => {
                 let index = self.textures.len() as u32;
                 self.textures.push(Arc::new(texture));
@@ -779,11 +838,7 @@ impl Loader<'_> {
                 Some(index)
             }
             Err(reason) => {
-                let why = if path.exists() {
-                    reason
-                } else {
-                    "no such file".into()
-                };
+                let why = reason;
                 self.error(
                     at,
                     format!("cannot load texture `{}`: {why}", path.display()),
@@ -1075,6 +1130,22 @@ impl Loader<'_> {
                     at,
                     "sphere `segments`",
                 )?;
+                // Refused before it is generated: `sphere(4096)` alone is 33 million triangles.
+                let (vertices, triangles) = limits::sphere_size(segments);
+                let bytes = limits::mesh_bytes(vertices, triangles);
+                if bytes > self.memory_budget {
+                    self.error(
+                        at,
+                        format!(
+                            "`Sphere(segments: {segments})` has {triangles} triangles and needs about {} to draw, more than the memory budget of {}",
+                            limits::human_bytes(bytes),
+                            limits::human_bytes(self.memory_budget)
+                        ),
+                        Some("too many triangles"),
+                        Some("use fewer segments, or raise the budget with --max-memory".into()),
+                    );
+                    return None;
+                }
                 Some((Arc::new(primitives::sphere(segments)), nothing_placed()))
             }
             MeshFile::Plane => Some((Arc::new(primitives::plane()), nothing_placed())),
@@ -1092,17 +1163,49 @@ impl Loader<'_> {
                     .map(Path::to_path_buf)
                     .unwrap_or_default();
                 let path = base.join(file);
-                if !path.is_file() {
-                    let why = if path.is_dir() {
-                        "is a directory"
-                    } else {
-                        "does not exist"
-                    };
+                let metadata = match self.access.metadata(&path) {
+                    Ok(metadata) => metadata,
+                    Err(error) => {
+                        let (why, label, hint) = match &error {
+                            ReadError::NotFound => (
+                                "does not exist".to_string(),
+                                "not found",
+                                "paths are relative to the scene file's folder",
+                            ),
+                            ReadError::OutsideSandbox { .. } => (
+                                format!("is refused: {error}"),
+                                "outside the sandbox",
+                                "--sandbox allows only files inside its folder",
+                            ),
+                            _ => (
+                                error.to_string(),
+                                "cannot be read",
+                                "name an OBJ, glTF or GLB file",
+                            ),
+                        };
+                        self.error(
+                            at,
+                            format!("mesh file `{}` {why}", path.display()),
+                            Some(label),
+                            Some(hint.into()),
+                        );
+                        self.files_read.push(path);
+                        return None;
+                    }
+                };
+                let parse_bytes = metadata.len().saturating_mul(limits::MESH_FILE_EXPANSION);
+                if parse_bytes > self.memory_budget {
                     self.error(
                         at,
-                        format!("mesh file `{}` {why}", path.display()),
-                        Some("not found"),
-                        Some("paths are relative to the scene file's folder".into()),
+                        format!(
+                            "mesh file `{}` is {} and may need up to {} to load, more than the memory budget of {}",
+                            path.display(),
+                            limits::human_bytes(metadata.len()),
+                            limits::human_bytes(parse_bytes),
+                            limits::human_bytes(self.memory_budget)
+                        ),
+                        Some("too large"),
+                        Some("raise the budget with --max-memory".into()),
                     );
                     self.files_read.push(path);
                     return None;
@@ -1141,6 +1244,7 @@ impl Loader<'_> {
             None => {
                 let options = MeshOptions {
                     crease_angle_degrees: crease_angle,
+                    access: self.access.clone(),
                 };
                 let loaded = if is_obj {
                     load_obj(path, &options)
@@ -1205,6 +1309,56 @@ impl Loader<'_> {
             at,
         );
         self.diagnostics.push(used_here);
+    }
+
+    /// Refuses a scene whose render would need more memory than the budget, before it runs.
+    fn check_memory(&mut self, image: ImageSettings, lights: &[Light], objects: &[Object], source: SourceId) {
+        let estimate = limits::MemoryEstimate {
+            image: limits::image_bytes(image.width, image.height),
+            shadow_maps: lights
+                .iter()
+                .filter_map(|light| {
+                    let settings = light.shadow()?;
+                    let cube = matches!(light, Light::Point { .. });
+                    Some(limits::shadow_map_bytes(settings.resolution, cube))
+                })
+                .sum(),
+            geometry: objects
+                .iter()
+                .map(|object| {
+                    limits::mesh_bytes(
+                        object.mesh.positions.len() as u64,
+                        object.mesh.triangle_count() as u64,
+                    )
+                })
+                .fold(0, u64::saturating_add),
+        };
+        if estimate.total() <= self.memory_budget {
+            return;
+        }
+        let triangles: usize = objects.iter().map(|o| o.mesh.triangle_count()).sum();
+        let message = format!(
+            "rendering this scene needs about {} ({}; {} triangles, {}×{} px), more than the memory budget of {}",
+            limits::human_bytes(estimate.total()),
+            estimate.parts(),
+            triangles,
+            image.width,
+            image.height,
+            limits::human_bytes(self.memory_budget)
+        );
+        let hint = "make the image smaller, use fewer triangles or smaller shadow maps, or raise the budget with --max-memory";
+        // Point at the image when it is the largest part, else at the file.
+        if estimate.image >= estimate.geometry.max(estimate.shadow_maps) {
+            self.error(
+                At::new(source, &ron_path!["image"]),
+                message,
+                Some("too large"),
+                Some(hint.into()),
+            );
+        } else {
+            self.diagnostics
+                .push(Diagnostic::error(self.sources.path(source), message).with_hint(hint));
+        }
     }
 
     // ----- camera and lights -----
@@ -1731,14 +1885,6 @@ fn auto_eye(bounds: BoundingSphere, target: DVec3, up: DVec3, fov_y_degrees: f64
 
 fn canonical(path: &Path) -> PathBuf {
     std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf())
-}
-
-fn io_reason(error: &std::io::Error) -> String {
-    match error.kind() {
-        std::io::ErrorKind::NotFound => "no such file".into(),
-        std::io::ErrorKind::PermissionDenied => "permission denied".into(),
-        _ => error.to_string(),
-    }
 }
 
 /// Levenshtein distance, for "did you mean" hints.

@@ -5,7 +5,9 @@
 //! locations. Everything in a `Scene` has been validated (finite numbers, sizes in range,
 //! materials resolved, meshes loaded), so rendering a `Scene` cannot fail.
 
+pub mod access;
 pub mod format;
+pub mod limits;
 pub mod load;
 pub mod locate;
 pub mod presets;
@@ -16,7 +18,7 @@ use glam::{DMat4, DVec3, Vec3};
 
 use crate::mesh::Mesh;
 
-pub use load::{LoadError, LoadOptions, LoadedScene, load_scene};
+pub use load::{LoadError, LoadOptions, LoadedScene, load_scene, load_scene_from_str};
 
 /// A scene ready to render.
 #[derive(Debug, Clone)]

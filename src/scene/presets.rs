@@ -69,9 +69,13 @@ impl MaterialRecipe {
         };
         if let LightingModel::CookTorrance(_) = self.model {
             let base = material.diffuse;
+            // F0 is a reflectance: above 1, Schlick's F exceeds 1 and the diffuse weight 1 − F
+            // turns negative (a diffuse colour of 10^30 gave −∞ pixels in the `render` fuzz
+            // target), so it is clamped to [0, 1] whether given or derived from the colour.
             let fresnel = self
                 .fresnel
-                .unwrap_or_else(|| Vec3::splat(DIELECTRIC_FRESNEL).lerp(base, self.metallic));
+                .unwrap_or_else(|| Vec3::splat(DIELECTRIC_FRESNEL).lerp(base, self.metallic))
+                .clamp(Vec3::ZERO, Vec3::ONE);
             material.diffuse = base * (1.0 - self.metallic);
             material.model = LightingModel::CookTorrance(Microfacet {
                 roughness: self.roughness,

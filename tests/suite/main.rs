@@ -17,6 +17,7 @@ mod golden;
 mod hard_cases;
 mod loading;
 mod render;
+mod robustness;
 mod watch;
 mod watch_browser;
 
