@@ -5,10 +5,9 @@
 //!   transform · project · per-vertex lighting (Gouraud)        once per vertex
 //!   facing · clip · snap · setup · bin into tiles               per triangle, per chunk
 //!     └─► RasterChunk list: raster triangles and their tile bins, in submission order
-//! tiles    in parallel, each tile on its own:
+//! tiles    bands of tile rows in parallel, each band's tiles in order, into the band's rows:
 //!   raster   fixed-point edge functions, top-left rule, depth test → visibility buffer
-//!   shade    each visible pixel once: flat / Gouraud / Phong
-//! resolve  tiles copied into the frame in a fixed order
+//!   shade    each visible pixel once: flat / Gouraud / Phong, written into the frame
 //! ```
 //!
 //! Architecture invariants:
@@ -91,7 +90,8 @@ pub struct RenderStats {
     pub raster_thread_time: Duration,
     /// Of `raster_shade`: shading, summed over the tiles (thread time, not wall time).
     pub shade_thread_time: Duration,
-    /// Of `raster_shade`: copying the tiles into the frame (wall time).
+    /// Of `raster_shade`: what follows the tiles (the depth view's normalisation); tiles write
+    /// straight into the frame, so there is nothing to copy (wall time).
     pub resolve: Duration,
     /// Pixels shaded (a pixel seeing several triangles through its samples counts once each).
     pub shaded_pixels: usize,
@@ -117,24 +117,46 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
     // Binning is done by the geometry stage's chunks, in parallel with the rest of their work.
     let geometry_time = started.elapsed();
 
+    // Each band of tile rows is rendered straight into its own slice of the frame, tile after
+    // tile; bands run in parallel. No tile image is kept and nothing is copied afterwards.
     let started = Instant::now();
-    let tile_images: Vec<(shade::TileImage, Duration, Duration)> = (0..tiles.count())
-        .into_par_iter()
-        .map(|index| {
-            let rect = tiles.rect(index);
-            let raster_started = Instant::now();
-            let visibility = raster::rasterize_tile(rect, pattern, &frame.raster, index);
-            let shade_started = Instant::now();
-            let image = shade::shade_tile(&frame, &visibility, scene.image.background);
-            (image, shade_started - raster_started, shade_started.elapsed())
+    let (width, height) = (tiles.width, tiles.height);
+    let pixel_count = width as usize * height as usize;
+    let mut framebuffer = FrameBuffer {
+        width,
+        height,
+        color: vec![Vec3::ZERO; pixel_count],
+        covered: vec![false; pixel_count],
+    };
+    let band = TILE_SIZE as usize * width as usize;
+    let band_results: Vec<(Duration, Duration, usize)> = framebuffer
+        .color
+        .par_chunks_mut(band)
+        .zip(framebuffer.covered.par_chunks_mut(band))
+        .enumerate()
+        .map(|(tile_row, (color, covered))| {
+            let mut target = shade::TileTarget {
+                color,
+                covered,
+                stride: width as usize,
+            };
+            let (mut raster_time, mut shade_time, mut shaded) = (Duration::ZERO, Duration::ZERO, 0);
+            for column in 0..tiles.columns as usize {
+                let index = tile_row * tiles.columns as usize + column;
+                let raster_started = Instant::now();
+                let visibility = raster::rasterize_tile(tiles.rect(index), pattern, &frame.raster, index);
+                let shade_started = Instant::now();
+                shaded += shade::shade_tile(&frame, &visibility, scene.image.background, &mut target);
+                raster_time += shade_started - raster_started;
+                shade_time += shade_started.elapsed();
+            }
+            (raster_time, shade_time, shaded)
         })
         .collect();
     let resolve_started = Instant::now();
-    let raster_thread_time = tile_images.iter().map(|tile| tile.1).sum();
-    let shade_thread_time = tile_images.iter().map(|tile| tile.2).sum();
-    let shaded_pixels = tile_images.iter().map(|tile| tile.0.shaded).sum();
-    let tile_images: Vec<shade::TileImage> = tile_images.into_iter().map(|tile| tile.0).collect();
-    let mut framebuffer = resolve(&tiles, &tile_images);
+    let raster_thread_time = band_results.iter().map(|band| band.0).sum();
+    let shade_thread_time = band_results.iter().map(|band| band.1).sum();
+    let shaded_pixels = band_results.iter().map(|band| band.2).sum();
     if options.debug_view == Some(DebugView::Depth) {
         normalize_depth(&mut framebuffer);
     }
@@ -150,41 +172,6 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
         threads: rayon::current_num_threads(),
     };
     (framebuffer, stats)
-}
-
-/// Copies every tile into the frame: each band of tile rows in parallel (the bands are disjoint
-/// slices of the frame, so no order between them matters).
-fn resolve(tiles: &bin::TileGrid, tile_images: &[shade::TileImage]) -> FrameBuffer {
-    let (width, height) = (tiles.width, tiles.height);
-    let pixel_count = width as usize * height as usize;
-    let mut framebuffer = FrameBuffer {
-        width,
-        height,
-        color: vec![Vec3::ZERO; pixel_count],
-        covered: vec![false; pixel_count],
-    };
-    let band = TILE_SIZE as usize * width as usize;
-    framebuffer
-        .color
-        .par_chunks_mut(band)
-        .zip(framebuffer.covered.par_chunks_mut(band))
-        .enumerate()
-        .for_each(|(tile_row, (color, covered))| {
-            for column in 0..tiles.columns as usize {
-                let index = tile_row * tiles.columns as usize + column;
-                let (rect, tile) = (tiles.rect(index), &tile_images[index]);
-                let tile_width = rect.width() as usize;
-                for row in 0..rect.height() as usize {
-                    let band_start = row * width as usize + rect.x0 as usize;
-                    let tile_start = row * tile_width;
-                    color[band_start..band_start + tile_width]
-                        .copy_from_slice(&tile.color[tile_start..tile_start + tile_width]);
-                    covered[band_start..band_start + tile_width]
-                        .copy_from_slice(&tile.covered[tile_start..tile_start + tile_width]);
-                }
-            }
-        });
-    framebuffer
 }
 
 /// The depth view's shader wrote view distances; map them so the nearest covered pixel is white

@@ -23,13 +23,12 @@ use crate::render::raster::{NO_TRIANGLE, RasterTriangle, SUBPIXEL_ONE, Visibilit
 use crate::render::shade_fast::FastPhong;
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
-/// The shaded pixels of one tile, row-major.
-#[derive(Debug, Clone, PartialEq)]
-pub struct TileImage {
-    pub color: Vec<Vec3>,
-    pub covered: Vec<bool>,
-    /// Shading evaluations: one per distinct triangle seen by each covered pixel.
-    pub shaded: usize,
+/// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
+/// tile's first row), `stride` pixels per row.
+pub struct TileTarget<'a> {
+    pub color: &'a mut [Vec3],
+    pub covered: &'a mut [bool],
+    pub stride: usize,
 }
 
 /// Colours lit per triangle while shading a tile, so that each is lit once however many pixels
@@ -76,16 +75,29 @@ struct TileCaches {
 /// of covered points, so inside the triangle: no extrapolated attributes), and the pixel is
 /// the average of its samples in linear light, background included. One sample per pixel is
 /// the same computation with the pixel centre.
-pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> TileImage {
+///
+/// Writes every pixel of the tile into `target` (the background where nothing is seen) and
+/// returns the number of shading evaluations (one per distinct triangle per covered pixel).
+pub fn shade_tile(
+    frame: &Frame,
+    visibility: &Visibility,
+    background: Vec3,
+    target: &mut TileTarget,
+) -> usize {
     let rect = visibility.rect;
     let pattern = visibility.pattern;
     let samples = pattern.len();
     let pixel_count = (rect.width() * rect.height()) as usize;
-    let mut image = TileImage {
-        color: vec![background; pixel_count],
-        covered: vec![false; pixel_count],
-        shaded: 0,
-    };
+    let tile_width = rect.width() as usize;
+    for row in 0..rect.height() as usize {
+        let start = row * target.stride + rect.x0 as usize;
+        target.color[start..start + tile_width].fill(background);
+        target.covered[start..start + tile_width].fill(false);
+    }
+    // The tile's pixel `slot` (row-major within the tile) in the band.
+    let stride = target.stride;
+    let at_slot = |slot: usize| (slot / tile_width) * stride + rect.x0 as usize + slot % tile_width;
+    let mut shaded = 0;
     let mut caches = TileCaches {
         flat: TriangleColorCache::new(),
         back: TriangleColorCache::new(),
@@ -117,7 +129,7 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
                     current.insert((id, raster, shader))
                 }
             };
-            image.color[slot] = match shader {
+            target.color[at_slot(slot)] = match shader {
                 RunShader::Solid(color) => *color,
                 RunShader::Gouraud([a, b, c]) => {
                     let weights = source_weights(raster, at);
@@ -126,10 +138,10 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
                 RunShader::Phong(fast) => fast.shade(source_weights(raster, at)),
                 RunShader::General => shade_sample(frame, raster, at, &mut caches),
             };
-            image.covered[slot] = true;
-            image.shaded += 1;
+            target.covered[at_slot(slot)] = true;
+            shaded += 1;
         }
-        return image;
+        return shaded;
     }
     for slot in 0..pixel_count {
         let ids = &visibility.triangle[slot * samples..(slot + 1) * samples];
@@ -156,7 +168,7 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
         let centre_y = i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
         let mut sum = Vec3::ZERO;
         let mut covered_samples = 0;
-        image.shaded += seen.len();
+        shaded += seen.len();
         for &(id, count, offset_x, offset_y) in &seen {
             let n = i64::from(count);
             let at = (
@@ -167,15 +179,15 @@ pub fn shade_tile(frame: &Frame, visibility: &Visibility, background: Vec3) -> T
             sum += color * count as f32;
             covered_samples += count;
         }
-        image.color[slot] = if depth_view {
+        target.color[at_slot(slot)] = if depth_view {
             // Distances are averaged over covered samples only: the background has none.
             sum / covered_samples as f32
         } else {
             (sum + background * (samples as u32 - covered_samples) as f32) / samples as f32
         };
-        image.covered[slot] = true;
+        target.covered[at_slot(slot)] = true;
     }
-    image
+    shaded
 }
 
 /// How the pixels of one run (consecutive pixels showing the same triangle) are shaded, decided
