@@ -711,11 +711,11 @@ impl Baker<'_> {
             }
         };
 
-        let uvs = self.read_uvs(primitive, &reader, 0, vertex_count, &here);
-        let uvs1 = self.read_uvs(primitive, &reader, 1, vertex_count, &here);
-        let colors = self.read_colors(primitive, &reader, vertex_count, &here);
+        let uvs = self.read_uvs(primitive, &reader, 0, vertex_count, &here)?;
+        let uvs1 = self.read_uvs(primitive, &reader, 1, vertex_count, &here)?;
+        let colors = self.read_colors(primitive, &reader, vertex_count, &here)?;
         let file_tangents = self
-            .read_tangents(primitive, &reader, vertex_count, &here)
+            .read_tangents(primitive, &reader, vertex_count, &here)?
             .map(|tangents| {
                 // Directions transform like edges between positions, by the linear part.
                 let handedness = if mirrored { -1.0 } else { 1.0 };
@@ -795,8 +795,10 @@ impl Baker<'_> {
         set: u32,
         vertex_count: usize,
         here: &str,
-    ) -> Option<Vec<Vec2>> {
-        let accessor = primitive.get(&gltf::Semantic::TexCoords(set))?;
+    ) -> Result<Option<Vec<Vec2>>, String> {
+        let Some(accessor) = primitive.get(&gltf::Semantic::TexCoords(set)) else {
+            return Ok(None);
+        };
         let name = format!("TEXCOORD_{set}");
         let allowed = accessor.dimensions() == Dimensions::Vec2
             && match accessor.data_type() {
@@ -811,19 +813,20 @@ impl Baker<'_> {
                 &accessor,
                 "float or normalized unsigned byte/short VEC2",
             );
-            return None;
+            return Ok(None);
         }
-        let uvs: Vec<Vec2> = self.read_checked(here, &name, &accessor, || {
-            reader.read_tex_coords(set).map(|uvs| {
-                uvs.into_f32()
-                    .map(|uv| {
-                        let uv = Vec2::from(uv);
-                        Vec2::select(uv.is_finite_mask(), uv, Vec2::ZERO)
-                    })
-                    .collect()
-            })
-        })?;
-        self.check_count(here, &name, uvs, vertex_count)
+        let Some(uvs) = self.read_checked(here, &name, &accessor, || {
+            reader
+                .read_tex_coords(set)
+                .map(|uvs| uvs.into_f32().map(Vec2::from).collect::<Vec<Vec2>>())
+        }) else {
+            return Ok(None);
+        };
+        // Rejected like a non-finite position or normal (issue 6): a broken export.
+        if !uvs.iter().all(|uv| uv.is_finite()) {
+            return Err(format!("{here}: a {name} is not finite (NaN or infinity)"));
+        }
+        Ok(self.check_count(here, &name, uvs, vertex_count))
     }
 
     /// `COLOR_0` as linear RGBA, or `None` (with a warning when it exists but cannot be used).
@@ -833,8 +836,10 @@ impl Baker<'_> {
         reader: &gltf::mesh::Reader<'a, 's, F>,
         vertex_count: usize,
         here: &str,
-    ) -> Option<Vec<Vec4>> {
-        let accessor = primitive.get(&gltf::Semantic::Colors(0))?;
+    ) -> Result<Option<Vec<Vec4>>, String> {
+        let Some(accessor) = primitive.get(&gltf::Semantic::Colors(0)) else {
+            return Ok(None);
+        };
         let allowed = matches!(accessor.dimensions(), Dimensions::Vec3 | Dimensions::Vec4)
             && match accessor.data_type() {
                 DataType::F32 => true,
@@ -848,17 +853,19 @@ impl Baker<'_> {
                 &accessor,
                 "float or normalized unsigned byte/short VEC3 or VEC4",
             );
-            return None;
+            return Ok(None);
         }
-        let colors: Vec<Vec4> = self.read_checked(here, "COLOR_0", &accessor, || {
-            reader.read_colors(0).map(|colors| {
-                colors
-                    .into_rgba_f32()
-                    .map(|rgba| finite_or(Vec4::from(rgba), Vec4::ONE))
-                    .collect()
-            })
-        })?;
-        self.check_count(here, "COLOR_0", colors, vertex_count)
+        let Some(colors) = self.read_checked(here, "COLOR_0", &accessor, || {
+            reader
+                .read_colors(0)
+                .map(|colors| colors.into_rgba_f32().map(Vec4::from).collect::<Vec<Vec4>>())
+        }) else {
+            return Ok(None);
+        };
+        if !colors.iter().all(|color| color.is_finite()) {
+            return Err(format!("{here}: a COLOR_0 is not finite (NaN or infinity)"));
+        }
+        Ok(self.check_count(here, "COLOR_0", colors, vertex_count))
     }
 
     /// `TANGENT` as stored (model space), or `None` (with a warning when it exists but
@@ -869,18 +876,25 @@ impl Baker<'_> {
         reader: &gltf::mesh::Reader<'a, 's, F>,
         vertex_count: usize,
         here: &str,
-    ) -> Option<Vec<Vec4>> {
-        let accessor = primitive.get(&gltf::Semantic::Tangents)?;
+    ) -> Result<Option<Vec<Vec4>>, String> {
+        let Some(accessor) = primitive.get(&gltf::Semantic::Tangents) else {
+            return Ok(None);
+        };
         if accessor.dimensions() != Dimensions::Vec4 || accessor.data_type() != DataType::F32 {
             self.warn_attribute(here, "TANGENT", &accessor, "float VEC4");
-            return None;
+            return Ok(None);
         }
-        let tangents: Vec<Vec4> = self.read_checked(here, "TANGENT", &accessor, || {
+        let Some(tangents) = self.read_checked(here, "TANGENT", &accessor, || {
             reader
                 .read_tangents()
-                .map(|tangents| tangents.map(|t| finite_or(Vec4::from(t), Vec4::ZERO)).collect())
-        })?;
-        self.check_count(here, "TANGENT", tangents, vertex_count)
+                .map(|tangents| tangents.map(Vec4::from).collect::<Vec<Vec4>>())
+        }) else {
+            return Ok(None);
+        };
+        if !tangents.iter().all(|tangent| tangent.is_finite()) {
+            return Err(format!("{here}: a TANGENT is not finite (NaN or infinity)"));
+        }
+        Ok(self.check_count(here, "TANGENT", tangents, vertex_count))
     }
 
     fn warn_attribute(&mut self, here: &str, name: &str, accessor: &gltf::Accessor, expected: &str) {
@@ -989,11 +1003,6 @@ fn extend_attribute<T>(
     } else {
         merged.extend(part);
     }
-}
-
-/// `value` where finite, `fallback`'s component elsewhere.
-fn finite_or(value: Vec4, fallback: Vec4) -> Vec4 {
-    Vec4::select(value.is_finite_mask(), value, fallback)
 }
 
 /// Triangles from a primitive's index list, in the glTF spec's vertex order: strip triangle
