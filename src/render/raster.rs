@@ -424,6 +424,18 @@ pub fn rasterize_tile(
     visibility
 }
 
+/// The three edge functions of `triangle` (`E₀` opposite v0, `E₁`, `E₂`) at the centre of pixel
+/// `(px, py)`, ready to step.
+fn triangle_edges(triangle: &RasterTriangle, px: u32, py: u32) -> [Edge; 3] {
+    let [x0, x1, x2] = triangle.x;
+    let [y0, y1, y2] = triangle.y;
+    [
+        Edge::new(x1, y1, x2, y2, px, py),
+        Edge::new(x2, y2, x0, y0, px, py),
+        Edge::new(x0, y0, x1, y1, px, py),
+    ]
+}
+
 /// The depth test of one triangle at every pixel centre of the tile: [`for_each_covered_sample`]
 /// with one sample, written for the common case. The fill rule's bias is folded into the edge
 /// values (`E − min_inside ≥ 0`), so the inside test is one sign check of their bitwise or.
@@ -433,13 +445,7 @@ fn rasterize_single_sample(triangle: &RasterTriangle, id: u32, visibility: &mut 
     let Some(area) = triangle.bounds.intersect(&rect) else {
         return;
     };
-    let [x0, x1, x2] = triangle.x;
-    let [y0, y1, y2] = triangle.y;
-    let mut edges = [
-        Edge::new(x1, y1, x2, y2, area.x0, area.y0),
-        Edge::new(x2, y2, x0, y0, area.x0, area.y0),
-        Edge::new(x0, y0, x1, y1, area.x0, area.y0),
-    ];
+    let mut edges = triangle_edges(triangle, area.x0, area.y0);
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
     let tile_width = rect.width() as usize;
@@ -493,13 +499,7 @@ pub fn for_each_covered_sample(
     let Some(area) = triangle.bounds.intersect(&rect) else {
         return;
     };
-    let [x0, x1, x2] = triangle.x;
-    let [y0, y1, y2] = triangle.y;
-    let mut edges = [
-        Edge::new(x1, y1, x2, y2, area.x0, area.y0),
-        Edge::new(x2, y2, x0, y0, area.x0, area.y0),
-        Edge::new(x0, y0, x1, y1, area.x0, area.y0),
-    ];
+    let mut edges = triangle_edges(triangle, area.x0, area.y0);
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
     // Each sample's offset turned into edge-function offsets, once per triangle.
