@@ -25,8 +25,7 @@ use image::RgbImage;
 use serde_json::json;
 
 use crate::check::compare::{Tolerance, compare_pixels};
-use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, thousands, use_color};
-use crate::diag::render_diagnostics;
+use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, print_load_error, thousands};
 use crate::output::{self, PngCompression};
 use crate::render::{RenderOptions, RenderStats, render};
 use crate::scene::load::{LoadOptions, load_scene};
@@ -178,10 +177,7 @@ pub fn run(args: &BenchArgs) -> i32 {
         let loaded = match load_scene(path, &load_options) {
             Ok(loaded) => loaded,
             Err(error) => {
-                eprint!(
-                    "{}",
-                    render_diagnostics(&error.diagnostics, &error.sources, use_color())
-                );
+                print_load_error(&error);
                 exit = EXIT_BAD_INPUT;
                 continue;
             }

@@ -20,7 +20,7 @@ use crate::pipeline::{RenderedScene, render_scene_file};
 use crate::render::{DebugView, RenderOptions};
 use crate::scene::access::FileAccess;
 use crate::scene::limits::parse_memory_size;
-use crate::scene::load::{LoadOptions, MeshCache};
+use crate::scene::load::{LoadError, LoadOptions, MeshCache};
 use crate::scene::{LightingModel, Shading};
 
 pub const EXIT_OK: i32 = 0;
@@ -225,6 +225,14 @@ fn exit_on_ctrl_c() {
     }
 }
 
+/// Prints the diagnostics of a scene that failed to load, on stderr.
+pub fn print_load_error(error: &LoadError) {
+    eprint!(
+        "{}",
+        render_diagnostics(&error.diagnostics, &error.sources, use_color())
+    );
+}
+
 /// Whether diagnostics on stderr should be coloured.
 pub fn use_color() -> bool {
     std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none()
@@ -365,10 +373,7 @@ fn render_one(
     let rendered = match rendered {
         Ok(rendered) => rendered,
         Err(error) => {
-            eprint!(
-                "{}",
-                render_diagnostics(&error.diagnostics, &error.sources, use_color())
-            );
+            print_load_error(&error);
             return Err(RenderFailure::BadInput);
         }
     };

@@ -28,8 +28,7 @@ use std::time::{Duration, Instant};
 
 use clap::Subcommand;
 
-use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, use_color};
-use crate::diag::render_diagnostics;
+use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, print_load_error};
 use crate::mesh::{Mesh, primitives};
 use crate::metrics::{Compared, ErrorMetrics, compare, compare_over};
 use crate::reference::{LightingPrecision, Shape, recognize_shape, render_reference_with};
@@ -531,10 +530,7 @@ fn run_accuracy(args: &AccuracyArgs) -> i32 {
     let loaded = match load_scene(&args.scene, &options) {
         Ok(loaded) => loaded,
         Err(error) => {
-            eprint!(
-                "{}",
-                render_diagnostics(&error.diagnostics, &error.sources, use_color())
-            );
+            print_load_error(&error);
             return EXIT_BAD_INPUT;
         }
     };
@@ -578,10 +574,7 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
     let loaded = match load_scene(&args.scene, &LoadOptions::default()) {
         Ok(loaded) => loaded,
         Err(error) => {
-            eprint!(
-                "{}",
-                render_diagnostics(&error.diagnostics, &error.sources, use_color())
-            );
+            print_load_error(&error);
             return EXIT_BAD_INPUT;
         }
     };
