@@ -26,15 +26,28 @@ use lampshade::scene::load::{LoadOptions, load_scene_from_str};
 /// A memory budget small enough that no accepted input takes long to load or render.
 const FUZZ_MEMORY_BUDGET: u64 = 256 << 20;
 
-/// The scratch folder, with the files the seeds refer to.
+/// The scratch folder, with the files the seeds refer to: `lampshade-fuzz/<pid>` in the
+/// temporary folder. A fuzzer ends by aborting, and a static is never dropped, so nothing
+/// removes it at exit; instead each process removes the folders of processes that are gone
+/// (on Linux, where `/proc` says which are).
 fn scratch() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let dir = tempfile::Builder::new()
-            .prefix("lampshade-fuzz-")
-            .tempdir()
-            .expect("a scratch folder")
-            .keep();
+        let parent = std::env::temp_dir().join("lampshade-fuzz");
+        if Path::new("/proc/self").exists() {
+            for entry in std::fs::read_dir(&parent).into_iter().flatten().flatten() {
+                let name = entry.file_name();
+                let gone = name
+                    .to_str()
+                    .and_then(|pid| pid.parse::<u32>().ok())
+                    .is_some_and(|pid| !Path::new("/proc").join(pid.to_string()).exists());
+                if gone {
+                    let _ = std::fs::remove_dir_all(entry.path());
+                }
+            }
+        }
+        let dir = parent.join(std::process::id().to_string());
+        std::fs::create_dir_all(&dir).expect("a scratch folder");
         let dir = std::fs::canonicalize(dir).expect("the scratch folder exists");
         std::fs::write(
             dir.join("lib.ron"),

@@ -113,6 +113,7 @@ use super::{
     MeshOptions, normals, tangents,
 };
 use crate::scene::access::{FileAccess, ReadError};
+use crate::scene::limits::MAX_LIGHTING_VALUE;
 use crate::scene::{LightingModel, Material, Microfacet, MicrofacetDistribution, TextureBinding};
 use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 
@@ -139,7 +140,7 @@ pub fn blinn_phong_exponent(roughness: f32) -> f32 {
 /// `roughness` are clamped to [0, 1]; non-finite inputs fall back to the glTF defaults.
 pub fn material_from_factors(base_color: Vec3, metallic: f32, roughness: f32, emission: Vec3) -> Material {
     let base_color = if base_color.is_finite() {
-        base_color
+        lighting_value(base_color)
     } else {
         Vec3::ONE
     };
@@ -160,7 +161,7 @@ pub fn material_from_factors(base_color: Vec3, metallic: f32, roughness: f32, em
         specular: fresnel,
         shininess: blinn_phong_exponent(roughness),
         emission: if emission.is_finite() {
-            emission
+            lighting_value(emission)
         } else {
             Vec3::ZERO
         },
@@ -171,6 +172,12 @@ pub fn material_from_factors(base_color: Vec3, metallic: f32, roughness: f32, em
         }),
         textures: Default::default(),
     }
+}
+
+/// `value` held to `[0, MAX_LIGHTING_VALUE]`, the range a scene file may give colours and
+/// intensities in (NaN stays NaN, for the callers' finiteness checks).
+fn lighting_value(value: Vec3) -> Vec3 {
+    value.clamp(Vec3::ZERO, Vec3::splat(MAX_LIGHTING_VALUE as f32))
 }
 
 /// The material of primitives that have none: glTF's default material (base colour 1,
@@ -355,10 +362,11 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
 }
 
 /// A `KHR_lights_punctual` light at a node with world matrix `world`; `None` when something
-/// is not finite. Negative colours or intensities (invalid glTF) are taken as 0.
+/// is not finite. Negative colours or intensities (invalid glTF) are taken as 0, and both are
+/// held to [`MAX_LIGHTING_VALUE`] like a scene file's.
 fn imported_light(light: &gltf::khr_lights_punctual::Light, world: DMat4) -> Option<ImportedLight> {
     use gltf::khr_lights_punctual::Kind;
-    let color = Vec3::from(light.color()).max(Vec3::ZERO) * light.intensity().max(0.0);
+    let color = lighting_value(Vec3::from(light.color())) * lighting_value(Vec3::splat(light.intensity()));
     let kind = match light.kind() {
         Kind::Directional => ImportedLightKind::Directional,
         Kind::Point => ImportedLightKind::Point,

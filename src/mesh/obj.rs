@@ -77,6 +77,7 @@ use glam::{Vec2, Vec3};
 use super::normals::VertexAttributes;
 use super::{LoadedMesh, Mesh, MeshError, MeshOptions, normals};
 use crate::scene::access::FileAccess;
+use crate::scene::limits::MAX_LIGHTING_VALUE;
 use crate::scene::{LightingModel, Material, TextureBinding};
 use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 
@@ -693,18 +694,24 @@ fn assign_materials(
 /// One MTL material as a [`Material`] (module documentation: "MTL to Material").
 fn material_from_mtl(mtl: &tobj::Material, warnings: &mut Vec<String>) -> Material {
     let defaults = default_material();
-    let mut warn_not_finite = |statement: &str| {
-        warnings.push(format!(
-            "material '{}': {statement} is not finite; the default is used",
-            mtl.name
-        ));
-    };
     let mut colour = |value: Option<[f32; 3]>, statement: &str, default: Vec3| match value.map(Vec3::from) {
         None => default,
-        Some(colour) if colour.is_finite() => colour,
-        Some(_) => {
-            warn_not_finite(statement);
+        Some(colour) if !colour.is_finite() => {
+            warnings.push(format!(
+                "material '{}': {statement} is not finite; the default is used",
+                mtl.name
+            ));
             default
+        }
+        Some(colour) => {
+            let max = MAX_LIGHTING_VALUE as f32;
+            if colour.min_element() < 0.0 || colour.max_element() > max {
+                warnings.push(format!(
+                    "material '{}': {statement} has components outside [0, {max}]; they are clamped",
+                    mtl.name
+                ));
+            }
+            colour.clamp(Vec3::ZERO, Vec3::splat(max))
         }
     };
     let diffuse = colour(mtl.diffuse, "Kd", defaults.diffuse);
@@ -1141,6 +1148,24 @@ mod tests {
         // Recorded all the same, so that a watcher reloads the mesh when it appears.
         assert_eq!(loaded.files_read.len(), 2, "{:?}", loaded.files_read);
         assert!(loaded.files_read[1].ends_with("nowhere.mtl"));
+    }
+
+    #[test]
+    fn mtl_colours_beyond_the_lighting_limit_are_clamped_with_a_warning() {
+        let mtl = "newmtl hot\nKd 1e30 0.5 -2\nKs 0.5 0.5 0.5\n";
+        let obj = format!("mtllib hot.mtl\nusemtl hot\n{TRIANGLE}f 1 2 3\n");
+        let loaded = load_text(&obj, &[("hot.mtl", mtl)]).unwrap_or_else(|e| panic!("{e:?}"));
+        let material = loaded.mesh.materials[0];
+        assert_eq!(material.diffuse, Vec3::new(MAX_LIGHTING_VALUE as f32, 0.5, 0.0));
+        assert_eq!(material.specular, Vec3::splat(0.5));
+        assert!(
+            loaded
+                .warnings
+                .iter()
+                .any(|w| w.contains("'hot'") && w.contains("Kd") && w.contains("clamped")),
+            "{:?}",
+            loaded.warnings
+        );
     }
 
     #[test]

@@ -129,12 +129,20 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
         covered: vec![false; pixel_count],
     };
     let band = TILE_SIZE as usize * width as usize;
+    // Debug builds only: a seam that makes the worker threads panic, for the end-to-end test of
+    // how a bug is reported (exit code 101, nothing written; tests/suite/robustness.rs).
+    #[cfg(debug_assertions)]
+    let simulate_panic = std::env::var_os("LAMPSHADE_SIMULATE_PANIC").is_some();
     let band_results: Vec<(Duration, Duration, usize)> = framebuffer
         .color
         .par_chunks_mut(band)
         .zip(framebuffer.covered.par_chunks_mut(band))
         .enumerate()
         .map(|(tile_row, (color, covered))| {
+            #[cfg(debug_assertions)]
+            if simulate_panic {
+                panic!("simulated bug in band {tile_row} (LAMPSHADE_SIMULATE_PANIC)");
+            }
             let mut target = shade::TileTarget {
                 color,
                 covered,

@@ -23,6 +23,14 @@ use crate::render::raster::RasterTriangle;
 /// the `render` fuzz target). Scenes translated by 10⁶ (issue 6) are well inside.
 pub const MAX_WORLD_EXTENT: f64 = 1e15;
 
+/// The largest colour component, material coefficient (`ka`, `kd`, `ks`) and light intensity a
+/// scene may give. Lighting is `f32`: a coefficient times a light's colour × intensity × an
+/// attenuation (at most 10⁶, [`crate::lighting::MIN_ATTENUATION_DENOMINATOR`]) stays below
+/// 10³⁰ under this bound, so no product overflows and no `∞ · 0` turns a pixel NaN (`ks` 8.6·10²⁹
+/// with an intensity of 1.9·10²⁹ did, found by the `render` fuzz target). Far above what any
+/// pixel can show: a value of 10⁶ already saturates to white under a light of 10⁻⁶.
+pub const MAX_LIGHTING_VALUE: f64 = 1e6;
+
 /// The memory a render may need when `--max-memory` is not given: the largest image
 /// (16384 × 16384, 8 GiB) with a few million triangles, or some 30 million triangles at a
 /// usual size. A scene above it is almost certainly a typo (an extra zero in a size or a

@@ -54,6 +54,28 @@ pub const DEFAULT_SPOT_CUTOFF_DEGREES: f32 = 30.0;
 /// Included material libraries may include others, this deep at most.
 pub const MAX_INCLUDE_DEPTH: usize = 16;
 
+/// `value` as a scene would write it: whole numbers in full, others with the shortest digits
+/// that read back to the same `f32` when they are one (fields are `f32`, and `8.6e29` widened to
+/// `f64` prints 30 digits), with an exponent when very large or small.
+fn display_number(value: f64) -> String {
+    let magnitude = value.abs();
+    if value.fract() == 0.0 && magnitude < 1e16 {
+        return format!("{value}");
+    }
+    let exponent = !(1e-4..1e7).contains(&magnitude);
+    let narrow = value as f32;
+    match (f64::from(narrow) == value, exponent) {
+        (true, true) => format!("{narrow:e}"),
+        (true, false) => format!("{narrow}"),
+        (false, true) => format!("{value:e}"),
+        (false, false) => format!("{value}"),
+    }
+}
+
+/// Why colours, coefficients and intensities have an upper bound ([`limits::MAX_LIGHTING_VALUE`]).
+const LIGHTING_VALUE_HINT: &str = "lighting is computed in 32-bit floats and larger values could overflow; \
+     10⁶ already saturates to white (docs/limits.md)";
+
 /// Settings from the command line that override the scene file.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LoadOptions {
@@ -450,7 +472,7 @@ impl Loader<'_> {
         Some(vector / length)
     }
 
-    /// A non-negative RGB triple.
+    /// An RGB triple with components in `[0, limits::MAX_LIGHTING_VALUE]`.
     fn color(&mut self, value: [f32; 3], at: At) -> Option<Vec3> {
         let vector = self.vector(value.map(f64::from), at)?;
         if vector.min_element() < 0.0 {
@@ -459,6 +481,19 @@ impl Loader<'_> {
                 "colour components cannot be negative",
                 Some("negative component"),
                 None,
+            );
+            return None;
+        }
+        if vector.max_element() > limits::MAX_LIGHTING_VALUE {
+            self.error(
+                at,
+                format!(
+                    "colour components must be at most {}, not {:e}",
+                    limits::MAX_LIGHTING_VALUE,
+                    vector.max_element()
+                ),
+                Some("too large"),
+                Some(LIGHTING_VALUE_HINT.into()),
             );
             return None;
         }
@@ -474,11 +509,12 @@ impl Loader<'_> {
             } else {
                 format!("between {min} and {max}")
             };
+            let hint = (max == limits::MAX_LIGHTING_VALUE && value > max).then(|| LIGHTING_VALUE_HINT.into());
             self.error(
                 at,
-                format!("{what} must be {range}, not {value}"),
+                format!("{what} must be {range}, not {}", display_number(value)),
                 Some("out of range"),
-                None,
+                hint,
             );
             return None;
         }
@@ -684,9 +720,9 @@ impl Loader<'_> {
             ok &= checked.is_some();
             checked.map(|v| v as f32)
         };
-        let ka = strength(self, material.ka, "ka", f64::INFINITY);
-        let kd = strength(self, material.kd, "kd", f64::INFINITY);
-        let ks = strength(self, material.ks, "ks", f64::INFINITY);
+        let ka = strength(self, material.ka, "ka", limits::MAX_LIGHTING_VALUE);
+        let kd = strength(self, material.kd, "kd", limits::MAX_LIGHTING_VALUE);
+        let ks = strength(self, material.ks, "ks", limits::MAX_LIGHTING_VALUE);
         let scr = strength(
             self,
             material.specular_color_reflectance,
@@ -1671,7 +1707,7 @@ impl Loader<'_> {
             Some(i) => self.ranged(
                 f64::from(i),
                 0.0,
-                f64::INFINITY,
+                limits::MAX_LIGHTING_VALUE,
                 At::new(source, &field("intensity")),
                 "`intensity`",
             ),

@@ -293,7 +293,7 @@ fn spot_cutoffs_of_0_and_90_degrees_match_the_reference() {
     assert!(at(96, 32) > ambient_only + 50);
 }
 
-/// Intensities of 10⁶ and emission of 10³⁰ saturate at 255: a lit pixel never wraps to dark.
+/// Intensities, coefficients and emission at the format's limit of 10⁶ saturate at 255: a lit pixel never wraps to dark.
 #[test]
 fn intensities_far_above_one_saturate_instead_of_wrapping() {
     let scene = load("lighting-intense");

@@ -60,20 +60,25 @@ fn ctrl_c_during_a_render_keeps_the_previous_image_and_leaves_no_temporary_file(
 
 #[cfg(unix)]
 #[test]
-fn an_unreadable_include_or_mesh_is_a_located_error() {
+fn an_unreadable_include_is_a_located_error() {
     use std::os::unix::fs::PermissionsExt;
     let work = tempfile::tempdir().unwrap();
     let locked = work.path().join("locked.ron");
     std::fs::write(&locked, "Materials(materials: {})").unwrap();
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o000)).unwrap();
-    if std::fs::read(&locked).is_ok() {
-        // Root (as in some containers) reads any file: there is no unreadable file to test with.
-        eprintln!("skipped: this user can read a file with mode 000");
+    // Root (CI containers) reads a file of mode 000; Linux's `/proc/self/mem` is a regular file
+    // that nobody can read from its start (EIO), so it stands in.
+    let (include, reason) = if std::fs::read(&locked).is_err() {
+        ("locked.ron", "permission denied")
+    } else if cfg!(target_os = "linux") {
+        ("/proc/self/mem", "Input/output error")
+    } else {
+        eprintln!("skipped: this user reads a file of mode 000 and there is no /proc/self/mem");
         return;
-    }
+    };
     std::fs::write(
         work.path().join("s.ron"),
-        "(include: [\"locked.ron\"], objects: [(mesh: Cube)])",
+        format!("(include: [\"{include}\"], objects: [(mesh: Cube)])"),
     )
     .unwrap();
     let output = lampshade(work.path()).args(["render", "s.ron"]).output().unwrap();
@@ -81,10 +86,47 @@ fn an_unreadable_include_or_mesh_is_a_located_error() {
     assert_eq!(output.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains("s.ron:1:12"), "{stderr}");
     assert!(
-        stderr.contains("cannot read the file: permission denied"),
+        stderr.contains(&format!("cannot read the file: {reason}")),
         "{stderr}"
     );
     assert!(!work.path().join("s.png").exists());
+}
+
+/// A bug's panic, here on the renderer's worker threads, is an internal error: exit code 101,
+/// a request to report it, and the previous image untouched. The panic comes from the
+/// debug-only seam `LAMPSHADE_SIMULATE_PANIC` (`render::render`); release builds have none,
+/// so the test runs only where the binary was built with debug assertions, as `cargo test` does.
+#[cfg(debug_assertions)]
+#[test]
+fn a_panic_is_an_internal_error_with_exit_code_101_and_nothing_written() {
+    let work = tempfile::tempdir().unwrap();
+    std::fs::write(work.path().join("a.ron"), "(objects: [(mesh: Cube)])").unwrap();
+    std::fs::write(work.path().join("a.png"), b"previous good image").unwrap();
+    let output = lampshade(work.path())
+        .args(["render", "a.ron"])
+        .env("LAMPSHADE_SIMULATE_PANIC", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(101), "{stderr}");
+    assert!(
+        stderr.contains("simulated bug"),
+        "the panic message comes first: {stderr}"
+    );
+    assert!(stderr.contains("internal error in lampshade"), "{stderr}");
+    assert!(stderr.contains("Please report it"), "{stderr}");
+    assert_eq!(
+        std::fs::read(work.path().join("a.png")).unwrap(),
+        b"previous good image"
+    );
+    assert_eq!(temporary_files(work.path()), Vec::<String>::new());
+    // Without the seam the same command renders: the panic came from the seam alone.
+    let output = lampshade(work.path()).args(["render", "a.ron"]).output().unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
 }
 
 /// A suite folder with a good scene and one that reads a mesh outside the sandbox.
