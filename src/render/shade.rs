@@ -88,61 +88,65 @@ pub fn shade_tile(
     let pattern = visibility.pattern;
     let samples = pattern.len();
     let pixel_count = (rect.width() * rect.height()) as usize;
-    let tile_width = rect.width() as usize;
-    for row in 0..rect.height() as usize {
-        let start = row * target.stride + rect.x0 as usize;
-        target.color[start..start + tile_width].fill(background);
-        target.covered[start..start + tile_width].fill(false);
-    }
-    // The tile's pixel `slot` (row-major within the tile) in the band.
     let stride = target.stride;
-    let at_slot = |slot: usize| (slot / tile_width) * stride + rect.x0 as usize + slot % tile_width;
+    let tile_width = rect.width() as usize;
     let mut shaded = 0;
     let mut caches = TileCaches {
         flat: TriangleColorCache::new(),
         back: TriangleColorCache::new(),
     };
-    // Distinct triangles at the current pixel: id, samples covered, sum of their offsets.
-    let mut seen: Vec<(u32, u32, i64, i64)> = Vec::with_capacity(samples);
-    let depth_view = frame.debug_view == Some(DebugView::Depth);
     if samples == 1 {
         // One sample at the pixel centre: the general loop below with `seen` holding one entry
         // at offset zero, and the same result bit for bit. What depends only on the triangle
-        // is looked up once per run of pixels showing it.
+        // is looked up once per run of pixels showing it. Every pixel of the tile is written
+        // exactly once, the background included.
         let phong_allowed = FastPhong::frame_allows(frame);
         let mut current: Option<(u32, &RasterTriangle, RunShader)> = None;
-        for (slot, &id) in visibility.triangle.iter().enumerate() {
-            if id == NO_TRIANGLE {
-                continue;
+        let rows = visibility.triangle.chunks_exact(tile_width);
+        for (row, ids) in rows.enumerate() {
+            let start = row * stride + rect.x0 as usize;
+            let colors = &mut target.color[start..start + tile_width];
+            let covered = &mut target.covered[start..start + tile_width];
+            let y = i64::from(rect.y0 + row as u32) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+            for (column, &id) in ids.iter().enumerate() {
+                covered[column] = id != NO_TRIANGLE;
+                if id == NO_TRIANGLE {
+                    colors[column] = background;
+                    continue;
+                }
+                let x = i64::from(rect.x0 + column as u32) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+                let (_, raster, shader) = match &current {
+                    Some((current_id, ..)) if *current_id == id => current.as_ref().expect("matched"),
+                    _ => {
+                        let raster = frame.raster_triangle(id);
+                        let shader = RunShader::new(frame, raster, phong_allowed, &mut caches);
+                        current.insert((id, raster, shader))
+                    }
+                };
+                colors[column] = match shader {
+                    RunShader::Solid(color) => *color,
+                    RunShader::Gouraud([a, b, c]) => {
+                        let weights = source_weights(raster, (x, y));
+                        *a * weights.x + *b * weights.y + *c * weights.z
+                    }
+                    RunShader::Phong(fast) => fast.shade(source_weights(raster, (x, y))),
+                    RunShader::General => shade_sample(frame, raster, (x, y), &mut caches),
+                };
+                shaded += 1;
             }
-            let px = rect.x0 + slot as u32 % rect.width();
-            let py = rect.y0 + slot as u32 / rect.width();
-            let at = (
-                i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
-                i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
-            );
-            let (_, raster, shader) = match &current {
-                Some((current_id, ..)) if *current_id == id => current.as_ref().expect("matched"),
-                _ => {
-                    let raster = frame.raster_triangle(id);
-                    let shader = RunShader::new(frame, raster, phong_allowed, &mut caches);
-                    current.insert((id, raster, shader))
-                }
-            };
-            target.color[at_slot(slot)] = match shader {
-                RunShader::Solid(color) => *color,
-                RunShader::Gouraud([a, b, c]) => {
-                    let weights = source_weights(raster, at);
-                    *a * weights.x + *b * weights.y + *c * weights.z
-                }
-                RunShader::Phong(fast) => fast.shade(source_weights(raster, at)),
-                RunShader::General => shade_sample(frame, raster, at, &mut caches),
-            };
-            target.covered[at_slot(slot)] = true;
-            shaded += 1;
         }
         return shaded;
     }
+    for row in 0..rect.height() as usize {
+        let start = row * stride + rect.x0 as usize;
+        target.color[start..start + tile_width].fill(background);
+        target.covered[start..start + tile_width].fill(false);
+    }
+    // The tile's pixel `slot` (row-major within the tile) in the band.
+    let at_slot = |slot: usize| (slot / tile_width) * stride + rect.x0 as usize + slot % tile_width;
+    // Distinct triangles at the current pixel: id, samples covered, sum of their offsets.
+    let mut seen: Vec<(u32, u32, i64, i64)> = Vec::with_capacity(samples);
+    let depth_view = frame.debug_view == Some(DebugView::Depth);
     for slot in 0..pixel_count {
         let ids = &visibility.triangle[slot * samples..(slot + 1) * samples];
         if ids.iter().all(|&id| id == NO_TRIANGLE) {
