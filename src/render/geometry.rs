@@ -1,10 +1,11 @@
 //! The geometry stage: everything done per vertex and per triangle before rasterization.
 //!
 //! Per object: vertices are transformed once (to eye-relative world space for lighting and to
-//! clip space for rasterization) and, for Gouraud objects, lit once. Per triangle: facing is
-//! decided in homogeneous coordinates (valid even across w = 0), back faces are culled when the
-//! object asks, flat-shaded triangles are lit once at their centroid, and the triangle is
-//! clipped, projected, snapped and set up for the rasterizer.
+//! clip space for rasterization). Per triangle: facing is decided in homogeneous coordinates
+//! (valid even across w = 0), back faces are culled when the object asks, and the triangle is
+//! clipped, projected, snapped and set up for the rasterizer. Then the vertices of Gouraud
+//! objects that some rasterized triangle uses are lit, each once. (Flat triangles are lit
+//! later, by the tiles that show them.)
 //!
 //! World positions are made relative to the eye in `f64` before anything is rounded to `f32`, so
 //! a scene far from the origin (camera included) keeps its precision.
@@ -16,6 +17,7 @@ use glam::{DMat3, DMat4, DVec3, Mat3, Mat4, Vec2, Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate_with_visibility};
 use crate::render::DebugView;
@@ -25,6 +27,7 @@ use crate::render::raster::{
     GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, setup_snapped,
     setup_triangle,
 };
+use crate::render::shade_fast::{FastLighting, FastPhong};
 use crate::render::shadow::ShadowMap;
 use crate::scene::presets::default_material;
 use crate::scene::{
@@ -412,8 +415,114 @@ fn build(
             )
         })
         .collect();
-    add_triangles(&mut frame, scene, &placed, &projected, &viewport);
+    // Gouraud vertices are lit after the triangles are known, and only those that a triangle
+    // reaching the rasterizer uses: hidden back faces, culled and off-screen triangles need none.
+    let seen_vertices: Vec<AtomicBool> = if needs_colors {
+        (0..vertex_count).map(|_| AtomicBool::new(false)).collect()
+    } else {
+        Vec::new()
+    };
+    add_triangles(&mut frame, scene, &placed, &projected, &viewport, &seen_vertices);
+    if needs_colors {
+        light_gouraud_vertices(&mut frame, scene, &placed, &seen_vertices);
+    }
     frame
+}
+
+/// Lights the vertices of Gouraud objects that `seen` marks, each once, with the material of
+/// the first triangle that uses it; the other vertices keep a zero colour nothing reads. One
+/// parallel pass over the whole vertex array, so many small objects still fill every core.
+fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObject], seen: &[AtomicBool]) {
+    // Per object whose triangles carry the mesh's materials: each vertex's material.
+    let vertex_materials: Vec<Option<Vec<u32>>> = scene
+        .objects
+        .iter()
+        .zip(placed)
+        .map(|(object, place)| {
+            let mesh = &object.mesh;
+            let gouraud = object.shading == Shading::Gouraud;
+            (gouraud && place.uses_mesh_materials).then(|| {
+                let mut materials = vec![place.material_base; place.vertex_count as usize];
+                for (t, triangle) in mesh.triangles.iter().enumerate().rev() {
+                    let material = place.material_base + mesh.triangle_materials.get(t).copied().unwrap_or(0);
+                    for &v in triangle {
+                        materials[v as usize] = material;
+                    }
+                }
+                materials
+            })
+        })
+        .collect();
+    let mut colors = std::mem::take(&mut frame.vertex_colors);
+    colors.resize(frame.vertices.len(), VertexColors::default());
+    let lit_frame = &*frame;
+    let fast_allowed = FastPhong::frame_allows(lit_frame);
+    colors
+        .par_chunks_mut(VERTEX_CHUNK)
+        .zip(seen.par_chunks(VERTEX_CHUNK))
+        .enumerate()
+        .for_each(|(chunk, (colors, seen))| {
+            let first = chunk * VERTEX_CHUNK;
+            let mut object = placed.partition_point(|place| place.vertex_base as usize <= first) - 1;
+            // The fast lighting of the last (object, material) met, when it may take it.
+            let mut fast: Option<(usize, u32, Option<FastLighting>)> = None;
+            for (offset, (colors, seen)) in colors.iter_mut().zip(seen).enumerate() {
+                if !seen.load(Ordering::Relaxed) {
+                    continue;
+                }
+                let vertex_index = first + offset;
+                while vertex_index >= (placed[object].vertex_base + placed[object].vertex_count) as usize {
+                    object += 1;
+                }
+                let place = &placed[object];
+                let v = vertex_index - place.vertex_base as usize;
+                let material = match &vertex_materials[object] {
+                    Some(materials) => materials[v],
+                    None => place.material_base,
+                };
+                let vertex = &lit_frame.vertices[vertex_index];
+                let style = &lit_frame.objects[object];
+                if fast_allowed {
+                    let lighting = match fast {
+                        Some((o, m, lighting)) if o == object && m == material => lighting,
+                        _ => {
+                            let lighting =
+                                FastLighting::new(lit_frame, material, style, Shading::Gouraud, false);
+                            fast = Some((object, material, lighting));
+                            lighting
+                        }
+                    };
+                    if let Some(lighting) = lighting {
+                        let normal = style.side_normal(vertex.normal, false);
+                        let to_viewer = lit_frame.viewer.to_viewer(vertex.position);
+                        *colors = VertexColors {
+                            color: lighting.light(vertex.position, normal, to_viewer),
+                            color_textured: Vec3::ZERO,
+                        };
+                        continue;
+                    }
+                }
+                let material = &lit_frame.materials[material as usize];
+                let material = match scene.objects[object].mesh.colors.get(v) {
+                    Some(tint) => tinted(material, tint.truncate()),
+                    None => *material,
+                };
+                let (textured, rest) =
+                    lit_frame.light_material(&material, style, vertex.position, vertex.normal, false);
+                *colors = if has_color_texture(&material) {
+                    VertexColors {
+                        color: rest,
+                        color_textured: textured,
+                    }
+                } else {
+                    VertexColors {
+                        color: textured + rest,
+                        color_textured: Vec3::ZERO,
+                    }
+                };
+            }
+        });
+    frame.vertex_colors = colors;
 }
 
 struct Viewport {
@@ -441,6 +550,7 @@ const VERTEX_CHUNK: usize = 4096;
 /// Where an object's vertices and materials landed in the frame, for its triangles.
 struct PlacedObject {
     vertex_base: u32,
+    vertex_count: u32,
     material_base: u32,
     uses_mesh_materials: bool,
     mirrored: bool,
@@ -704,51 +814,6 @@ fn add_object_vertices(
         }));
     }
 
-    // Gouraud: every vertex lit once, with the material of the first triangle that uses it.
-    if frame.vertex_colors.capacity() > 0 {
-        frame
-            .vertex_colors
-            .resize(vertex_base as usize + vertex_count, VertexColors::default());
-        if style.shading == Shading::Gouraud {
-            let mut vertex_materials = vec![material_base; vertex_count];
-            if uses_mesh_materials {
-                for (t, triangle) in mesh.triangles.iter().enumerate().rev() {
-                    let material = material_base + mesh.triangle_materials.get(t).copied().unwrap_or(0);
-                    for &v in triangle {
-                        vertex_materials[v as usize] = material;
-                    }
-                }
-            }
-            let mut colors = std::mem::take(&mut frame.vertex_colors);
-            let frame_ref = &*frame;
-            colors[vertex_base as usize..]
-                .par_iter_mut()
-                .enumerate()
-                .for_each(|(v, colors)| {
-                    let vertex = &frame_ref.vertices[vertex_base as usize + v];
-                    let material = &frame_ref.materials[vertex_materials[v] as usize];
-                    let material = match mesh.colors.get(v) {
-                        Some(tint) => tinted(material, tint.truncate()),
-                        None => *material,
-                    };
-                    let (textured, rest) =
-                        frame_ref.light_material(&material, &style, vertex.position, vertex.normal, false);
-                    *colors = if has_color_texture(&material) {
-                        VertexColors {
-                            color: rest,
-                            color_textured: textured,
-                        }
-                    } else {
-                        VertexColors {
-                            color: textured + rest,
-                            color_textured: Vec3::ZERO,
-                        }
-                    };
-                });
-            frame.vertex_colors = colors;
-        }
-    }
-
     // Constant shading: one colour per material for the whole object, lit at the centre of its
     // bounds with the normal facing the viewer.
     frame.constant_colors.resize(frame.materials.len(), Vec3::ZERO);
@@ -762,6 +827,7 @@ fn add_object_vertices(
     }
     PlacedObject {
         vertex_base,
+        vertex_count: vertex_count as u32,
         material_base,
         uses_mesh_materials,
         mirrored: transforms.mirrored,
@@ -820,6 +886,7 @@ fn add_triangles(
     placed: &[PlacedObject],
     projected: &[ProjectedVertex],
     viewport: &Viewport,
+    seen_vertices: &[AtomicBool],
 ) {
     // Where each object's triangles start in the scene's stream.
     let mut object_starts = Vec::with_capacity(scene.objects.len() + 1);
@@ -865,6 +932,7 @@ fn add_triangles(
                     material,
                     object: object as u32,
                 };
+                let before = raster.len();
                 add_raster_triangles(
                     frame_ref,
                     slot,
@@ -874,6 +942,14 @@ fn add_triangles(
                     viewport,
                     &mut raster,
                 );
+                if raster.len() > before
+                    && frame_ref.objects[object].shading == Shading::Gouraud
+                    && frame_ref.lit
+                {
+                    for v in slot.vertices {
+                        seen_vertices[v as usize].store(true, Ordering::Relaxed);
+                    }
+                }
             }
             RasterChunk::new(raster, &frame_ref.tiles)
         })

@@ -28,64 +28,29 @@ enum Specular {
     BlinnPhong,
 }
 
-/// One Phong-shaded triangle, ready to shade pixel after pixel.
-pub struct FastPhong<'f> {
+/// The lighting of one material on one side of an object, for the fast paths: what does not
+/// change from point to point decided once, and the loop specialised per model.
+#[derive(Clone, Copy)]
+pub struct FastLighting<'f> {
     frame: &'f Frame,
-    triangle: &'f FrameTriangle,
     material: &'f Material,
-    style: &'f ObjectStyle,
-    positions: [Vec3; 3],
-    normals: [Vec3; 3],
-    back_facing: bool,
     specular: Specular,
 }
 
-impl<'f> FastPhong<'f> {
-    /// Whether any triangle of `frame` may take the fast path: no debug view, no vertex
-    /// attributes (tints, texture coordinates), no shadows, no spot light. Asked once per tile.
-    pub fn frame_allows(frame: &Frame) -> bool {
-        frame.debug_view.is_none()
-            && frame.vertex_attributes.is_empty()
-            && frame.shadows.iter().all(Option::is_none)
-            && frame
-                .lights
-                .iter()
-                .all(|light| !matches!(light.kind, ShadingLightKind::Spot { .. }))
-    }
-
-    /// The fast path for `triangle` seen from the front or the back, or `None` when it needs the
-    /// general path: another shading mode or model, a texture, Slerp, or a single lighting
-    /// component. Only for frames that [`FastPhong::frame_allows`].
-    pub fn new(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Self> {
-        let (material, style, specular) = Self::eligible(frame, triangle, back_facing, Shading::Phong)?;
-        if style.normal_interpolation != NormalInterpolation::Nlerp {
-            return None;
-        }
-        let vertices = triangle.vertices.map(|v| &frame.vertices[v as usize]);
-        Some(FastPhong {
-            frame,
-            triangle,
-            material,
-            style,
-            positions: vertices.map(|v| v.position),
-            normals: vertices.map(|v| v.normal),
-            back_facing,
-            specular,
-        })
-    }
-
-    /// The material, style and specular term of `triangle` when it may take a fast path for
-    /// `shading`: a Phong or Blinn-Phong material without textures, all lighting components, and
-    /// a side that is lit.
-    fn eligible(
+impl<'f> FastLighting<'f> {
+    /// The fast lighting of `material` on an object of `style` shaded with `shading`, or `None`
+    /// when it needs the general path: a Phong or Blinn-Phong material without textures, all
+    /// lighting components, and a side that is lit. Only for frames that
+    /// [`FastPhong::frame_allows`].
+    pub fn new(
         frame: &'f Frame,
-        triangle: &FrameTriangle,
-        back_facing: bool,
+        material: u32,
+        style: &ObjectStyle,
         shading: Shading,
-    ) -> Option<(&'f Material, &'f ObjectStyle, Specular)> {
-        debug_assert!(Self::frame_allows(frame));
-        let style = &frame.objects[triangle.object as usize];
-        let material = &frame.materials[triangle.material as usize];
+        back_facing: bool,
+    ) -> Option<Self> {
+        debug_assert!(FastPhong::frame_allows(frame));
+        let material = &frame.materials[material as usize];
         let textured = material.textures.diffuse.is_some()
             || material.textures.ambient.is_some()
             || material.textures.normal.is_some();
@@ -100,48 +65,21 @@ impl<'f> FastPhong<'f> {
             && matches!(material.model, LightingModel::Phong | LightingModel::BlinnPhong)
             && !textured
             && !(back_facing && style.back_faces == BackFaces::Unlit);
-        eligible.then_some((material, style, specular))
-    }
-
-    /// A flat-shaded triangle's colour, as `Frame::flat_colors` computes it (lit once at the
-    /// centroid with the face normal), or `None` when it needs the general path.
-    pub fn flat_color(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Vec3> {
-        let (material, style, specular) = Self::eligible(frame, triangle, back_facing, Shading::Flat)?;
-        let [p0, p1, p2] = triangle.vertices.map(|v| frame.vertices[v as usize].position);
-        let centroid = (p0 + p1 + p2) / 3.0;
-        let fast = FastPhong {
+        eligible.then_some(FastLighting {
             frame,
-            triangle,
             material,
-            style,
-            positions: [p0, p1, p2],
-            normals: [Vec3::ZERO; 3],
-            back_facing,
             specular,
-        };
-        let normal = style.side_normal(frame.face_normal(triangle), back_facing);
-        Some(fast.light_with(centroid, normal, frame.viewer.to_viewer(centroid)))
+        })
     }
 
-    /// The colour at the point with source-triangle weights `weights`.
+    /// The lighting at `position` with the (side) normal `normal`: `Frame::light_material`'s
+    /// two parts, summed.
     #[inline]
-    pub fn shade(&self, weights: Vec3) -> Vec3 {
-        let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
-        let position = interpolate(self.positions);
-        let normal = renormalize_or_else(interpolate(self.normals), || {
-            self.frame.face_normal(self.triangle)
-        });
-        let normal = self.style.side_normal(normal, self.back_facing);
-        self.light_with(position, normal, self.frame.viewer.to_viewer(position))
-    }
-
-    /// The lighting at `position` with the (side) normal `normal`.
-    #[inline]
-    fn light_with(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
+    pub fn light(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
         match self.specular {
-            Specular::None => self.light::<0>(position, normal, to_viewer),
-            Specular::Phong => self.light::<1>(position, normal, to_viewer),
-            Specular::BlinnPhong => self.light::<2>(position, normal, to_viewer),
+            Specular::None => self.light_model::<0>(position, normal, to_viewer),
+            Specular::Phong => self.light_model::<1>(position, normal, to_viewer),
+            Specular::BlinnPhong => self.light_model::<2>(position, normal, to_viewer),
         }
     }
 
@@ -149,7 +87,7 @@ impl<'f> FastPhong<'f> {
     /// `(ambient + diffuse) + (specular + emission)`. `SPECULAR` is [`Specular`] as a number so
     /// each model gets its own loop.
     #[inline]
-    fn light<const SPECULAR: u8>(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
+    fn light_model<const SPECULAR: u8>(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
         let material = self.material;
         let ambient = material.ambient * self.frame.ambient_light;
         let mut diffuse = Vec3::ZERO;
@@ -189,6 +127,73 @@ impl<'f> FastPhong<'f> {
             }
         }
         (ambient + diffuse) + (specular + material.emission)
+    }
+}
+
+/// One Phong-shaded triangle, ready to shade pixel after pixel.
+pub struct FastPhong<'f> {
+    lighting: FastLighting<'f>,
+    triangle: &'f FrameTriangle,
+    style: &'f ObjectStyle,
+    positions: [Vec3; 3],
+    normals: [Vec3; 3],
+    back_facing: bool,
+}
+
+impl<'f> FastPhong<'f> {
+    /// Whether any triangle of `frame` may take the fast path: no debug view, no vertex
+    /// attributes (tints, texture coordinates), no shadows, no spot light. Asked once per tile.
+    pub fn frame_allows(frame: &Frame) -> bool {
+        frame.debug_view.is_none()
+            && frame.vertex_attributes.is_empty()
+            && frame.shadows.iter().all(Option::is_none)
+            && frame
+                .lights
+                .iter()
+                .all(|light| !matches!(light.kind, ShadingLightKind::Spot { .. }))
+    }
+
+    /// The fast path for `triangle` seen from the front or the back, or `None` when it needs the
+    /// general path: another shading mode or model, a texture, Slerp, or a single lighting
+    /// component (see [`FastLighting::new`]). Only for frames that [`FastPhong::frame_allows`].
+    pub fn new(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Self> {
+        let style = &frame.objects[triangle.object as usize];
+        if style.normal_interpolation != NormalInterpolation::Nlerp {
+            return None;
+        }
+        let lighting = FastLighting::new(frame, triangle.material, style, Shading::Phong, back_facing)?;
+        let vertices = triangle.vertices.map(|v| &frame.vertices[v as usize]);
+        Some(FastPhong {
+            lighting,
+            triangle,
+            style,
+            positions: vertices.map(|v| v.position),
+            normals: vertices.map(|v| v.normal),
+            back_facing,
+        })
+    }
+
+    /// A flat-shaded triangle's colour, as `Frame::flat_colors` computes it (lit once at the
+    /// centroid with the face normal), or `None` when it needs the general path.
+    pub fn flat_color(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Vec3> {
+        let style = &frame.objects[triangle.object as usize];
+        let lighting = FastLighting::new(frame, triangle.material, style, Shading::Flat, back_facing)?;
+        let [p0, p1, p2] = triangle.vertices.map(|v| frame.vertices[v as usize].position);
+        let centroid = (p0 + p1 + p2) / 3.0;
+        let normal = style.side_normal(frame.face_normal(triangle), back_facing);
+        Some(lighting.light(centroid, normal, frame.viewer.to_viewer(centroid)))
+    }
+
+    /// The colour at the point with source-triangle weights `weights`.
+    #[inline]
+    pub fn shade(&self, weights: Vec3) -> Vec3 {
+        let frame = self.lighting.frame;
+        let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
+        let position = interpolate(self.positions);
+        let normal = renormalize_or_else(interpolate(self.normals), || frame.face_normal(self.triangle));
+        let normal = self.style.side_normal(normal, self.back_facing);
+        self.lighting
+            .light(position, normal, frame.viewer.to_viewer(position))
     }
 }
 
@@ -299,6 +304,50 @@ pub(crate) mod tests {
                 }
                 assert!(checked > 1000);
             }
+        }
+    }
+
+    /// Gouraud vertex colours, lit by the fast path in the geometry stage, against the general
+    /// `Frame::light_material`, bit for bit; and only vertices of rasterized triangles are lit.
+    #[test]
+    fn gouraud_vertices_lit_by_the_fast_path_equal_the_general_lighting_bit_for_bit() {
+        for (model, specular) in [
+            (LightingModel::Phong, Vec3::splat(0.7)),
+            (LightingModel::BlinnPhong, Vec3::splat(0.7)),
+            (LightingModel::Phong, Vec3::ZERO),
+        ] {
+            let mut scene = scene(model, specular, BackFaces::ReverseLit);
+            for object in &mut scene.objects {
+                object.shading = Shading::Gouraud;
+            }
+            let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+            assert!(FastPhong::frame_allows(&frame));
+            let mut lit = 0;
+            for triangle in &frame.triangles {
+                for v in triangle.vertices {
+                    let color = frame.vertex_colors[v as usize].color;
+                    if color == Vec3::ZERO {
+                        continue; // a vertex only hidden back faces use: never lit, never read
+                    }
+                    let vertex = frame.vertices[v as usize];
+                    let style = &frame.objects[triangle.object as usize];
+                    let material = &frame.materials[triangle.material as usize];
+                    let (textured, rest) =
+                        frame.light_material(material, style, vertex.position, vertex.normal, false);
+                    assert_eq!(color, textured + rest, "{model:?}");
+                    lit += 1;
+                }
+            }
+            assert!(lit > 1000, "{lit}");
+            let unlit = frame
+                .vertex_colors
+                .iter()
+                .filter(|c| c.color == Vec3::ZERO)
+                .count();
+            assert!(
+                unlit > frame.vertices.len() / 4,
+                "hidden back vertices are not lit: {unlit}"
+            );
         }
     }
 
