@@ -27,7 +27,7 @@ use serde_json::json;
 use crate::check::compare::{Tolerance, compare_pixels};
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, print_load_error, thousands};
 use crate::output::{self, PngCompression};
-use crate::render::{RenderOptions, RenderStats, render};
+use crate::render::{RenderOptions, RenderStats, Renderer};
 use crate::scene::load::{LoadOptions, load_scene};
 use crate::scene::{LightingModel, Scene, Shading};
 
@@ -269,9 +269,10 @@ fn measure(
     };
     let run = || {
         reset_peak_memory();
-        let mut frame = None;
+        // Frames reuse the last frame's buffers, as a GL context keeps its framebuffer.
+        let mut renderer = Renderer::default();
         for _ in 0..warmup {
-            frame = Some(render(scene, &pooled).0);
+            renderer.render(scene, &pooled);
         }
         let mut measurement = Measurement {
             frames: Vec::new(),
@@ -282,16 +283,18 @@ fn measure(
         let cpu_before = process_cpu_time();
         for _ in 0..frames {
             let started = std::time::Instant::now();
-            let (framebuffer, stats) = render(scene, &pooled);
+            let stats = renderer.render(scene, &pooled);
             measurement.frames.push(started.elapsed());
             measurement.stats.push(stats);
-            frame = Some(framebuffer);
         }
         measurement.peak_memory = peak_memory();
         if let (Some(before), Some(after)) = (cpu_before, process_cpu_time()) {
             measurement.cpu_per_frame = Some(after.saturating_sub(before) / frames.max(1));
         }
-        (measurement, frame.expect("at least one frame is rendered"))
+        if warmup + frames == 0 {
+            renderer.render(scene, &pooled);
+        }
+        (measurement, renderer.framebuffer().clone())
     };
     match &pool {
         Some(pool) => pool.install(run),

@@ -96,11 +96,23 @@ pub struct RasterChunk {
 impl RasterChunk {
     /// Bins `triangles` into the tiles of `grid` (a counting sort by tile).
     pub fn new(triangles: Vec<RasterTriangle>, grid: &TileGrid) -> Self {
-        if triangles.is_empty() {
-            return RasterChunk::default();
+        let mut chunk = RasterChunk::default();
+        chunk.rebin(triangles, grid);
+        chunk
+    }
+
+    /// Takes `triangles` and bins them into the tiles of `grid` (a counting sort by tile),
+    /// reusing this chunk's bin arrays; the triangles it held are dropped.
+    pub fn rebin(&mut self, triangles: Vec<RasterTriangle>, grid: &TileGrid) {
+        self.triangles = triangles;
+        self.offsets.clear();
+        self.entries.clear();
+        if self.triangles.is_empty() {
+            return;
         }
-        let mut offsets = vec![0u32; grid.count() + 1];
-        for triangle in &triangles {
+        let offsets = &mut self.offsets;
+        offsets.resize(grid.count() + 1, 0);
+        for triangle in &self.triangles {
             let (rows, columns) = grid.tiles_touched(&triangle.bounds);
             for row in rows {
                 for column in columns.clone() {
@@ -112,22 +124,24 @@ impl RasterChunk {
             offsets[t] += offsets[t - 1];
         }
         let mut cursor = offsets.clone();
-        let mut entries = vec![0u32; offsets[grid.count()] as usize];
-        for (index, triangle) in triangles.iter().enumerate() {
+        self.entries.resize(offsets[grid.count()] as usize, 0);
+        for (index, triangle) in self.triangles.iter().enumerate() {
             let (rows, columns) = grid.tiles_touched(&triangle.bounds);
             for row in rows {
                 for column in columns.clone() {
                     let tile = (row * grid.columns + column) as usize;
-                    entries[cursor[tile] as usize] = index as u32;
+                    self.entries[cursor[tile] as usize] = index as u32;
                     cursor[tile] += 1;
                 }
             }
         }
-        RasterChunk {
-            triangles,
-            offsets,
-            entries,
-        }
+    }
+
+    /// Empties the chunk and hands back its triangle array (capacity kept) for the next frame.
+    pub fn take_triangles(&mut self) -> Vec<RasterTriangle> {
+        let mut triangles = std::mem::take(&mut self.triangles);
+        triangles.clear();
+        triangles
     }
 
     /// Indices (into `triangles`) of the triangles touching tile `tile`, in order.

@@ -326,6 +326,17 @@ pub fn build_frame(
     debug_view: Option<DebugView>,
     shadows: Vec<Option<Arc<ShadowMap>>>,
 ) -> Frame {
+    build_frame_in(scene, pattern, debug_view, shadows, &mut SpareBuffers::default())
+}
+
+/// [`build_frame`] in the arrays of an earlier frame, taken from `spare`.
+pub fn build_frame_in(
+    scene: &Scene,
+    pattern: SamplePattern,
+    debug_view: Option<DebugView>,
+    shadows: Vec<Option<Arc<ShadowMap>>>,
+    spare: &mut SpareBuffers,
+) -> Frame {
     let (width, height) = (scene.image.width, scene.image.height);
     build(
         scene,
@@ -336,7 +347,40 @@ pub fn build_frame(
         debug_view,
         shadows,
         true,
+        spare,
     )
+}
+
+/// The big arrays of a finished frame, emptied but with their capacity, to build the next frame
+/// in: a stream of frames (`bench`, `watch`) then allocates and page-faults nothing big after
+/// the first. Which arrays are reused changes no result.
+#[derive(Default)]
+pub struct SpareBuffers {
+    vertices: Vec<FrameVertex>,
+    vertex_colors: Vec<VertexColors>,
+    triangles: Vec<FrameTriangle>,
+    /// The chunks' bin arrays, and their triangle arrays (taken back by the next frame's chunk
+    /// of the same index).
+    raster: Vec<RasterChunk>,
+    projected: Vec<ProjectedVertex>,
+    seen_vertices: Vec<AtomicBool>,
+}
+
+impl SpareBuffers {
+    /// Keeps `frame`'s arrays for the next frame.
+    pub fn keep(&mut self, frame: Frame) {
+        self.vertices = emptied(frame.vertices, 0);
+        self.vertex_colors = emptied(frame.vertex_colors, 0);
+        self.triangles = emptied(frame.triangles, 0);
+        self.raster = frame.raster;
+    }
+}
+
+/// `vector` emptied, with room for at least `count` elements.
+fn emptied<T>(mut vector: Vec<T>, count: usize) -> Vec<T> {
+    vector.clear();
+    vector.reserve(count);
+    vector
 }
 
 /// The scene's geometry as `camera` sees it on a `size`×`size` image, for depth only: nothing is
@@ -351,6 +395,7 @@ pub fn build_depth_frame(scene: &Scene, camera: &Camera, size: u32) -> Frame {
         None,
         Vec::new(),
         false,
+        &mut SpareBuffers::default(),
     )
 }
 
@@ -364,6 +409,7 @@ fn build(
     debug_view: Option<DebugView>,
     shadows: Vec<Option<Arc<ShadowMap>>>,
     lit: bool,
+    spare: &mut SpareBuffers,
 ) -> Frame {
     let eye = camera.eye;
     let camera = CameraSetup::new(camera, width as f64 / height as f64);
@@ -374,10 +420,13 @@ fn build(
         !mesh.uvs.is_empty() || !mesh.uvs1.is_empty() || !mesh.colors.is_empty() || !mesh.tangents.is_empty()
     });
     let mut frame = Frame {
-        vertices: Vec::with_capacity(vertex_count),
-        vertex_colors: Vec::with_capacity(if needs_colors { vertex_count } else { 0 }),
+        vertices: emptied(std::mem::take(&mut spare.vertices), vertex_count),
+        vertex_colors: emptied(
+            std::mem::take(&mut spare.vertex_colors),
+            if needs_colors { vertex_count } else { 0 },
+        ),
         vertex_attributes: Vec::with_capacity(if needs_attributes { vertex_count } else { 0 }),
-        triangles: Vec::new(),
+        triangles: std::mem::take(&mut spare.triangles),
         raster: Vec::new(),
         tiles: TileGrid::new(width, height),
         materials: Vec::new(),
@@ -399,7 +448,7 @@ fn build(
         guard_x: GUARD_BAND_PIXELS / width as f32,
         guard_y: GUARD_BAND_PIXELS / height as f32,
     };
-    let mut projected: Vec<ProjectedVertex> = Vec::with_capacity(vertex_count);
+    let mut projected = emptied(std::mem::take(&mut spare.projected), vertex_count);
     let placed: Vec<PlacedObject> = scene
         .objects
         .iter()
@@ -417,15 +466,26 @@ fn build(
         .collect();
     // Gouraud vertices are lit after the triangles are known, and only those that a triangle
     // reaching the rasterizer uses: hidden back faces, culled and off-screen triangles need none.
-    let seen_vertices: Vec<AtomicBool> = if needs_colors {
-        (0..vertex_count).map(|_| AtomicBool::new(false)).collect()
-    } else {
-        Vec::new()
-    };
-    add_triangles(&mut frame, scene, &placed, &projected, &viewport, &seen_vertices);
+    let mut seen_vertices = std::mem::take(&mut spare.seen_vertices);
+    seen_vertices.clear();
+    if needs_colors {
+        seen_vertices.resize_with(vertex_count, || AtomicBool::new(false));
+    }
+    let spare_chunks = std::mem::take(&mut spare.raster);
+    add_triangles(
+        &mut frame,
+        scene,
+        &placed,
+        &projected,
+        &viewport,
+        &seen_vertices,
+        spare_chunks,
+    );
     if needs_colors {
         light_gouraud_vertices(&mut frame, scene, &placed, &seen_vertices);
     }
+    spare.projected = projected;
+    spare.seen_vertices = seen_vertices;
     frame
 }
 
@@ -887,6 +947,7 @@ fn add_triangles(
     projected: &[ProjectedVertex],
     viewport: &Viewport,
     seen_vertices: &[AtomicBool],
+    mut spare_chunks: Vec<RasterChunk>,
 ) {
     // Where each object's triangles start in the scene's stream.
     let mut object_starts = Vec::with_capacity(scene.objects.len() + 1);
@@ -899,13 +960,16 @@ fn add_triangles(
 
     let mut triangles = std::mem::take(&mut frame.triangles);
     triangles.resize(total, FrameTriangle::default());
+    spare_chunks.resize_with(total.div_ceil(TRIANGLE_CHUNK), RasterChunk::default);
     let frame_ref = &*frame;
-    let raster: Vec<RasterChunk> = triangles
+    triangles
         .par_chunks_mut(TRIANGLE_CHUNK)
+        .zip(spare_chunks.par_iter_mut())
         .enumerate()
-        .map(|(chunk, out)| {
+        .for_each(|(chunk, (out, raster_chunk))| {
             let first = chunk * TRIANGLE_CHUNK;
-            let mut raster = Vec::with_capacity(out.len());
+            let mut raster = raster_chunk.take_triangles();
+            raster.reserve(out.len());
             // The object holding the chunk's first triangle; later ones follow in order.
             let mut object = object_starts.partition_point(|&start| start <= first) - 1;
             for (offset, slot) in out.iter_mut().enumerate() {
@@ -951,11 +1015,11 @@ fn add_triangles(
                     }
                 }
             }
-            RasterChunk::new(raster, &frame_ref.tiles)
-        })
-        .collect();
+            raster_chunk.rebin(raster, &frame_ref.tiles);
+        });
+    spare_chunks.truncate(total.div_ceil(TRIANGLE_CHUNK));
     frame.triangles = triangles;
-    frame.raster = raster;
+    frame.raster = spare_chunks;
 }
 
 /// Appends the raster triangles of one frame triangle: none if it is culled or invisible, one

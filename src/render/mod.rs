@@ -65,7 +65,7 @@ pub struct RenderOptions {
 }
 
 /// The rendered image in linear RGB, not clamped, row-major from the top-left pixel.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct FrameBuffer {
     pub width: u32,
     pub height: u32,
@@ -100,19 +100,53 @@ pub struct RenderStats {
 
 /// Renders `scene`. Never fails; see the module documentation for the invariants.
 pub fn render(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderStats) {
-    if let Some(threads) = options.threads
-        && let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build()
-    {
-        return pool.install(|| render_in_current_pool(scene, options));
-    }
-    render_in_current_pool(scene, options)
+    let mut renderer = Renderer::default();
+    let stats = renderer.render(scene, options);
+    (renderer.framebuffer, stats)
 }
 
-fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderStats) {
+/// Renders frame after frame, building each frame in the arrays of the last (see
+/// [`geometry::SpareBuffers`]) and into the same frame buffer, so that a stream of frames
+/// (`bench`, `watch`) allocates nothing big after the first. The images are [`render`]'s.
+#[derive(Default)]
+pub struct Renderer {
+    spare: geometry::SpareBuffers,
+    framebuffer: FrameBuffer,
+}
+
+impl Renderer {
+    /// Renders `scene` into [`Renderer::framebuffer`]. Never fails.
+    pub fn render(&mut self, scene: &Scene, options: &RenderOptions) -> RenderStats {
+        if let Some(threads) = options.threads
+            && let Ok(pool) = rayon::ThreadPoolBuilder::new().num_threads(threads).build()
+        {
+            return pool.install(|| self.render_in_current_pool(scene, options));
+        }
+        self.render_in_current_pool(scene, options)
+    }
+
+    /// The last frame rendered (empty before the first).
+    pub fn framebuffer(&self) -> &FrameBuffer {
+        &self.framebuffer
+    }
+
+    fn render_in_current_pool(&mut self, scene: &Scene, options: &RenderOptions) -> RenderStats {
+        let (stats, frame) = render_frame(scene, options, &mut self.spare, &mut self.framebuffer);
+        self.spare.keep(frame);
+        stats
+    }
+}
+
+fn render_frame(
+    scene: &Scene,
+    options: &RenderOptions,
+    spare: &mut geometry::SpareBuffers,
+    framebuffer: &mut FrameBuffer,
+) -> (RenderStats, geometry::Frame) {
     let started = Instant::now();
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
     let shadows = shadow::render_shadow_maps(scene, scene.camera.eye);
-    let frame = geometry::build_frame(scene, pattern, options.debug_view, shadows);
+    let frame = geometry::build_frame_in(scene, pattern, options.debug_view, shadows, spare);
     let tiles = frame.tiles;
     // Binning is done by the geometry stage's chunks, in parallel with the rest of their work.
     let geometry_time = started.elapsed();
@@ -122,12 +156,15 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
     let started = Instant::now();
     let (width, height) = (tiles.width, tiles.height);
     let pixel_count = width as usize * height as usize;
-    let mut framebuffer = FrameBuffer {
-        width,
-        height,
-        color: vec![Vec3::ZERO; pixel_count],
-        covered: vec![false; pixel_count],
-    };
+    // The tiles write every pixel, so a buffer of the right size is reused as it is.
+    if (framebuffer.width, framebuffer.height) != (width, height) || framebuffer.color.len() != pixel_count {
+        *framebuffer = FrameBuffer {
+            width,
+            height,
+            color: vec![Vec3::ZERO; pixel_count],
+            covered: vec![false; pixel_count],
+        };
+    }
     let band = TILE_SIZE as usize * width as usize;
     // Debug builds only: a seam that makes the worker threads panic, for the end-to-end test of
     // how a bug is reported (exit code 101, nothing written; tests/suite/robustness.rs).
@@ -166,7 +203,7 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
     let shade_thread_time = band_results.iter().map(|band| band.1).sum();
     let shaded_pixels = band_results.iter().map(|band| band.2).sum();
     if options.debug_view == Some(DebugView::Depth) {
-        normalize_depth(&mut framebuffer);
+        normalize_depth(framebuffer);
     }
     let stats = RenderStats {
         triangles: scene.triangle_count(),
@@ -179,7 +216,7 @@ fn render_in_current_pool(scene: &Scene, options: &RenderOptions) -> (FrameBuffe
         shaded_pixels,
         threads: rayon::current_num_threads(),
     };
-    (framebuffer, stats)
+    (stats, frame)
 }
 
 /// The depth view's shader wrote view distances; map them so the nearest covered pixel is white

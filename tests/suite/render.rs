@@ -440,6 +440,29 @@ fn the_image_is_bit_identical_for_any_thread_count() {
     }
 }
 
+/// A renderer reusing the last frame's buffers gives each frame exactly the image of a fresh
+/// render, whatever came before: another scene, more or fewer triangles, another size, other
+/// shading modes, more samples.
+#[test]
+fn reused_buffers_change_no_pixel() {
+    let busy = busy_scene();
+    let mut gouraud_only = busy_scene();
+    gouraud_only.objects.truncate(2);
+    gouraud_only.objects[0].shading = Shading::Gouraud;
+    gouraud_only.image.width = 173;
+    let mut sampled = busy_scene();
+    sampled.image.samples = 4;
+    let mut renderer = lampshade::render::Renderer::default();
+    let options = RenderOptions::default();
+    for scene in [&busy, &gouraud_only, &busy, &sampled, &busy, &busy] {
+        let (fresh, fresh_stats) = render(scene, &options);
+        let stats = renderer.render(scene, &options);
+        assert_eq!(renderer.framebuffer(), &fresh);
+        assert_eq!(stats.raster_triangles, fresh_stats.raster_triangles);
+        assert!(fresh.covered.iter().filter(|&&c| c).count() > 1000);
+    }
+}
+
 fn check_thread_independence(scene: &Scene) {
     let (reference, _) = render(
         scene,
