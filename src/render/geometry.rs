@@ -352,8 +352,8 @@ pub fn build_frame_in(
 }
 
 /// The big arrays of a finished frame, emptied but with their capacity, to build the next frame
-/// in: a stream of frames (`bench`, `watch`) then allocates and page-faults nothing big after
-/// the first. Which arrays are reused changes no result.
+/// in: a stream of frames (`bench`'s) then allocates and page-faults nothing big after the
+/// first. Which arrays are reused changes no result.
 #[derive(Default)]
 pub struct SpareBuffers {
     vertices: Vec<FrameVertex>,

@@ -107,7 +107,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderSta
 
 /// Renders frame after frame, building each frame in the arrays of the last (see
 /// [`geometry::SpareBuffers`]) and into the same frame buffer, so that a stream of frames
-/// (`bench`, `watch`) allocates nothing big after the first. The images are [`render`]'s.
+/// (`bench`'s) allocates nothing big after the first. The images are [`render`]'s.
 #[derive(Default)]
 pub struct Renderer {
     spare: geometry::SpareBuffers,
