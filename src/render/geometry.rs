@@ -77,7 +77,8 @@ pub struct Frame {
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct FrameVertex {
     pub position: Vec3,
-    /// Unit normal, or zero when the mesh gives none usable.
+    /// Unit normal, or zero when the mesh gives none usable, or when nothing reads it (objects
+    /// shaded flat or constant, depth-only frames).
     pub normal: Vec3,
 }
 
@@ -821,6 +822,9 @@ fn add_object_vertices(
     frame.vertices.resize(end, FrameVertex::default());
     projected.resize(end, ProjectedVertex::default());
     let (width, height) = (viewport.width as f32, viewport.height as f32);
+    // Only smooth shading reads vertex normals: flat and constant shading light with the face
+    // normal, and depth-only frames light nothing.
+    let needs_normals = frame.lit && matches!(style.shading, Shading::Gouraud | Shading::Phong);
     frame.vertices[vertex_base as usize..]
         .par_chunks_mut(VERTEX_CHUNK)
         .zip(projected[vertex_base as usize..].par_chunks_mut(VERTEX_CHUNK))
@@ -831,7 +835,11 @@ fn add_object_vertices(
             for ((vertex, projected), (&p, &n)) in vertices.iter_mut().zip(projected).zip(sources) {
                 *vertex = FrameVertex {
                     position: transforms.world_from_model.transform_point3(p),
-                    normal: (transforms.normal_matrix * n).normalize_or_zero(),
+                    normal: if needs_normals {
+                        (transforms.normal_matrix * n).normalize_or_zero()
+                    } else {
+                        Vec3::ZERO
+                    },
                 };
                 let clip = transforms.clip_from_model * p.extend(1.0);
                 let inside = inside_clip_volume(clip, viewport.guard_x, viewport.guard_y);
@@ -970,50 +978,54 @@ fn add_triangles(
             let first = chunk * TRIANGLE_CHUNK;
             let mut raster = raster_chunk.take_triangles();
             raster.reserve(out.len());
-            // The object holding the chunk's first triangle; later ones follow in order.
+            // The chunk in runs of one object each: what depends on the object is looked up
+            // once per run.
             let mut object = object_starts.partition_point(|&start| start <= first) - 1;
-            for (offset, slot) in out.iter_mut().enumerate() {
-                let source = first + offset;
-                while source >= object_starts[object + 1] {
+            let mut run_start = 0;
+            while run_start < out.len() {
+                while first + run_start >= object_starts[object + 1] {
                     object += 1;
                 }
-                let t = source - object_starts[object];
+                let run_end = (object_starts[object + 1] - first).min(out.len());
                 let mesh = &scene.objects[object].mesh;
                 let place = &placed[object];
-                let corners = mesh.triangles[t];
-                let corners = if place.mirrored {
-                    [corners[0], corners[2], corners[1]]
-                } else {
-                    corners
-                };
-                let material = if place.uses_mesh_materials {
-                    place.material_base + mesh.triangle_materials.get(t).copied().unwrap_or(0)
-                } else {
-                    place.material_base
-                };
-                *slot = FrameTriangle {
-                    vertices: corners.map(|v| v + place.vertex_base),
-                    material,
-                    object: object as u32,
-                };
-                let before = raster.len();
-                add_raster_triangles(
-                    frame_ref,
-                    slot,
-                    place.skip_back_faces,
-                    source as u32,
-                    projected,
-                    viewport,
-                    &mut raster,
-                );
-                if raster.len() > before
-                    && frame_ref.objects[object].shading == Shading::Gouraud
-                    && frame_ref.lit
-                {
-                    for v in slot.vertices {
-                        seen_vertices[v as usize].store(true, Ordering::Relaxed);
+                let marks_vertices = frame_ref.lit && frame_ref.objects[object].shading == Shading::Gouraud;
+                let first_t = first + run_start - object_starts[object];
+                for (t, slot) in (first_t..).zip(&mut out[run_start..run_end]) {
+                    let corners = mesh.triangles[t];
+                    let corners = if place.mirrored {
+                        [corners[0], corners[2], corners[1]]
+                    } else {
+                        corners
+                    };
+                    let material = if place.uses_mesh_materials {
+                        place.material_base + mesh.triangle_materials.get(t).copied().unwrap_or(0)
+                    } else {
+                        place.material_base
+                    };
+                    *slot = FrameTriangle {
+                        vertices: corners.map(|v| v + place.vertex_base),
+                        material,
+                        object: object as u32,
+                    };
+                    let before = raster.len();
+                    let source = (object_starts[object] + t) as u32;
+                    add_raster_triangles(
+                        frame_ref,
+                        slot,
+                        place.skip_back_faces,
+                        source,
+                        projected,
+                        viewport,
+                        &mut raster,
+                    );
+                    if marks_vertices && raster.len() > before {
+                        for v in slot.vertices {
+                            seen_vertices[v as usize].store(true, Ordering::Relaxed);
+                        }
                     }
                 }
+                run_start = run_end;
             }
             raster_chunk.rebin(raster, &frame_ref.tiles);
         });
