@@ -23,6 +23,7 @@ use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate_
 use crate::render::DebugView;
 use crate::render::bin::{self, RasterChunk, TileGrid};
 use crate::render::clip::{Clipped, clip_triangle};
+use crate::render::lanes::LANES;
 use crate::render::raster::{
     GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, setup_snapped,
     setup_triangle,
@@ -146,11 +147,17 @@ impl ObjectStyle {
     /// The normal lighting uses on the side being shaded: flipped towards the viewer for back
     /// faces of `ReverseLit` objects, as it is otherwise.
     pub fn side_normal(&self, normal: Vec3, back_facing: bool) -> Vec3 {
-        if back_facing && matches!(self.back_faces, BackFaces::ReverseLit | BackFaces::Cull) {
+        if self.reverses_normal(back_facing) {
             -normal
         } else {
             normal
         }
+    }
+
+    /// Whether [`ObjectStyle::side_normal`] flips the normal of a side.
+    #[inline]
+    pub fn reverses_normal(&self, back_facing: bool) -> bool {
+        back_facing && matches!(self.back_faces, BackFaces::ReverseLit | BackFaces::Cull)
     }
 }
 
@@ -527,8 +534,10 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
             let mut object = placed.partition_point(|place| place.vertex_base as usize <= first) - 1;
             // The fast lighting of the last (object, material) met, when it may take it.
             let mut fast: Option<(usize, u32, Option<FastLighting>)> = None;
-            for (offset, (colors, seen)) in colors.iter_mut().zip(seen).enumerate() {
-                if !seen.load(Ordering::Relaxed) {
+            // Vertices waiting to be lit together by the fast lighting in `fast`.
+            let mut batch = LightingBatch::default();
+            for offset in 0..colors.len() {
+                if !seen[offset].load(Ordering::Relaxed) {
                     continue;
                 }
                 let vertex_index = first + offset;
@@ -547,6 +556,9 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                     let lighting = match fast {
                         Some((o, m, lighting)) if o == object && m == material => lighting,
                         _ => {
+                            if let Some((.., Some(previous))) = fast {
+                                batch.flush(&previous, colors);
+                            }
                             let lighting =
                                 FastLighting::new(lit_frame, material, style, Shading::Gouraud, false);
                             fast = Some((object, material, lighting));
@@ -555,11 +567,9 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                     };
                     if let Some(lighting) = lighting {
                         let normal = style.side_normal(vertex.normal, false);
-                        let to_viewer = lit_frame.viewer.to_viewer(vertex.position);
-                        *colors = VertexColors {
-                            color: lighting.light(vertex.position, normal, to_viewer),
-                            color_textured: Vec3::ZERO,
-                        };
+                        if batch.push(offset, vertex.position, normal) {
+                            batch.flush(&lighting, colors);
+                        }
                         continue;
                     }
                 }
@@ -570,7 +580,7 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                 };
                 let (textured, rest) =
                     lit_frame.light_material(&material, style, vertex.position, vertex.normal, false);
-                *colors = if has_color_texture(&material) {
+                colors[offset] = if has_color_texture(&material) {
                     VertexColors {
                         color: rest,
                         color_textured: textured,
@@ -582,8 +592,52 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                     }
                 };
             }
+            if let Some((.., Some(lighting))) = fast {
+                batch.flush(&lighting, colors);
+            }
         });
     frame.vertex_colors = colors;
+}
+
+/// Up to [`LANES`] vertices of one (object, material) waiting to be lit together, and where
+/// their colours go in the chunk.
+#[derive(Default)]
+struct LightingBatch {
+    len: usize,
+    slots: [usize; LANES],
+    positions: [Vec3; LANES],
+    normals: [Vec3; LANES],
+}
+
+impl LightingBatch {
+    /// Adds a vertex; true when the batch is full and must be flushed.
+    fn push(&mut self, slot: usize, position: Vec3, normal: Vec3) -> bool {
+        self.slots[self.len] = slot;
+        self.positions[self.len] = position;
+        self.normals[self.len] = normal;
+        self.len += 1;
+        self.len == LANES
+    }
+
+    /// Lights the waiting vertices into `colors` and empties the batch. The unused lanes of a
+    /// partial batch repeat its first vertex, and their results are dropped.
+    fn flush(&mut self, lighting: &FastLighting, colors: &mut [VertexColors]) {
+        if self.len == 0 {
+            return;
+        }
+        for lane in self.len..LANES {
+            self.positions[lane] = self.positions[0];
+            self.normals[lane] = self.normals[0];
+        }
+        let lit = lighting.light_lanes(&self.positions, &self.normals);
+        for (&slot, &color) in self.slots[..self.len].iter().zip(&lit) {
+            colors[slot] = VertexColors {
+                color,
+                color_textured: Vec3::ZERO,
+            };
+        }
+        self.len = 0;
+    }
 }
 
 struct Viewport {

@@ -21,6 +21,7 @@
 pub mod bin;
 pub mod clip;
 pub mod geometry;
+pub mod lanes;
 pub mod raster;
 pub mod shade;
 pub mod shade_fast;
@@ -186,12 +187,19 @@ fn render_frame(
                 stride: width as usize,
             };
             let (mut raster_time, mut shade_time, mut shaded) = (Duration::ZERO, Duration::ZERO, 0);
+            let mut scratch = shade::TileScratch::default();
             for column in 0..tiles.columns as usize {
                 let index = tile_row * tiles.columns as usize + column;
                 let raster_started = Instant::now();
                 let visibility = raster::rasterize_tile(tiles.rect(index), pattern, &frame.raster, index);
                 let shade_started = Instant::now();
-                shaded += shade::shade_tile(&frame, &visibility, scene.image.background, &mut target);
+                shaded += shade::shade_tile(
+                    &frame,
+                    &visibility,
+                    scene.image.background,
+                    &mut target,
+                    &mut scratch,
+                );
                 raster_time += shade_started - raster_started;
                 shade_time += shade_started.elapsed();
             }

@@ -16,11 +16,13 @@
 use glam::{Vec3, Vec4};
 
 use crate::render::DebugView;
+use crate::render::TILE_SIZE;
 use crate::render::geometry::{
     Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted,
 };
+use crate::render::lanes::{LANES, Mask, Vec3s};
 use crate::render::raster::{NO_TRIANGLE, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_values};
-use crate::render::shade_fast::FastPhong;
+use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch};
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
 /// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
@@ -50,6 +52,19 @@ impl<T: Copy + Default> TriangleColorCache<T> {
     }
 
     #[inline]
+    fn get(&self, key: u32) -> Option<T> {
+        let slot = key as usize % TRIANGLE_CACHE_SIZE;
+        (self.keys[slot] == key).then_some(self.values[slot])
+    }
+
+    #[inline]
+    fn insert(&mut self, key: u32, value: T) {
+        let slot = key as usize % TRIANGLE_CACHE_SIZE;
+        self.keys[slot] = key;
+        self.values[slot] = value;
+    }
+
+    #[inline]
     fn get_or_insert_with(&mut self, key: u32, make: impl FnOnce() -> T) -> T {
         let slot = key as usize % TRIANGLE_CACHE_SIZE;
         if self.keys[slot] != key {
@@ -66,6 +81,95 @@ impl<T: Copy + Default> TriangleColorCache<T> {
 struct TileCaches {
     flat: TriangleColorCache<(Vec3, Vec3)>,
     back: TriangleColorCache<[(Vec3, Vec3); 3]>,
+    /// Flat triangles waiting in [`FlatBatch`]: their index there.
+    flat_waiting: TriangleColorCache<u16>,
+}
+
+/// What the shading of a band's tiles keeps from tile to tile, so a frame allocates it once per
+/// band rather than once per tile.
+#[derive(Default)]
+pub struct TileScratch<'f> {
+    flat: FlatBatch<'f>,
+}
+
+/// The fast-path flat triangles a tile shows, lit together once the tile's pixels are known,
+/// and the runs of pixels that show them. One at a time, each triangle waits on its own cache
+/// misses (its corners) and its own chain of square roots and divisions; together, the corner
+/// loads overlap and the arithmetic runs [`LANES`] wide.
+#[derive(Default)]
+struct FlatBatch<'f> {
+    /// Per waiting triangle: its lighting, source triangle and side.
+    waiting: Vec<(FastLighting<'f>, u32, bool)>,
+    colors: Vec<Vec3>,
+    /// (first pixel in the band, pixel count, index of the triangle).
+    runs: Vec<(usize, u16, u16)>,
+}
+
+// A tile has at most `TILE_SIZE²` runs, so triangles waiting in one tile are numbered by `u16`.
+const _: () = assert!(TILE_SIZE * TILE_SIZE <= u16::MAX as u32);
+
+impl<'f> FlatBatch<'f> {
+    fn clear(&mut self) {
+        self.waiting.clear();
+        self.colors.clear();
+        self.runs.clear();
+    }
+
+    /// Queues source triangle `source`, seen from the back if `back_facing`; returns its index.
+    fn add(&mut self, lighting: FastLighting<'f>, source: u32, back_facing: bool) -> u16 {
+        self.waiting.push((lighting, source, back_facing));
+        (self.waiting.len() - 1) as u16
+    }
+
+    /// `count` pixels of the band from `first` on show waiting triangle `index`.
+    #[inline]
+    fn cover(&mut self, first: usize, count: u16, index: u16) {
+        self.runs.push((first, count, index));
+    }
+
+    /// Lights the waiting triangles as `Frame::flat_colors` does (at the centroid, with the
+    /// face normal on the side the camera sees), consecutive ones with the same lighting
+    /// together, and writes their runs of pixels.
+    fn light_and_fill(&mut self, frame: &Frame, color: &mut [Vec3]) {
+        self.light(frame);
+        for &(first, count, index) in &self.runs {
+            color[first..first + usize::from(count)].fill(self.colors[usize::from(index)]);
+        }
+    }
+
+    /// The colour of every waiting triangle, into `colors`.
+    fn light(&mut self, frame: &Frame) {
+        self.colors.clear();
+        let count = self.waiting.len();
+        let mut start = 0;
+        while start < count {
+            let lighting = self.waiting[start].0;
+            let mut end = start + 1;
+            while end < count && end - start < LANES && lighting.same_as(&self.waiting[end].0) {
+                end += 1;
+            }
+            // The lanes past the last triangle repeat it; their results are dropped.
+            let waiting = |lane: usize| self.waiting[start + lane.min(end - start - 1)];
+            let mut centroids = [Vec3::ZERO; LANES];
+            let mut crossed = [Vec3::ZERO; LANES];
+            let mut reversed = [false; LANES];
+            for lane in 0..LANES {
+                let (_, source, back_facing) = waiting(lane);
+                let triangle = &frame.triangles[source as usize];
+                let [p0, p1, p2] = triangle.vertices.map(|v| frame.vertices[v as usize].position);
+                centroids[lane] = (p0 + p1 + p2) / 3.0;
+                crossed[lane] = (p1 - p0).cross(p2 - p0);
+                let style = &frame.objects[triangle.object as usize];
+                reversed[lane] = style.reverses_normal(back_facing);
+            }
+            // `Frame::face_normal`'s normalisation and `ObjectStyle::side_normal`, lane-wise.
+            let face_normals = Vec3s::from_array(&crossed).normalize_or_zero();
+            let normals = Mask(reversed).select3(-face_normals, face_normals).to_array();
+            let lit = lighting.light_lanes(&centroids, &normals);
+            self.colors.extend_from_slice(&lit[..end - start]);
+            start = end;
+        }
+    }
 }
 
 /// Shades every pixel of a tile.
@@ -78,11 +182,12 @@ struct TileCaches {
 ///
 /// Writes every pixel of the tile into `target` (the background where nothing is seen) and
 /// returns the number of shading evaluations (one per distinct triangle per covered pixel).
-pub fn shade_tile(
-    frame: &Frame,
+pub fn shade_tile<'f>(
+    frame: &'f Frame,
     visibility: &Visibility,
     background: Vec3,
     target: &mut TileTarget,
+    scratch: &mut TileScratch<'f>,
 ) -> usize {
     let rect = visibility.rect;
     let pattern = visibility.pattern;
@@ -94,6 +199,7 @@ pub fn shade_tile(
     let mut caches = TileCaches {
         flat: TriangleColorCache::new(),
         back: TriangleColorCache::new(),
+        flat_waiting: TriangleColorCache::new(),
     };
     if samples == 1 {
         // One sample at the pixel centre: the general loop below with `seen` holding one entry
@@ -101,40 +207,64 @@ pub fn shade_tile(
         // is looked up once per run of pixels showing it. Every pixel of the tile is written
         // exactly once, the background included.
         let phong_allowed = FastPhong::frame_allows(frame);
+        let flat = &mut scratch.flat;
+        flat.clear();
+        let mut phong = PhongBatch::default();
         let mut current: Option<(u32, &RasterTriangle, RunShader)> = None;
         let rows = visibility.triangle.chunks_exact(tile_width);
         for (row, ids) in rows.enumerate() {
-            let start = row * stride + rect.x0 as usize;
-            let colors = &mut target.color[start..start + tile_width];
-            let covered = &mut target.covered[start..start + tile_width];
+            let row_start = row * stride + rect.x0 as usize;
             let y = i64::from(rect.y0 + row as u32) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
-            for (column, &id) in ids.iter().enumerate() {
-                covered[column] = id != NO_TRIANGLE;
+            // The row in runs of pixels that show the same triangle (or nothing), each handled
+            // as a whole: one dispatch per run, and background and solid runs written as fills.
+            let mut column = 0;
+            while column < tile_width {
+                let id = ids[column];
+                let run_length = ids[column..].iter().take_while(|&&other| other == id).count();
+                let run = row_start + column..row_start + column + run_length;
+                let columns = column..column + run_length;
+                column += run_length;
+                target.covered[run.clone()].fill(id != NO_TRIANGLE);
                 if id == NO_TRIANGLE {
-                    colors[column] = background;
+                    target.color[run].fill(background);
                     continue;
                 }
-                let x = i64::from(rect.x0 + column as u32) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+                shaded += run_length;
                 let (_, raster, shader) = match &current {
                     Some((current_id, ..)) if *current_id == id => current.as_ref().expect("matched"),
                     _ => {
                         let raster = frame.raster_triangle(id);
-                        let shader = RunShader::new(frame, raster, phong_allowed, &mut caches);
+                        let shader = RunShader::new(frame, raster, phong_allowed, &mut caches, flat);
                         current.insert((id, raster, shader))
                     }
                 };
-                colors[column] = match shader {
-                    RunShader::Solid(color) => *color,
+                let pixel_x =
+                    |column: usize| i64::from(rect.x0 + column as u32) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+                match shader {
+                    RunShader::FlatWaiting(index) => flat.cover(run.start, run_length as u16, *index),
+                    RunShader::Solid(color) => target.color[run].fill(*color),
                     RunShader::Gouraud([a, b, c]) => {
-                        let weights = source_weights(raster, (x, y));
-                        *a * weights.x + *b * weights.y + *c * weights.z
+                        for (column, color) in columns.zip(&mut target.color[run]) {
+                            let weights = source_weights(raster, (pixel_x(column), y));
+                            *color = *a * weights.x + *b * weights.y + *c * weights.z;
+                        }
                     }
-                    RunShader::Phong(fast) => fast.shade(source_weights(raster, (x, y))),
-                    RunShader::General => shade_sample(frame, raster, (x, y), &mut caches),
-                };
-                shaded += 1;
+                    RunShader::Phong(fast) => {
+                        for column in columns {
+                            let weights = source_weights(raster, (pixel_x(column), y));
+                            phong.push(fast, weights, row_start + column, target.color);
+                        }
+                    }
+                    RunShader::General => {
+                        for (column, color) in columns.zip(&mut target.color[run]) {
+                            *color = shade_sample(frame, raster, (pixel_x(column), y), &mut caches);
+                        }
+                    }
+                }
             }
         }
+        phong.flush(target.color);
+        flat.light_and_fill(frame, target.color);
         return shaded;
     }
     for row in 0..rect.height() as usize {
@@ -199,6 +329,9 @@ pub fn shade_tile(
 enum RunShader<'f> {
     /// Flat or constant shading without a colour texture: one colour for the whole triangle.
     Solid(Vec3),
+    /// Flat shading on the fast path: the triangle waits in the tile's [`FlatBatch`] at this
+    /// index, and its pixels are written when the batch is lit.
+    FlatWaiting(u16),
     /// Gouraud shading without a colour texture: the three vertex colours, interpolated.
     Gouraud([Vec3; 3]),
     /// Phong shading in the common case (see [`FastPhong`]).
@@ -208,7 +341,13 @@ enum RunShader<'f> {
 }
 
 impl<'f> RunShader<'f> {
-    fn new(frame: &'f Frame, raster: &RasterTriangle, phong_allowed: bool, caches: &mut TileCaches) -> Self {
+    fn new(
+        frame: &'f Frame,
+        raster: &RasterTriangle,
+        phong_allowed: bool,
+        caches: &mut TileCaches,
+        flat: &mut FlatBatch<'f>,
+    ) -> Self {
         let triangle = &frame.triangles[raster.source as usize];
         let style = &frame.objects[triangle.object as usize];
         let material = &frame.materials[triangle.material as usize];
@@ -218,15 +357,21 @@ impl<'f> RunShader<'f> {
         match style.shading {
             Shading::Constant if plain => RunShader::Solid(frame.constant_colors[triangle.material as usize]),
             Shading::Flat if plain => {
-                let (_, rest) = caches.flat.get_or_insert_with(raster.source, || {
-                    let fast = phong_allowed
-                        .then(|| FastPhong::flat_color(frame, triangle, raster.back_facing))
-                        .flatten();
-                    match fast {
-                        Some(color) => (Vec3::ZERO, color),
-                        None => frame.flat_colors(triangle, raster.back_facing),
-                    }
-                });
+                if let Some(index) = caches.flat_waiting.get(raster.source) {
+                    return RunShader::FlatWaiting(index);
+                }
+                let back_facing = raster.back_facing;
+                let fast = phong_allowed
+                    .then(|| FastLighting::new(frame, triangle.material, style, Shading::Flat, back_facing))
+                    .flatten();
+                if let Some(lighting) = fast {
+                    let index = flat.add(lighting, raster.source, back_facing);
+                    caches.flat_waiting.insert(raster.source, index);
+                    return RunShader::FlatWaiting(index);
+                }
+                let (_, rest) = caches
+                    .flat
+                    .get_or_insert_with(raster.source, || frame.flat_colors(triangle, back_facing));
                 RunShader::Solid(rest)
             }
             Shading::Gouraud if plain && raster.back_facing => {
@@ -503,14 +648,14 @@ mod tests {
                 };
                 let frame = build_frame(&scene, SamplePattern::SINGLE, view, vec![None, None]);
                 let phong_allowed = FastPhong::frame_allows(&frame);
-                let mut run_caches = TileCaches {
+                let new_caches = || TileCaches {
                     flat: TriangleColorCache::new(),
                     back: TriangleColorCache::new(),
+                    flat_waiting: TriangleColorCache::new(),
                 };
-                let mut general_caches = TileCaches {
-                    flat: TriangleColorCache::new(),
-                    back: TriangleColorCache::new(),
-                };
+                let (mut run_caches, mut general_caches) = (new_caches(), new_caches());
+                let mut flat = FlatBatch::default();
+                let mut flat_lit = 0;
                 let (mut shaded, mut back_seen) = (0, 0);
                 for tile in 0..frame.tiles.count() {
                     let rect = frame.tiles.rect(tile);
@@ -527,15 +672,21 @@ mod tests {
                         );
                         let raster = frame.raster_triangle(id);
                         let general = shade_sample(&frame, raster, at, &mut general_caches);
-                        let run = match RunShader::new(&frame, raster, phong_allowed, &mut run_caches) {
-                            RunShader::Solid(color) => color,
-                            RunShader::Gouraud([a, b, c]) => {
-                                let w = source_weights(raster, at);
-                                a * w.x + b * w.y + c * w.z
-                            }
-                            RunShader::Phong(fast) => fast.shade(source_weights(raster, at)),
-                            RunShader::General => continue,
-                        };
+                        let run =
+                            match RunShader::new(&frame, raster, phong_allowed, &mut run_caches, &mut flat) {
+                                RunShader::FlatWaiting(index) => {
+                                    flat.light(&frame);
+                                    flat_lit += 1;
+                                    flat.colors[usize::from(index)]
+                                }
+                                RunShader::Solid(color) => color,
+                                RunShader::Gouraud([a, b, c]) => {
+                                    let w = source_weights(raster, at);
+                                    a * w.x + b * w.y + c * w.z
+                                }
+                                RunShader::Phong(fast) => fast.shade(source_weights(raster, at)),
+                                RunShader::General => continue,
+                            };
                         assert_eq!(run, general, "{shading:?} {back_faces:?} {view:?} at {px}, {py}");
                         shaded += 1;
                         back_seen += usize::from(raster.back_facing);
@@ -545,6 +696,12 @@ mod tests {
                     continue;
                 }
                 assert!(shaded > 100, "{shading:?}: {shaded} pixels compared");
+                if shading == Shading::Flat && back_faces != BackFaces::Unlit {
+                    assert!(
+                        flat_lit > 100,
+                        "{back_faces:?}: {flat_lit} flat pixels lit in lanes"
+                    );
+                }
                 // Culled back faces are not drawn; unlit Phong back faces take the general path.
                 let back_fast = back_faces != BackFaces::Cull
                     && !(shading == Shading::Phong && back_faces == BackFaces::Unlit);

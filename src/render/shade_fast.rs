@@ -13,7 +13,8 @@
 use glam::Vec3;
 
 use crate::lighting::{ShadingLightKind, attenuate, reflect, specular_power};
-use crate::render::geometry::{Frame, FrameTriangle, ObjectStyle};
+use crate::render::geometry::{Frame, FrameTriangle, ObjectStyle, Viewer};
+use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::shade::renormalize_or_else;
 use crate::scene::{BackFaces, LightingComponent, LightingModel, Material, NormalInterpolation, Shading};
 
@@ -72,6 +73,13 @@ impl<'f> FastLighting<'f> {
         })
     }
 
+    /// Whether `other` lights exactly as `self` does (the same material, so points of both may
+    /// share one [`FastLighting::light_lanes`] call).
+    #[inline]
+    pub fn same_as(&self, other: &FastLighting) -> bool {
+        std::ptr::eq(self.material, other.material) && std::ptr::eq(self.frame, other.frame)
+    }
+
     /// The lighting at `position` with the (side) normal `normal`: `Frame::light_material`'s
     /// two parts, summed.
     #[inline]
@@ -81,6 +89,87 @@ impl<'f> FastLighting<'f> {
             Specular::Phong => self.light_model::<1>(position, normal, to_viewer),
             Specular::BlinnPhong => self.light_model::<2>(position, normal, to_viewer),
         }
+    }
+
+    /// [`FastLighting::light`] of `LANES` points at once (the viewer's direction computed here),
+    /// with the same bits per point as the one-point call; many times faster per point.
+    #[inline]
+    pub fn light_lanes(&self, positions: &[Vec3; LANES], normals: &[Vec3; LANES]) -> [Vec3; LANES] {
+        let position = Vec3s::from_array(positions);
+        let normal = Vec3s::from_array(normals);
+        let to_viewer = match self.frame.viewer {
+            Viewer::Local => (-position).normalize_or_zero(),
+            Viewer::Infinite { to_viewer } => Vec3s::splat(to_viewer),
+        };
+        let lit = match self.specular {
+            Specular::None => self.light_model_lanes::<0>(position, normal, to_viewer),
+            Specular::Phong => self.light_model_lanes::<1>(position, normal, to_viewer),
+            Specular::BlinnPhong => self.light_model_lanes::<2>(position, normal, to_viewer),
+        };
+        lit.to_array()
+    }
+
+    /// [`FastLighting::light_model`] lane by lane: the same operations in the same order, its
+    /// `continue`s turned into masks (a masked-off lane keeps its sums untouched, not `+ 0`).
+    #[inline]
+    fn light_model_lanes<const SPECULAR: u8>(
+        &self,
+        position: Vec3s,
+        normal: Vec3s,
+        to_viewer: Vec3s,
+    ) -> Vec3s {
+        let material = self.material;
+        let ambient = material.ambient * self.frame.ambient_light;
+        let mut diffuse = Vec3s::splat(Vec3::ZERO);
+        let mut specular = Vec3s::splat(Vec3::ZERO);
+        for light in &self.frame.lights {
+            let (to_light, strength, reaches) = match light.kind {
+                ShadingLightKind::Directional { to_light } => {
+                    (Vec3s::splat(to_light), Floats::splat(1.0), Mask([true; LANES]))
+                }
+                ShadingLightKind::Point {
+                    position: light_position,
+                    attenuation,
+                } => {
+                    let offset = Vec3s::splat(light_position) - position;
+                    let distance = offset.length();
+                    let reaches = distance.gt(Floats::splat(0.0)).and(distance.is_finite());
+                    let strength = Floats(distance.0.map(|d| attenuate(attenuation, d)));
+                    (offset.divide(distance), strength, reaches)
+                }
+                ShadingLightKind::Spot { .. } => unreachable!("spot lights take the general path"),
+            };
+            let n_dot_l = normal.dot(to_light);
+            let unlit = n_dot_l.le(Floats::splat(0.0)).or(strength.le(Floats::splat(0.0)));
+            let lit = reaches.and(!unlit);
+            if !lit.any() {
+                continue;
+            }
+            let strength = strength * Floats::splat(1.0);
+            let color = Vec3s::splat(light.color);
+            let irradiance = color.scale(strength).scale(n_dot_l);
+            diffuse = lit.select3(diffuse + Vec3s::splat(material.diffuse) * irradiance, diffuse);
+            if SPECULAR != 0 {
+                let cosine = if SPECULAR == 2 {
+                    normal.dot((to_light + to_viewer).normalize_or_zero())
+                } else {
+                    let reflected = normal.scale(Floats::splat(2.0) * normal.dot(to_light)) - to_light;
+                    reflected.dot(to_viewer)
+                };
+                let intensity = color.scale(strength);
+                // `powf` has no lane-wise form with the same bits: one call per lit lane.
+                let power = Floats(std::array::from_fn(|i| {
+                    if lit.0[i] {
+                        specular_power(cosine.0[i], material.shininess)
+                    } else {
+                        0.0
+                    }
+                }));
+                let added = specular + (Vec3s::splat(material.specular) * intensity).scale(power);
+                specular = lit.select3(added, specular);
+            }
+        }
+        (Vec3s::splat(ambient) + diffuse) + (specular + Vec3s::splat(material.emission))
     }
 
     /// `illuminate_with_visibility` for a Phong or Blinn-Phong material without shadows, then
@@ -140,6 +229,84 @@ pub struct FastPhong<'f> {
     back_facing: bool,
 }
 
+/// Up to [`LANES`] pixels of fast-path Phong triangles with the same lighting, waiting to be lit
+/// together by [`FastLighting::light_lanes`]: [`FastPhong::shade`] for each, with the same bits,
+/// but the square roots, divisions and lighting done lane-wise.
+#[derive(Default)]
+pub struct PhongBatch<'f> {
+    lighting: Option<FastLighting<'f>>,
+    len: usize,
+    /// Where each pixel's colour goes.
+    offsets: [usize; LANES],
+    positions: [Vec3; LANES],
+    /// Interpolated, not yet renormalised.
+    normals: [Vec3; LANES],
+    triangles: [Option<&'f FrameTriangle>; LANES],
+    reversed: [bool; LANES],
+}
+
+impl<'f> PhongBatch<'f> {
+    /// Queues the pixel with source-triangle weights `weights` of `phong`'s triangle; its
+    /// colour goes to `color[offset]` when the batch is lit (when full, when a pixel with other
+    /// lighting comes, or on [`PhongBatch::flush`]).
+    #[inline]
+    pub fn push(&mut self, phong: &FastPhong<'f>, weights: Vec3, offset: usize, color: &mut [Vec3]) {
+        if let Some(lighting) = self.lighting
+            && !lighting.same_as(&phong.lighting)
+        {
+            self.flush(color);
+        }
+        self.lighting = Some(phong.lighting);
+        let lane = self.len;
+        let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
+        self.offsets[lane] = offset;
+        self.positions[lane] = interpolate(phong.positions);
+        self.normals[lane] = interpolate(phong.normals);
+        self.triangles[lane] = Some(phong.triangle);
+        self.reversed[lane] = phong.style.reverses_normal(phong.back_facing);
+        self.len += 1;
+        if self.len == LANES {
+            self.flush(color);
+        }
+    }
+
+    /// Lights the waiting pixels into `color` and empties the batch.
+    pub fn flush(&mut self, color: &mut [Vec3]) {
+        let Some(lighting) = self.lighting else {
+            return;
+        };
+        if self.len == 0 {
+            return;
+        }
+        // The lanes past the last pixel repeat it; their results are dropped.
+        for lane in self.len..LANES {
+            self.positions[lane] = self.positions[self.len - 1];
+            self.normals[lane] = self.normals[self.len - 1];
+            self.triangles[lane] = self.triangles[self.len - 1];
+            self.reversed[lane] = self.reversed[self.len - 1];
+        }
+        // `renormalize_or_else`, lane-wise: `v / |v|` where `|v|² > 1e-12`, else the face normal.
+        let interpolated = Vec3s::from_array(&self.normals);
+        let length_squared = interpolated.dot(interpolated);
+        let usable = length_squared.gt(Floats::splat(1e-12));
+        let mut normals = interpolated.divide(length_squared.sqrt()).to_array();
+        for ((normal, usable), triangle) in normals.iter_mut().zip(usable.0).zip(self.triangles) {
+            if !usable {
+                *normal = lighting
+                    .frame
+                    .face_normal(triangle.expect("every lane holds a pixel"));
+            }
+        }
+        let normals = Vec3s::from_array(&normals);
+        let normals = Mask(self.reversed).select3(-normals, normals).to_array();
+        let lit = lighting.light_lanes(&self.positions, &normals);
+        for (&offset, &lit) in self.offsets[..self.len].iter().zip(&lit) {
+            color[offset] = lit;
+        }
+        self.len = 0;
+    }
+}
+
 impl<'f> FastPhong<'f> {
     /// Whether any triangle of `frame` may take the fast path: no debug view, no vertex
     /// attributes (tints, texture coordinates), no shadows, no spot light. Asked once per tile.
@@ -171,17 +338,6 @@ impl<'f> FastPhong<'f> {
             normals: vertices.map(|v| v.normal),
             back_facing,
         })
-    }
-
-    /// A flat-shaded triangle's colour, as `Frame::flat_colors` computes it (lit once at the
-    /// centroid with the face normal), or `None` when it needs the general path.
-    pub fn flat_color(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Vec3> {
-        let style = &frame.objects[triangle.object as usize];
-        let lighting = FastLighting::new(frame, triangle.material, style, Shading::Flat, back_facing)?;
-        let [p0, p1, p2] = triangle.vertices.map(|v| frame.vertices[v as usize].position);
-        let centroid = (p0 + p1 + p2) / 3.0;
-        let normal = style.side_normal(frame.face_normal(triangle), back_facing);
-        Some(lighting.light(centroid, normal, frame.viewer.to_viewer(centroid)))
     }
 
     /// The colour at the point with source-triangle weights `weights`.
@@ -303,6 +459,82 @@ pub(crate) mod tests {
                     }
                 }
                 assert!(checked > 1000);
+            }
+        }
+    }
+
+    /// Eight points lit at once against the one-point lighting, bit for bit, per model, with
+    /// both viewers, unlit lanes, reversed normals and a zero normal among them.
+    #[test]
+    fn lighting_eight_points_at_once_equals_lighting_each_bit_for_bit() {
+        for (model, specular) in [
+            (LightingModel::Phong, Vec3::splat(0.7)),
+            (LightingModel::BlinnPhong, Vec3::splat(0.7)),
+            (LightingModel::Phong, Vec3::ZERO),
+        ] {
+            let scene = scene(model, specular, BackFaces::ReverseLit);
+            let mut frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+            for viewer in [
+                frame.viewer,
+                crate::render::geometry::Viewer::Infinite { to_viewer: Vec3::Z },
+            ] {
+                frame.viewer = viewer;
+                let style = &frame.objects[0];
+                let lighting = FastLighting::new(&frame, 0, style, Shading::Phong, false).expect("eligible");
+                let mut compared = 0;
+                for (group, vertices) in frame.vertices.chunks_exact(LANES).enumerate() {
+                    let positions: [Vec3; LANES] = std::array::from_fn(|i| vertices[i].position);
+                    let normals: [Vec3; LANES] = std::array::from_fn(|i| match (group + i) % 5 {
+                        0 => -vertices[i].normal,
+                        1 if group % 7 == 0 => Vec3::ZERO,
+                        _ => vertices[i].normal,
+                    });
+                    let lit = lighting.light_lanes(&positions, &normals);
+                    for i in 0..LANES {
+                        let one =
+                            lighting.light(positions[i], normals[i], frame.viewer.to_viewer(positions[i]));
+                        assert_eq!(
+                            lit[i].to_array().map(f32::to_bits),
+                            one.to_array().map(f32::to_bits),
+                            "{model:?}, point {i} of group {group}"
+                        );
+                        compared += 1;
+                    }
+                }
+                assert!(compared > 500);
+            }
+        }
+    }
+
+    /// Pixels lit in batches (of mixed triangles, both objects' lightings, partial batches, and
+    /// normals that cancel out so the face normal stands in) against `FastPhong::shade`.
+    #[test]
+    fn phong_batches_equal_shading_each_pixel_bit_for_bit() {
+        for model in [LightingModel::Phong, LightingModel::BlinnPhong] {
+            let scene = scene(model, Vec3::splat(0.7), BackFaces::ReverseLit);
+            let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+            let weights = [Vec3::new(0.2, 0.3, 0.5), Vec3::splat(1.0 / 3.0), Vec3::new(0.5, 0.5, 0.0)];
+            let mut expected = Vec::new();
+            let mut batch = PhongBatch::default();
+            let mut colors = vec![Vec3::splat(-1.0); 3 * frame.triangles.len()];
+            let stride = frame.triangles.len() / 13; // visits both objects, alternating runs
+            for (n, triangle) in frame.triangles.iter().step_by(stride.max(1)).enumerate() {
+                let mut fast = FastPhong::new(&frame, triangle, n % 3 == 0).expect("eligible");
+                if n % 4 == 1 {
+                    // Opposite vertex normals: halfway between the first two, nothing is left.
+                    fast.normals = [Vec3::X, -Vec3::X, Vec3::Y];
+                }
+                let count = 1 + n % 3;
+                for &w in &weights[..count] {
+                    batch.push(&fast, w, expected.len(), &mut colors);
+                    expected.push(fast.shade(w));
+                }
+            }
+            batch.flush(&mut colors);
+            assert!(expected.len() > 20);
+            for (i, want) in expected.iter().enumerate() {
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!(bits(colors[i]), bits(*want), "{model:?}, pixel {i}");
             }
         }
     }

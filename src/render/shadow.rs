@@ -122,12 +122,15 @@ impl ShadowFace {
 /// Renders the shadow map of every light that casts shadows (`None` for the others), in the
 /// eye-relative space of a frame whose eye is `frame_eye`.
 pub fn render_shadow_maps(scene: &Scene, frame_eye: DVec3) -> Vec<Option<Arc<ShadowMap>>> {
-    let bounds = bounding_sphere(&scene.objects);
+    // The bounds read every vertex of the scene: computed on the first light that casts a
+    // shadow, and never for a scene without shadows.
+    let mut bounds = None;
     scene
         .lights
         .iter()
         .map(|light| {
             let settings = light.shadow()?;
+            let bounds = *bounds.get_or_insert_with(|| bounding_sphere(&scene.objects));
             let faces = light_views(light, bounds, settings.resolution)
                 .into_iter()
                 .map(|(camera, size)| render_face(scene, &camera, size, frame_eye))
