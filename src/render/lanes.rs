@@ -18,9 +18,10 @@ pub const LANES: usize = 8;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Floats(pub [f32; LANES]);
 
-/// One `bool` per lane: where a condition holds.
+/// Where a condition holds, per lane: all bits set or none, as SIMD compares produce, so
+/// selects compile to bitwise `and`/`or` rather than branches per lane.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Mask(pub [bool; LANES]);
+pub struct Mask([u32; LANES]);
 
 impl Floats {
     #[inline(always)]
@@ -40,7 +41,7 @@ impl Floats {
 
     #[inline(always)]
     fn compare(self, other: Self, f: impl Fn(f32, f32) -> bool) -> Mask {
-        Mask(std::array::from_fn(|i| f(self.0[i], other.0[i])))
+        Mask::from_bools(std::array::from_fn(|i| f(self.0[i], other.0[i])))
     }
 
     #[inline(always)]
@@ -64,33 +65,48 @@ impl Floats {
         self.compare(other, |a, b| a <= b)
     }
 
+    /// `f32::is_finite` per lane, as an integer compare of the bits.
     #[inline(always)]
     pub fn is_finite(self) -> Mask {
-        Mask(self.0.map(f32::is_finite))
+        Mask::from_bools(self.0.map(|a| (a.to_bits() & 0x7fff_ffff) < 0x7f80_0000))
     }
 }
 
 impl Mask {
+    /// Every lane.
+    pub const ALL: Mask = Mask([u32::MAX; LANES]);
+
+    #[inline(always)]
+    pub fn from_bools(lanes: [bool; LANES]) -> Self {
+        Mask(lanes.map(|on| if on { u32::MAX } else { 0 }))
+    }
+
+    /// Whether the condition holds in `lane`.
+    #[inline(always)]
+    pub fn lane(self, lane: usize) -> bool {
+        self.0[lane] != 0
+    }
+
     #[inline(always)]
     pub fn and(self, other: Self) -> Self {
-        Mask(std::array::from_fn(|i| self.0[i] && other.0[i]))
+        Mask(std::array::from_fn(|i| self.0[i] & other.0[i]))
     }
 
     #[inline(always)]
     pub fn or(self, other: Self) -> Self {
-        Mask(std::array::from_fn(|i| self.0[i] || other.0[i]))
+        Mask(std::array::from_fn(|i| self.0[i] | other.0[i]))
     }
 
     #[inline(always)]
     pub fn any(self) -> bool {
-        self.0.iter().any(|&m| m)
+        self.0.iter().fold(0, |any, &m| any | m) != 0
     }
 
-    /// Per lane, `if_true` where the mask holds and `if_false` elsewhere.
+    /// Per lane, `if_true` where the mask holds and `if_false` elsewhere (bit for bit).
     #[inline(always)]
     pub fn select(self, if_true: Floats, if_false: Floats) -> Floats {
         Floats(std::array::from_fn(|i| {
-            if self.0[i] { if_true.0[i] } else { if_false.0[i] }
+            f32::from_bits((if_true.0[i].to_bits() & self.0[i]) | (if_false.0[i].to_bits() & !self.0[i]))
         }))
     }
 
@@ -310,13 +326,26 @@ mod tests {
 
     #[test]
     fn select_takes_each_lane_from_the_side_its_mask_names() {
-        let mask = Mask(std::array::from_fn(|i| i % 3 == 0));
+        let mask = Mask::from_bools(std::array::from_fn(|i| i % 3 == 0));
         let picked = mask.select(Floats::splat(1.0), Floats::splat(2.0));
         for i in 0..LANES {
             assert_eq!(picked.0[i], if i % 3 == 0 { 1.0 } else { 2.0 });
         }
-        assert!(mask.any() && !Mask([false; LANES]).any());
-        assert_eq!((!mask).or(mask), Mask([true; LANES]));
-        assert_eq!((!mask).and(mask), Mask([false; LANES]));
+        assert!(mask.any() && !(!Mask::ALL).any());
+        assert!((0..LANES).all(|i| mask.lane(i) == (i % 3 == 0)));
+        assert_eq!((!mask).or(mask), Mask::ALL);
+        assert_eq!((!mask).and(mask), !Mask::ALL);
+        let finite = Floats([
+            0.0,
+            -1e38,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1e-45,
+            -0.0,
+        ]);
+        let expected = finite.0.map(f32::is_finite);
+        assert!((0..LANES).all(|i| finite.is_finite().lane(i) == expected[i]));
     }
 }

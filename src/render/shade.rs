@@ -164,7 +164,9 @@ impl<'f> FlatBatch<'f> {
             }
             // `Frame::face_normal`'s normalisation and `ObjectStyle::side_normal`, lane-wise.
             let face_normals = Vec3s::from_array(&crossed).normalize_or_zero();
-            let normals = Mask(reversed).select3(-face_normals, face_normals).to_array();
+            let normals = Mask::from_bools(reversed)
+                .select3(-face_normals, face_normals)
+                .to_array();
             let lit = lighting.light_lanes(&centroids, &normals);
             self.colors.extend_from_slice(&lit[..end - start]);
             start = end;

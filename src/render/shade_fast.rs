@@ -12,11 +12,13 @@
 
 use glam::Vec3;
 
-use crate::lighting::{ShadingLightKind, attenuate, reflect, specular_power};
+use crate::lighting::{MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, attenuate, reflect, specular_power};
 use crate::render::geometry::{Frame, FrameTriangle, ObjectStyle, Viewer};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::shade::renormalize_or_else;
-use crate::scene::{BackFaces, LightingComponent, LightingModel, Material, NormalInterpolation, Shading};
+use crate::scene::{
+    Attenuation, BackFaces, LightingComponent, LightingModel, Material, NormalInterpolation, Shading,
+};
 
 /// A lighting model the fast path evaluates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,7 +127,7 @@ impl<'f> FastLighting<'f> {
         for light in &self.frame.lights {
             let (to_light, strength, reaches) = match light.kind {
                 ShadingLightKind::Directional { to_light } => {
-                    (Vec3s::splat(to_light), Floats::splat(1.0), Mask([true; LANES]))
+                    (Vec3s::splat(to_light), Floats::splat(1.0), Mask::ALL)
                 }
                 ShadingLightKind::Point {
                     position: light_position,
@@ -134,7 +136,17 @@ impl<'f> FastLighting<'f> {
                     let offset = Vec3s::splat(light_position) - position;
                     let distance = offset.length();
                     let reaches = distance.gt(Floats::splat(0.0)).and(distance.is_finite());
-                    let strength = Floats(distance.0.map(|d| attenuate(attenuation, d)));
+                    // `attenuate`, lane-wise: `f32::max` against a positive constant is
+                    // "the denominator where it is larger", NaN giving the constant.
+                    let Attenuation {
+                        constant,
+                        linear,
+                        quadratic,
+                    } = attenuation;
+                    let denominator = Floats::splat(constant)
+                        + distance * (Floats::splat(linear) + distance * Floats::splat(quadratic));
+                    let least = Floats::splat(MIN_ATTENUATION_DENOMINATOR);
+                    let strength = Floats::splat(1.0) / denominator.gt(least).select(denominator, least);
                     (offset.divide(distance), strength, reaches)
                 }
                 ShadingLightKind::Spot { .. } => unreachable!("spot lights take the general path"),
@@ -159,7 +171,7 @@ impl<'f> FastLighting<'f> {
                 let intensity = color.scale(strength);
                 // `powf` has no lane-wise form with the same bits: one call per lit lane.
                 let power = Floats(std::array::from_fn(|i| {
-                    if lit.0[i] {
+                    if lit.lane(i) {
                         specular_power(cosine.0[i], material.shininess)
                     } else {
                         0.0
@@ -290,15 +302,17 @@ impl<'f> PhongBatch<'f> {
         let length_squared = interpolated.dot(interpolated);
         let usable = length_squared.gt(Floats::splat(1e-12));
         let mut normals = interpolated.divide(length_squared.sqrt()).to_array();
-        for ((normal, usable), triangle) in normals.iter_mut().zip(usable.0).zip(self.triangles) {
-            if !usable {
+        for (lane, (normal, triangle)) in normals.iter_mut().zip(self.triangles).enumerate() {
+            if !usable.lane(lane) {
                 *normal = lighting
                     .frame
                     .face_normal(triangle.expect("every lane holds a pixel"));
             }
         }
         let normals = Vec3s::from_array(&normals);
-        let normals = Mask(self.reversed).select3(-normals, normals).to_array();
+        let normals = Mask::from_bools(self.reversed)
+            .select3(-normals, normals)
+            .to_array();
         let lit = lighting.light_lanes(&self.positions, &normals);
         for (&offset, &lit) in self.offsets[..self.len].iter().zip(&lit) {
             color[offset] = lit;
@@ -513,7 +527,11 @@ pub(crate) mod tests {
         for model in [LightingModel::Phong, LightingModel::BlinnPhong] {
             let scene = scene(model, Vec3::splat(0.7), BackFaces::ReverseLit);
             let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
-            let weights = [Vec3::new(0.2, 0.3, 0.5), Vec3::splat(1.0 / 3.0), Vec3::new(0.5, 0.5, 0.0)];
+            let weights = [
+                Vec3::new(0.2, 0.3, 0.5),
+                Vec3::splat(1.0 / 3.0),
+                Vec3::new(0.5, 0.5, 0.0),
+            ];
             let mut expected = Vec::new();
             let mut batch = PhongBatch::default();
             let mut colors = vec![Vec3::splat(-1.0); 3 * frame.triangles.len()];
