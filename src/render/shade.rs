@@ -217,6 +217,12 @@ pub fn shade_tile<'f>(
         for (row, ids) in rows.enumerate() {
             let row_start = row * stride + rect.x0 as usize;
             let y = i64::from(rect.y0 + row as u32) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+            // Coverage for the whole row in one vectorisable pass (a fill per run would be a
+            // `memset` call per run, and runs are a few pixels long on dense meshes).
+            let covered = &mut target.covered[row_start..row_start + tile_width];
+            for (covered, &id) in covered.iter_mut().zip(ids) {
+                *covered = id != NO_TRIANGLE;
+            }
             // The row in runs of pixels that show the same triangle (or nothing), each handled
             // as a whole: one dispatch per run, and background and solid runs written as fills.
             let mut column = 0;
@@ -226,7 +232,6 @@ pub fn shade_tile<'f>(
                 let run = row_start + column..row_start + column + run_length;
                 let columns = column..column + run_length;
                 column += run_length;
-                target.covered[run.clone()].fill(id != NO_TRIANGLE);
                 if id == NO_TRIANGLE {
                     target.color[run].fill(background);
                     continue;
