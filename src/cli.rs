@@ -16,11 +16,11 @@ use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::diag::render_diagnostics;
 use crate::output::{self, Encoding, OutputFormat, PngCompression};
-use crate::pipeline::{RenderedScene, render_scene_file};
+use crate::pipeline::{BuildCache, RenderedScene, render_scene_file};
 use crate::render::{DebugView, RenderOptions};
 use crate::scene::access::FileAccess;
 use crate::scene::limits::parse_memory_size;
-use crate::scene::load::{LoadError, LoadOptions, MeshCache};
+use crate::scene::load::{LoadError, LoadOptions};
 use crate::scene::{LightingModel, Shading};
 
 pub const EXIT_OK: i32 = 0;
@@ -303,20 +303,22 @@ fn run_render(args: &RenderArgs) -> i32 {
     };
     let mut bad_inputs = Vec::new();
     let mut failed_outputs = 0;
+    // Scenes rendered in turn share meshes (a mesh several scenes use is read once) and the
+    // renderer's arrays.
+    let mut cache = BuildCache::default();
+    let run = RenderRun {
+        load_options: &load_options,
+        render_options: &render_options,
+        output_settings,
+        quiet: args.quiet,
+        reference: args.reference,
+    };
     for scene_path in &args.scenes {
         let output = args
             .output
             .clone()
             .unwrap_or_else(|| scene_path.with_extension(format.extension()));
-        match render_one(
-            scene_path,
-            &output,
-            &load_options,
-            &render_options,
-            output_settings,
-            args.quiet,
-            args.reference,
-        ) {
+        match render_one(scene_path, &output, &run, &mut cache) {
             Ok(()) => {}
             Err(RenderFailure::BadInput) => bad_inputs.push(scene_path),
             Err(RenderFailure::Output) => failed_outputs += 1,
@@ -351,24 +353,32 @@ struct OutputSettings {
     encoding: Encoding,
 }
 
-fn render_one(
-    scene_path: &Path,
-    output_path: &Path,
-    load_options: &LoadOptions,
-    render_options: &RenderOptions,
+/// What `render` does to every scene it is given.
+struct RenderRun<'a> {
+    load_options: &'a LoadOptions,
+    render_options: &'a RenderOptions,
     output_settings: OutputSettings,
     quiet: bool,
     reference: bool,
+}
+
+fn render_one(
+    scene_path: &Path,
+    output_path: &Path,
+    run: &RenderRun,
+    cache: &mut BuildCache,
 ) -> Result<(), RenderFailure> {
+    let RenderRun {
+        load_options,
+        render_options,
+        output_settings,
+        quiet,
+        reference,
+    } = *run;
     let rendered = if reference {
         crate::reference::render_reference_file(scene_path, load_options, render_options.threads)
     } else {
-        render_scene_file(
-            scene_path,
-            load_options,
-            render_options,
-            &mut MeshCache::default(),
-        )
+        render_scene_file(scene_path, load_options, render_options, cache)
     };
     let rendered = match rendered {
         Ok(rendered) => rendered,

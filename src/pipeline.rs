@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::diag::{Diagnostic, Sources};
-use crate::render::{FrameBuffer, RenderOptions, RenderStats, render};
+use crate::render::{FrameBuffer, RenderOptions, RenderStats, Renderer};
 use crate::scene::load::{LoadError, LoadOptions, MeshCache, load_scene_cached};
 
 /// A scene file that loaded and rendered.
@@ -23,19 +23,28 @@ pub struct RenderedScene {
     pub files_read: Vec<PathBuf>,
 }
 
-/// Loads `path` (reusing unchanged meshes from `cache`) and renders it.
+/// What one build keeps for the next: the meshes whose files have not changed, and the
+/// renderer's frame arrays (a re-render of the same scene, as in watch mode, builds its frame in
+/// the last one's memory instead of allocating and faulting in hundreds of megabytes again).
+#[derive(Default)]
+pub struct BuildCache {
+    pub meshes: MeshCache,
+    pub renderer: Renderer,
+}
+
+/// Loads `path` and renders it, reusing what `cache` kept from earlier builds.
 pub fn render_scene_file(
     path: &Path,
     load_options: &LoadOptions,
     render_options: &RenderOptions,
-    cache: &mut MeshCache,
+    cache: &mut BuildCache,
 ) -> Result<RenderedScene, LoadError> {
     let started = Instant::now();
-    let loaded = load_scene_cached(path, load_options, cache)?;
+    let loaded = load_scene_cached(path, load_options, &mut cache.meshes)?;
     let load_time = started.elapsed();
-    let (framebuffer, stats) = render(&loaded.scene, render_options);
+    let stats = cache.renderer.render(&loaded.scene, render_options);
     Ok(RenderedScene {
-        framebuffer,
+        framebuffer: cache.renderer.take_framebuffer(),
         stats,
         load_time,
         warnings: loaded.warnings,

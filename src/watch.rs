@@ -49,9 +49,9 @@ use std::time::{Duration, Instant};
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, thousands, use_color};
 use crate::diag::render_diagnostics;
 use crate::output::{self, OutputError, PngCompression};
-use crate::pipeline::{RenderedScene, render_scene_file};
+use crate::pipeline::{BuildCache, RenderedScene, render_scene_file};
 use crate::render::RenderOptions;
-use crate::scene::load::{LoadError, LoadOptions, MeshCache};
+use crate::scene::load::{LoadError, LoadOptions};
 
 use debounce::{Changes, Debounce, Signal, wait_for_changes};
 use files::{FolderWatches, WatchedFiles};
@@ -238,7 +238,7 @@ fn list_paths<'p>(paths: impl IntoIterator<Item = &'p PathBuf>) -> String {
 }
 
 /// One build: load, render and write the image (the seam tests use to make a build panic).
-type BuildFn = fn(&Path, &Path, &LoadOptions, &RenderOptions, &mut MeshCache) -> BuildOutcome;
+type BuildFn = fn(&Path, &Path, &LoadOptions, &RenderOptions, &mut BuildCache) -> BuildOutcome;
 
 /// Everything the loop keeps from one build to the next.
 struct WatchSession {
@@ -247,7 +247,8 @@ struct WatchSession {
     output: PathBuf,
     load_options: LoadOptions,
     render_options: RenderOptions,
-    mesh_cache: MeshCache,
+    /// Meshes and render buffers kept from one build to the next.
+    cache: BuildCache,
     files: WatchedFiles,
     watches: FolderWatches,
     preview: Option<PreviewServer>,
@@ -295,7 +296,7 @@ impl WatchSession {
             output: output.to_path_buf(),
             load_options,
             render_options,
-            mesh_cache: MeshCache::default(),
+            cache: BuildCache::default(),
             files: WatchedFiles::new(output),
             watches,
             preview: None,
@@ -313,15 +314,18 @@ impl WatchSession {
         let outcome = {
             let (scene, output) = (&self.scene, &self.output);
             let (load_options, render_options) = (&self.load_options, &self.render_options);
-            let (mesh_cache, build_once) = (&mut self.mesh_cache, self.build_once);
+            let (cache, build_once) = (&mut self.cache, self.build_once);
             panic::catch_unwind(AssertUnwindSafe(|| {
-                build_once(scene, output, load_options, render_options, mesh_cache)
+                build_once(scene, output, load_options, render_options, cache)
             }))
         };
         match outcome {
             Ok(BuildOutcome::Written(written)) => {
                 self.report_written(trigger, &written);
-                self.follow(written.rendered.files_read);
+                let rendered = written.rendered;
+                self.follow(rendered.files_read);
+                // The next build renders into the same pixels.
+                self.cache.renderer.reuse_framebuffer(rendered.framebuffer);
             }
             Ok(BuildOutcome::BadInput { error, load_time }) => {
                 let report = render_diagnostics(&error.diagnostics, &error.sources, self.color);
@@ -344,7 +348,7 @@ impl WatchSession {
                 // The panic hook has printed the message; say what happens next.
                 let message = panic_message(payload.as_ref());
                 eprintln!("error: the render failed with an internal error; still watching");
-                self.mesh_cache = MeshCache::default();
+                self.cache = BuildCache::default();
                 self.report_failure(trigger, "internal error", None, || {
                     format!("internal error (a bug in lampshade, not in your files): {message}")
                 });
@@ -469,10 +473,10 @@ fn build_once(
     output_path: &Path,
     load_options: &LoadOptions,
     render_options: &RenderOptions,
-    mesh_cache: &mut MeshCache,
+    cache: &mut BuildCache,
 ) -> BuildOutcome {
     let started = Instant::now();
-    let rendered = match render_scene_file(scene, load_options, render_options, mesh_cache) {
+    let rendered = match render_scene_file(scene, load_options, render_options, cache) {
         Ok(rendered) => rendered,
         Err(error) => {
             return BuildOutcome::BadInput {
@@ -531,7 +535,7 @@ mod tests {
         _: &Path,
         _: &LoadOptions,
         _: &RenderOptions,
-        _: &mut MeshCache,
+        _: &mut BuildCache,
     ) -> BuildOutcome {
         panic!("simulated bug in the renderer");
     }

@@ -32,9 +32,9 @@ use rayon::prelude::*;
 use crate::check::compare::{self, Comparison, SizeMismatch};
 use crate::check::suite::SuiteScene;
 use crate::output::{self, OutputError, PngCompression, to_rgb8, write_png};
-use crate::pipeline::render_scene_file;
+use crate::pipeline::{BuildCache, render_scene_file};
 use crate::render::RenderOptions;
-use crate::scene::load::{LoadError, LoadOptions, MeshCache};
+use crate::scene::load::{LoadError, LoadOptions};
 
 /// What a run does besides comparing.
 #[derive(Debug, Clone, Default)]
@@ -243,7 +243,7 @@ pub fn check_scene(scene: &SuiteScene, index: usize, options: &RunOptions) -> Sc
         &scene.path,
         &options.load_options,
         &RenderOptions::default(),
-        &mut MeshCache::default(),
+        &mut BuildCache::default(),
     ) {
         Ok(rendered) => rendered,
         Err(error) => {

@@ -131,6 +131,16 @@ impl Renderer {
         &self.framebuffer
     }
 
+    /// The last frame rendered, moved out (the next frame gets a new frame buffer).
+    pub fn take_framebuffer(&mut self) -> FrameBuffer {
+        std::mem::take(&mut self.framebuffer)
+    }
+
+    /// Gives back a frame buffer taken earlier, for the next frame to reuse if its size fits.
+    pub fn reuse_framebuffer(&mut self, framebuffer: FrameBuffer) {
+        self.framebuffer = framebuffer;
+    }
+
     fn render_in_current_pool(&mut self, scene: &Scene, options: &RenderOptions) -> RenderStats {
         let (stats, frame) = render_frame(scene, options, &mut self.spare, &mut self.framebuffer);
         self.spare.keep(frame);
