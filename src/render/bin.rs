@@ -10,6 +10,8 @@
 //! A raster triangle's id, as stored in visibility buffers, is its chunk and its index within
 //! the chunk packed into a `u32` ([`raster_id`]).
 
+use glam::Vec3;
+
 use crate::render::TILE_SIZE;
 use crate::render::raster::{NO_TRIANGLE, PixelRect, RasterTriangle};
 
@@ -86,6 +88,8 @@ pub fn split_raster_id(id: u32) -> (usize, usize) {
 #[derive(Debug, Clone, Default)]
 pub struct RasterChunk {
     pub triangles: Vec<RasterTriangle>,
+    /// The corner weights of this chunk's clipped triangles (see `CornerWeights`).
+    pub clipped_weights: Vec<[Vec3; 3]>,
     /// Tile `t`'s triangles are `entries[offsets[t]..offsets[t + 1]]`; empty when the chunk
     /// has no triangle.
     offsets: Vec<u32>,
@@ -144,6 +148,14 @@ impl RasterChunk {
         triangles
     }
 
+    /// The corner weights of raster triangle `index` of this chunk.
+    #[inline]
+    pub fn corner_weights(&self, index: usize) -> [Vec3; 3] {
+        self.triangles[index]
+            .corner_weights
+            .resolve(&self.clipped_weights)
+    }
+
     /// Indices (into `triangles`) of the triangles touching tile `tile`, in order.
     #[inline]
     pub fn tile_triangles(&self, tile: usize) -> &[u32] {
@@ -169,7 +181,15 @@ mod tests {
             weights: Vec3::ZERO,
         };
         let corners = [vertex(x0, y0), vertex(x0 + size, y0), vertex(x0, y0 + size)];
-        setup_triangle(corners, 200, 150, SamplePattern::SINGLE, 0, false).expect("visible")
+        setup_triangle(
+            corners,
+            200,
+            150,
+            SamplePattern::SINGLE,
+            Default::default(),
+            &mut Vec::new(),
+        )
+        .expect("visible")
     }
 
     #[test]

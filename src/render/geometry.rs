@@ -24,9 +24,10 @@ use crate::render::DebugView;
 use crate::render::bin::{self, RasterChunk, TileGrid};
 use crate::render::clip::{Clipped, clip_triangle};
 use crate::render::lanes::LANES;
+pub use crate::render::raster::FrameTriangle;
 use crate::render::raster::{
-    GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, setup_snapped,
-    setup_triangle,
+    GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, SourceTriangle,
+    setup_snapped, setup_triangle,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong};
 use crate::render::shadow::ShadowMap;
@@ -50,8 +51,6 @@ pub struct Frame {
     pub vertex_colors: Vec<VertexColors>,
     /// Per vertex, texture coordinates, tint and tangent; empty when no mesh has any of them.
     pub vertex_attributes: Vec<VertexAttributes>,
-    /// One per scene triangle, in scene order; `RasterTriangle::source` indexes this.
-    pub triangles: Vec<FrameTriangle>,
     /// The raster triangles of each chunk of the triangle stream, binned into tiles.
     pub raster: Vec<RasterChunk>,
     pub tiles: TileGrid,
@@ -116,15 +115,6 @@ impl Default for VertexAttributes {
     }
 }
 
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct FrameTriangle {
-    /// Indices into `Frame::vertices`, counter-clockwise from the front.
-    pub vertices: [u32; 3],
-    pub material: u32,
-    /// Index into `Frame::objects`.
-    pub object: u32,
-}
-
 /// How an object is shaded: the settings the shading stage reads per pixel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ObjectStyle {
@@ -185,6 +175,13 @@ impl Frame {
     pub fn raster_triangle(&self, id: u32) -> &RasterTriangle {
         let (chunk, index) = bin::split_raster_id(id);
         &self.raster[chunk].triangles[index]
+    }
+
+    /// The corner weights of the raster triangle with id `id` (see `CornerWeights`).
+    #[inline]
+    pub fn corner_weights(&self, id: u32) -> [Vec3; 3] {
+        let (chunk, index) = bin::split_raster_id(id);
+        self.raster[chunk].corner_weights(index)
     }
 
     /// Every raster triangle, in submission order.
@@ -366,7 +363,6 @@ pub fn build_frame_in(
 pub struct SpareBuffers {
     vertices: Vec<FrameVertex>,
     vertex_colors: Vec<VertexColors>,
-    triangles: Vec<FrameTriangle>,
     /// The chunks' bin arrays, and their triangle arrays (taken back by the next frame's chunk
     /// of the same index).
     raster: Vec<RasterChunk>,
@@ -379,7 +375,6 @@ impl SpareBuffers {
     pub fn keep(&mut self, frame: Frame) {
         self.vertices = emptied(frame.vertices, 0);
         self.vertex_colors = emptied(frame.vertex_colors, 0);
-        self.triangles = emptied(frame.triangles, 0);
         self.raster = frame.raster;
     }
 }
@@ -434,7 +429,6 @@ fn build(
             if needs_colors { vertex_count } else { 0 },
         ),
         vertex_attributes: Vec::with_capacity(if needs_attributes { vertex_count } else { 0 }),
-        triangles: std::mem::take(&mut spare.triangles),
         raster: Vec::new(),
         tiles: TileGrid::new(width, height),
         materials: Vec::new(),
@@ -1020,32 +1014,34 @@ fn add_triangles(
     }
     object_starts.push(total);
 
-    let mut triangles = std::mem::take(&mut frame.triangles);
-    triangles.resize(total, FrameTriangle::default());
     spare_chunks.resize_with(total.div_ceil(TRIANGLE_CHUNK), RasterChunk::default);
     let frame_ref = &*frame;
-    triangles
-        .par_chunks_mut(TRIANGLE_CHUNK)
-        .zip(spare_chunks.par_iter_mut())
+    spare_chunks
+        .par_iter_mut()
         .enumerate()
-        .for_each(|(chunk, (out, raster_chunk))| {
+        .for_each(|(chunk, raster_chunk)| {
             let first = chunk * TRIANGLE_CHUNK;
-            let mut raster = raster_chunk.take_triangles();
-            raster.reserve(out.len());
+            let chunk_len = TRIANGLE_CHUNK.min(total - first);
+            let mut raster = RasterOutput {
+                triangles: raster_chunk.take_triangles(),
+                clipped_weights: std::mem::take(&mut raster_chunk.clipped_weights),
+            };
+            raster.triangles.reserve(chunk_len);
+            raster.clipped_weights.clear();
             // The chunk in runs of one object each: what depends on the object is looked up
             // once per run.
             let mut object = object_starts.partition_point(|&start| start <= first) - 1;
             let mut run_start = 0;
-            while run_start < out.len() {
+            while run_start < chunk_len {
                 while first + run_start >= object_starts[object + 1] {
                     object += 1;
                 }
-                let run_end = (object_starts[object + 1] - first).min(out.len());
+                let run_end = (object_starts[object + 1] - first).min(chunk_len);
                 let mesh = &scene.objects[object].mesh;
                 let place = &placed[object];
                 let marks_vertices = frame_ref.lit && frame_ref.objects[object].shading == Shading::Gouraud;
                 let first_t = first + run_start - object_starts[object];
-                for (t, slot) in (first_t..).zip(&mut out[run_start..run_end]) {
+                for t in first_t..first_t + (run_end - run_start) {
                     let corners = mesh.triangles[t];
                     let corners = if place.mirrored {
                         [corners[0], corners[2], corners[1]]
@@ -1057,35 +1053,42 @@ fn add_triangles(
                     } else {
                         place.material_base
                     };
-                    *slot = FrameTriangle {
+                    let triangle = FrameTriangle {
                         vertices: corners.map(|v| v + place.vertex_base),
                         material,
                         object: object as u32,
                     };
-                    let before = raster.len();
+                    let before = raster.triangles.len();
                     let source = (object_starts[object] + t) as u32;
                     add_raster_triangles(
                         frame_ref,
-                        slot,
+                        &triangle,
                         place.skip_back_faces,
                         source,
                         projected,
                         viewport,
                         &mut raster,
                     );
-                    if marks_vertices && raster.len() > before {
-                        for v in slot.vertices {
+                    if marks_vertices && raster.triangles.len() > before {
+                        for v in triangle.vertices {
                             seen_vertices[v as usize].store(true, Ordering::Relaxed);
                         }
                     }
                 }
                 run_start = run_end;
             }
-            raster_chunk.rebin(raster, &frame_ref.tiles);
+            raster_chunk.rebin(raster.triangles, &frame_ref.tiles);
+            raster_chunk.clipped_weights = raster.clipped_weights;
         });
     spare_chunks.truncate(total.div_ceil(TRIANGLE_CHUNK));
-    frame.triangles = triangles;
     frame.raster = spare_chunks;
+}
+
+/// A chunk's raster triangles as the geometry stage appends them, and the corner weights of
+/// those that were clipped (see `CornerWeights`).
+struct RasterOutput {
+    triangles: Vec<RasterTriangle>,
+    clipped_weights: Vec<[Vec3; 3]>,
 }
 
 /// Appends the raster triangles of one frame triangle: none if it is culled or invisible, one
@@ -1097,7 +1100,7 @@ fn add_raster_triangles(
     source: u32,
     projected: &[ProjectedVertex],
     viewport: &Viewport,
-    raster: &mut Vec<RasterTriangle>,
+    raster: &mut RasterOutput,
 ) {
     let corners = triangle.vertices.map(|v| &projected[v as usize]);
     let clip = corners.map(|v| v.clip);
@@ -1109,26 +1112,28 @@ fn add_raster_triangles(
         return; // edge-on, degenerate, non-finite, or culled
     }
     let (width, height) = (viewport.width, viewport.height);
-    let setup = |corners: [ScreenVertex; 3]| {
-        setup_triangle(corners, width, height, viewport.pattern, source, back_facing)
+    let source = SourceTriangle {
+        index: source,
+        triangle: *triangle,
+        back_facing,
     };
+    let pattern = viewport.pattern;
     if corners.iter().all(|v| v.inside) {
-        raster.extend(setup_snapped(
-            corners.map(|v| v.screen),
-            Vec3::AXES,
-            width,
-            height,
-            viewport.pattern,
-            source,
-            back_facing,
-        ));
+        let corners = corners.map(|v| v.screen);
+        let weights = &mut raster.clipped_weights;
+        let setup = setup_snapped(corners, None, width, height, pattern, source, weights);
+        raster.triangles.extend(setup);
         return;
     }
+    let weights = &mut raster.clipped_weights;
+    let mut setup =
+        |corners: [ScreenVertex; 3]| setup_triangle(corners, width, height, pattern, source, weights);
+    let triangles = &mut raster.triangles;
     match clip_triangle(clip, viewport.guard_x, viewport.guard_y) {
         Clipped::Outside => {}
         Clipped::Inside => {
             let corners = [0, 1, 2].map(|i| project(clip[i], Vec3::AXES[i], width as f32, height as f32));
-            raster.extend(setup(corners));
+            triangles.extend(setup(corners));
         }
         Clipped::Polygon(polygon) => {
             let projected: Vec<ScreenVertex> = polygon
@@ -1137,7 +1142,7 @@ fn add_raster_triangles(
                 .map(|v| project(v.position, v.weights, width as f32, height as f32))
                 .collect();
             for i in 1..projected.len().saturating_sub(1) {
-                raster.extend(setup([projected[0], projected[i], projected[i + 1]]));
+                triangles.extend(setup([projected[0], projected[i], projected[i + 1]]));
             }
         }
     }

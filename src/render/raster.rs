@@ -96,16 +96,76 @@ pub struct RasterTriangle {
     pub y: [i32; 3],
     pub depth: [f32; 3],
     pub inv_w: [f32; 3],
-    /// Barycentric weights of each corner with respect to the source triangle's vertices
-    /// (the identity for an unclipped triangle, permuted if corners were reordered).
-    pub weights: [Vec3; 3],
+    /// Barycentric weights of each corner with respect to the source triangle's vertices.
+    pub corner_weights: CornerWeights,
     /// 1 / A, with A the doubled fixed-point area.
     pub inv_area: f32,
     /// The pixels whose centres may be covered, clipped to the image.
     pub bounds: PixelRect,
-    /// Index of the source triangle in the frame (for attributes and materials).
+    /// Index of the source triangle in the frame (the key of per-triangle caches).
     pub source: u32,
+    /// The source triangle's vertices, material and object: what shading reads of it, carried
+    /// here so that shading a run of pixels reads nothing but this triangle (no lookup in a
+    /// frame-wide triangle array, which would miss the cache on dense meshes).
+    pub triangle: FrameTriangle,
     /// The source triangle is seen from behind.
+    pub back_facing: bool,
+}
+
+/// How a raster triangle's corners map to its source triangle's vertices (the barycentric
+/// weights of each corner): the identity for an unclipped triangle, the identity with corners 1
+/// and 2 swapped when setup reordered them, or a row of its chunk's table for the pieces of a
+/// clipped triangle. Nearly every triangle is unclipped, so the 36 bytes of weights are stored
+/// only for the few that need them, and the raster triangles the stages stream through memory
+/// stay small.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CornerWeights(u32);
+
+impl CornerWeights {
+    const IDENTITY: CornerWeights = CornerWeights(u32::MAX);
+    const SWAPPED: CornerWeights = CornerWeights(u32::MAX - 1);
+    const SWAPPED_AXES: [Vec3; 3] = [Vec3::X, Vec3::Z, Vec3::Y];
+
+    /// `weights`, kept in `table` unless they are one of the two permutations of the identity
+    /// (compared bit for bit, so resolving gives back exactly `weights`).
+    pub fn store(weights: [Vec3; 3], table: &mut Vec<[Vec3; 3]>) -> Self {
+        let bits = |w: [Vec3; 3]| w.map(|v| v.to_array().map(f32::to_bits));
+        if bits(weights) == bits(Vec3::AXES) {
+            CornerWeights::IDENTITY
+        } else if bits(weights) == bits(Self::SWAPPED_AXES) {
+            CornerWeights::SWAPPED
+        } else {
+            table.push(weights);
+            CornerWeights(table.len() as u32 - 1)
+        }
+    }
+
+    /// The weights, given the table of the chunk the triangle belongs to.
+    #[inline]
+    pub fn resolve(self, table: &[[Vec3; 3]]) -> [Vec3; 3] {
+        match self {
+            CornerWeights::IDENTITY => Vec3::AXES,
+            CornerWeights::SWAPPED => Self::SWAPPED_AXES,
+            CornerWeights(row) => table[row as usize],
+        }
+    }
+}
+
+/// A triangle of the frame: its vertices (indices into `Frame::vertices`, counter-clockwise from
+/// the front), material and object (index into `Frame::objects`).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameTriangle {
+    pub vertices: [u32; 3],
+    pub material: u32,
+    pub object: u32,
+}
+
+/// Where a raster triangle comes from: its frame triangle, that triangle's index in the
+/// frame's stream, and the side the camera sees.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SourceTriangle {
+    pub index: u32,
+    pub triangle: FrameTriangle,
     pub back_facing: bool,
 }
 
@@ -116,19 +176,19 @@ pub fn setup_triangle(
     width: u32,
     height: u32,
     pattern: SamplePattern,
-    source: u32,
-    back_facing: bool,
+    source: SourceTriangle,
+    weights_table: &mut Vec<[Vec3; 3]>,
 ) -> Option<RasterTriangle> {
     let corners = corners.map(|c| SnappedVertex::snap(&c));
     let weights = [corners[0].1, corners[1].1, corners[2].1];
     setup_snapped(
         corners.map(|c| c.0),
-        weights,
+        Some(weights),
         width,
         height,
         pattern,
         source,
-        back_facing,
+        weights_table,
     )
 }
 
@@ -161,23 +221,27 @@ impl SnappedVertex {
 
 /// [`setup_triangle`] for corners already snapped (the geometry stage snaps each vertex once,
 /// not once per triangle that uses it).
+/// `weights` are the corners' weights, `None` for the identity (an unclipped triangle).
 pub fn setup_snapped(
     corners: [SnappedVertex; 3],
-    weights: [Vec3; 3],
+    weights: Option<[Vec3; 3]>,
     width: u32,
     height: u32,
     pattern: SamplePattern,
-    source: u32,
-    back_facing: bool,
+    source: SourceTriangle,
+    weights_table: &mut Vec<[Vec3; 3]>,
 ) -> Option<RasterTriangle> {
     let (mut corners, mut weights) = (corners, weights);
     let mut area = doubled_area(corners.map(|c| c.x), corners.map(|c| c.y));
     if area == 0 {
         return None;
     }
-    if area < 0 {
+    let swapped = area < 0;
+    if swapped {
         corners.swap(1, 2);
-        weights.swap(1, 2);
+        if let Some(weights) = &mut weights {
+            weights.swap(1, 2);
+        }
         area = -area;
     }
     let (x, y) = (corners.map(|c| c.x), corners.map(|c| c.y));
@@ -187,11 +251,16 @@ pub fn setup_snapped(
         y,
         depth: corners.map(|c| c.depth),
         inv_w: corners.map(|c| c.inv_w),
-        weights,
+        corner_weights: match weights {
+            None if swapped => CornerWeights::SWAPPED,
+            None => CornerWeights::IDENTITY,
+            Some(weights) => CornerWeights::store(weights, weights_table),
+        },
         inv_area: 1.0 / area as f32,
         bounds,
-        source,
-        back_facing,
+        source: source.index,
+        triangle: source.triangle,
+        back_facing: source.back_facing,
     })
 }
 
@@ -573,7 +642,16 @@ mod tests {
         );
         let triangles: Vec<_> = [[a, b, c], [a, c, d]]
             .into_iter()
-            .filter_map(|t| setup_triangle(t, 8, 8, SamplePattern::SINGLE, 0, false))
+            .filter_map(|t| {
+                setup_triangle(
+                    t,
+                    8,
+                    8,
+                    SamplePattern::SINGLE,
+                    SourceTriangle::default(),
+                    &mut Vec::new(),
+                )
+            })
             .collect();
         assert!(coverage(&triangles, 8, 8).iter().all(|&n| n == 1));
     }
@@ -589,7 +667,16 @@ mod tests {
         );
         let triangles: Vec<_> = [[a, b, c], [a, c, d]]
             .into_iter()
-            .filter_map(|t| setup_triangle(t, 4, 4, SamplePattern::SINGLE, 0, false))
+            .filter_map(|t| {
+                setup_triangle(
+                    t,
+                    4,
+                    4,
+                    SamplePattern::SINGLE,
+                    SourceTriangle::default(),
+                    &mut Vec::new(),
+                )
+            })
             .collect();
         let counts = coverage(&triangles, 4, 4);
         #[rustfmt::skip]
@@ -603,6 +690,21 @@ mod tests {
     }
 
     #[test]
+    fn corner_weights_come_back_bit_for_bit_and_only_clipped_ones_are_stored() {
+        let mut table = Vec::new();
+        let swapped = [Vec3::X, Vec3::Z, Vec3::Y];
+        let clipped = [Vec3::new(0.5, 0.5, 0.0), Vec3::Y, Vec3::new(0.25, 0.0, 0.75)];
+        let negative_zero = [Vec3::new(1.0, -0.0, 0.0), Vec3::Y, Vec3::Z];
+        let stored =
+            [Vec3::AXES, swapped, clipped, negative_zero].map(|w| CornerWeights::store(w, &mut table));
+        assert_eq!(table.len(), 2, "the identity and its swap take no row");
+        for (weights, stored) in [Vec3::AXES, swapped, clipped, negative_zero].iter().zip(stored) {
+            let bits = |w: &[Vec3; 3]| w.map(|v| v.to_array().map(f32::to_bits));
+            assert_eq!(bits(&stored.resolve(&table)), bits(weights));
+        }
+    }
+
+    #[test]
     fn zero_area_triangles_are_dropped() {
         assert!(
             setup_triangle(
@@ -610,12 +712,22 @@ mod tests {
                 8,
                 8,
                 SamplePattern::SINGLE,
-                0,
-                false
+                SourceTriangle::default(),
+                &mut Vec::new(),
             )
             .is_none()
         );
-        assert!(setup_triangle([vertex(1.0, 1.0); 3], 8, 8, SamplePattern::SINGLE, 0, false).is_none());
+        assert!(
+            setup_triangle(
+                [vertex(1.0, 1.0); 3],
+                8,
+                8,
+                SamplePattern::SINGLE,
+                SourceTriangle::default(),
+                &mut Vec::new()
+            )
+            .is_none()
+        );
     }
 
     #[test]
@@ -625,8 +737,8 @@ mod tests {
             8,
             8,
             SamplePattern::SINGLE,
-            0,
-            false,
+            SourceTriangle::default(),
+            &mut Vec::new(),
         )
         .unwrap();
         assert_eq!(
@@ -643,8 +755,8 @@ mod tests {
             8,
             8,
             SamplePattern::SINGLE,
-            0,
-            false,
+            SourceTriangle::default(),
+            &mut Vec::new(),
         )
         .unwrap();
         assert_eq!(
@@ -665,8 +777,8 @@ mod tests {
             8,
             8,
             SamplePattern::SINGLE,
-            0,
-            false,
+            SourceTriangle::default(),
+            &mut Vec::new(),
         )
         .unwrap();
         let [e0, e1, e2] = edge_values(&t, 3 * 256 + 128, 3 * 256 + 128);

@@ -98,8 +98,8 @@ pub struct TileScratch<'f> {
 /// loads overlap and the arithmetic runs [`LANES`] wide.
 #[derive(Default)]
 struct FlatBatch<'f> {
-    /// Per waiting triangle: its lighting, source triangle and side.
-    waiting: Vec<(FastLighting<'f>, u32, bool)>,
+    /// Per waiting triangle: its lighting, the triangle and its side.
+    waiting: Vec<(FastLighting<'f>, FrameTriangle, bool)>,
     colors: Vec<Vec3>,
     /// (first pixel in the band, pixel count, index of the triangle).
     runs: Vec<(usize, u16, u16)>,
@@ -115,9 +115,9 @@ impl<'f> FlatBatch<'f> {
         self.runs.clear();
     }
 
-    /// Queues source triangle `source`, seen from the back if `back_facing`; returns its index.
-    fn add(&mut self, lighting: FastLighting<'f>, source: u32, back_facing: bool) -> u16 {
-        self.waiting.push((lighting, source, back_facing));
+    /// Queues `triangle`, seen from the back if `back_facing`; returns its index.
+    fn add(&mut self, lighting: FastLighting<'f>, triangle: FrameTriangle, back_facing: bool) -> u16 {
+        self.waiting.push((lighting, triangle, back_facing));
         (self.waiting.len() - 1) as u16
     }
 
@@ -154,8 +154,7 @@ impl<'f> FlatBatch<'f> {
             let mut crossed = [Vec3::ZERO; LANES];
             let mut reversed = [false; LANES];
             for lane in 0..LANES {
-                let (_, source, back_facing) = waiting(lane);
-                let triangle = &frame.triangles[source as usize];
+                let (_, triangle, back_facing) = waiting(lane);
                 let [p0, p1, p2] = triangle.vertices.map(|v| frame.vertices[v as usize].position);
                 centroids[lane] = (p0 + p1 + p2) / 3.0;
                 crossed[lane] = (p1 - p0).cross(p2 - p0);
@@ -212,7 +211,7 @@ pub fn shade_tile<'f>(
         let flat = &mut scratch.flat;
         flat.clear();
         let mut phong = PhongBatch::default();
-        let mut current: Option<(u32, &RasterTriangle, RunShader)> = None;
+        let mut current: Option<(u32, &RasterTriangle, [Vec3; 3], RunShader)> = None;
         let rows = visibility.triangle.chunks_exact(tile_width);
         for (row, ids) in rows.enumerate() {
             let row_start = row * stride + rect.x0 as usize;
@@ -237,12 +236,13 @@ pub fn shade_tile<'f>(
                     continue;
                 }
                 shaded += run_length;
-                let (_, raster, shader) = match &current {
+                let (_, raster, corners, shader) = match &current {
                     Some((current_id, ..)) if *current_id == id => current.as_ref().expect("matched"),
                     _ => {
                         let raster = frame.raster_triangle(id);
+                        let corners = frame.corner_weights(id);
                         let shader = RunShader::new(frame, raster, phong_allowed, &mut caches, flat);
-                        current.insert((id, raster, shader))
+                        current.insert((id, raster, corners, shader))
                     }
                 };
                 let pixel_x =
@@ -252,19 +252,19 @@ pub fn shade_tile<'f>(
                     RunShader::Solid(color) => target.color[run].fill(*color),
                     RunShader::Gouraud([a, b, c]) => {
                         for (column, color) in columns.zip(&mut target.color[run]) {
-                            let weights = source_weights(raster, (pixel_x(column), y));
+                            let weights = source_weights(raster, corners, (pixel_x(column), y));
                             *color = *a * weights.x + *b * weights.y + *c * weights.z;
                         }
                     }
                     RunShader::Phong(fast) => {
                         for column in columns {
-                            let weights = source_weights(raster, (pixel_x(column), y));
+                            let weights = source_weights(raster, corners, (pixel_x(column), y));
                             phong.push(fast, weights, row_start + column, target.color);
                         }
                     }
                     RunShader::General => {
                         for (column, color) in columns.zip(&mut target.color[run]) {
-                            *color = shade_sample(frame, raster, (pixel_x(column), y), &mut caches);
+                            *color = shade_sample(frame, raster, corners, (pixel_x(column), y), &mut caches);
                         }
                     }
                 }
@@ -316,7 +316,8 @@ pub fn shade_tile<'f>(
                 centre_x + offset_x.div_euclid(n),
                 centre_y + offset_y.div_euclid(n),
             );
-            let color = shade_sample(frame, frame.raster_triangle(id), at, &mut caches);
+            let corners = frame.corner_weights(id);
+            let color = shade_sample(frame, frame.raster_triangle(id), &corners, at, &mut caches);
             sum += color * count as f32;
             covered_samples += count;
         }
@@ -350,12 +351,12 @@ enum RunShader<'f> {
 impl<'f> RunShader<'f> {
     fn new(
         frame: &'f Frame,
-        raster: &RasterTriangle,
+        raster: &'f RasterTriangle,
         phong_allowed: bool,
         caches: &mut TileCaches,
         flat: &mut FlatBatch<'f>,
     ) -> Self {
-        let triangle = &frame.triangles[raster.source as usize];
+        let triangle = &raster.triangle;
         let style = &frame.objects[triangle.object as usize];
         let material = &frame.materials[triangle.material as usize];
         let plain = frame.debug_view.is_none()
@@ -372,7 +373,7 @@ impl<'f> RunShader<'f> {
                     .then(|| FastLighting::new(frame, triangle.material, style, Shading::Flat, back_facing))
                     .flatten();
                 if let Some(lighting) = fast {
-                    let index = flat.add(lighting, raster.source, back_facing);
+                    let index = flat.add(lighting, raster.triangle, back_facing);
                     caches.flat_waiting.insert(raster.source, index);
                     return RunShader::FlatWaiting(index);
                 }
@@ -417,20 +418,27 @@ fn back_gouraud_colors(
 }
 
 /// Perspective-correct barycentric weights of the source triangle's vertices at the fixed-point
-/// point `at` (1/256 pixel).
-pub fn source_weights(triangle: &RasterTriangle, at: (i64, i64)) -> Vec3 {
+/// point `at` (1/256 pixel); `corners` are the triangle's corner weights
+/// (`Frame::corner_weights`).
+pub fn source_weights(triangle: &RasterTriangle, corners: &[Vec3; 3], at: (i64, i64)) -> Vec3 {
     let [e0, e1, e2] = edge_values(triangle, at.0, at.1);
     let screen = Vec3::new(e0 as f32, e1 as f32, e2 as f32) * triangle.inv_area;
     let [w0, w1, w2] = triangle.inv_w;
     let over_w = screen * Vec3::new(w0, w1, w2);
     let sum = over_w.element_sum();
     let corner = if sum > 0.0 { over_w / sum } else { screen };
-    triangle.weights[0] * corner.x + triangle.weights[1] * corner.y + triangle.weights[2] * corner.z
+    corners[0] * corner.x + corners[1] * corner.y + corners[2] * corner.z
 }
 
-fn shade_sample(frame: &Frame, raster: &RasterTriangle, at: (i64, i64), caches: &mut TileCaches) -> Vec3 {
-    let weights = source_weights(raster, at);
-    let triangle = &frame.triangles[raster.source as usize];
+fn shade_sample(
+    frame: &Frame,
+    raster: &RasterTriangle,
+    corners: &[Vec3; 3],
+    at: (i64, i64),
+    caches: &mut TileCaches,
+) -> Vec3 {
+    let weights = source_weights(raster, corners, at);
+    let triangle = &raster.triangle;
     let style = &frame.objects[triangle.object as usize];
     let [a, b, c] = triangle.vertices.map(|v| &frame.vertices[v as usize]);
     let interpolate = |x: Vec3, y: Vec3, z: Vec3| x * weights.x + y * weights.y + z * weights.z;
@@ -464,8 +472,8 @@ fn shade_sample(frame: &Frame, raster: &RasterTriangle, at: (i64, i64), caches: 
     // equation extends past the triangle's edges, so this is valid at its border too).
     let (weights_dx, weights_dy) = if textured {
         (
-            source_weights(raster, (at.0 + SUBPIXEL_ONE, at.1)),
-            source_weights(raster, (at.0, at.1 + SUBPIXEL_ONE)),
+            source_weights(raster, corners, (at.0 + SUBPIXEL_ONE, at.1)),
+            source_weights(raster, corners, (at.0, at.1 + SUBPIXEL_ONE)),
         )
     } else {
         (weights, weights)
@@ -678,7 +686,8 @@ mod tests {
                             py * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
                         );
                         let raster = frame.raster_triangle(id);
-                        let general = shade_sample(&frame, raster, at, &mut general_caches);
+                        let corners = frame.corner_weights(id);
+                        let general = shade_sample(&frame, raster, &corners, at, &mut general_caches);
                         let run =
                             match RunShader::new(&frame, raster, phong_allowed, &mut run_caches, &mut flat) {
                                 RunShader::FlatWaiting(index) => {
@@ -688,10 +697,10 @@ mod tests {
                                 }
                                 RunShader::Solid(color) => color,
                                 RunShader::Gouraud([a, b, c]) => {
-                                    let w = source_weights(raster, at);
+                                    let w = source_weights(raster, &corners, at);
                                     a * w.x + b * w.y + c * w.z
                                 }
-                                RunShader::Phong(fast) => fast.shade(source_weights(raster, at)),
+                                RunShader::Phong(fast) => fast.shade(source_weights(raster, &corners, at)),
                                 RunShader::General => continue,
                             };
                         assert_eq!(run, general, "{shading:?} {back_faces:?} {view:?} at {px}, {py}");

@@ -379,6 +379,16 @@ pub(crate) mod tests {
     use crate::render::{RenderOptions, geometry::build_frame, render};
     use crate::scene::{Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene};
 
+    /// The frame triangles that reached the rasterizer, each once, in submission order.
+    fn frame_triangles(frame: &Frame) -> Vec<FrameTriangle> {
+        let mut seen = std::collections::HashSet::new();
+        frame
+            .raster_triangles()
+            .filter(|raster| seen.insert(raster.source))
+            .map(|raster| raster.triangle)
+            .collect()
+    }
+
     pub(crate) fn scene(model: LightingModel, specular: Vec3, back_faces: BackFaces) -> Scene {
         let material = Material {
             ambient: Vec3::new(0.1, 0.05, 0.0),
@@ -453,7 +463,7 @@ pub(crate) mod tests {
                 let scene = scene(model, specular, back_faces);
                 let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
                 let mut checked = 0;
-                for triangle in &frame.triangles {
+                for triangle in &frame_triangles(&frame) {
                     for back_facing in [false, true] {
                         let fast = FastPhong::new(&frame, triangle, back_facing).expect("eligible");
                         for weights in [Vec3::new(0.2, 0.3, 0.5), Vec3::splat(1.0 / 3.0), Vec3::X] {
@@ -534,9 +544,10 @@ pub(crate) mod tests {
             ];
             let mut expected = Vec::new();
             let mut batch = PhongBatch::default();
-            let mut colors = vec![Vec3::splat(-1.0); 3 * frame.triangles.len()];
-            let stride = frame.triangles.len() / 13; // visits both objects, alternating runs
-            for (n, triangle) in frame.triangles.iter().step_by(stride.max(1)).enumerate() {
+            let triangles = frame_triangles(&frame);
+            let mut colors = vec![Vec3::splat(-1.0); 3 * triangles.len()];
+            let stride = triangles.len() / 13; // visits both objects, alternating runs
+            for (n, triangle) in triangles.iter().step_by(stride.max(1)).enumerate() {
                 let mut fast = FastPhong::new(&frame, triangle, n % 3 == 0).expect("eligible");
                 if n % 4 == 1 {
                     // Opposite vertex normals: halfway between the first two, nothing is left.
@@ -573,7 +584,7 @@ pub(crate) mod tests {
             let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
             assert!(FastPhong::frame_allows(&frame));
             let mut lit = 0;
-            for triangle in &frame.triangles {
+            for triangle in &frame_triangles(&frame) {
                 for v in triangle.vertices {
                     let color = frame.vertex_colors[v as usize].color;
                     if color == Vec3::ZERO {
@@ -607,9 +618,10 @@ pub(crate) mod tests {
         scene.objects[0].normal_interpolation = NormalInterpolation::Slerp;
         let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
         assert!(FastPhong::frame_allows(&frame));
-        let first = &frame.triangles[0];
+        let triangles = frame_triangles(&frame);
+        let first = &triangles[0];
         assert!(FastPhong::new(&frame, first, false).is_none());
-        let last = frame.triangles.last().expect("triangles");
+        let last = triangles.last().expect("triangles");
         assert!(FastPhong::new(&frame, last, false).is_some());
         let debug = build_frame(
             &scene,

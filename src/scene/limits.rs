@@ -14,7 +14,7 @@ use std::mem::size_of;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::render::geometry::{FrameTriangle, FrameVertex};
+use crate::render::geometry::FrameVertex;
 use crate::render::raster::RasterTriangle;
 
 /// How far from the origin objects may reach (world units, after their transforms). The
@@ -47,13 +47,10 @@ pub const BYTES_PER_PIXEL: u64 = 2 * (size_of::<Vec3>() as u64 + 1) + 2 * 3;
 pub const BYTES_PER_VERTEX: u64 =
     (2 * size_of::<Vec3>() + 2 * size_of::<Vec2>() + 2 * size_of::<Vec4>() + size_of::<FrameVertex>()) as u64;
 
-/// Bytes per triangle: the mesh's indices and material index, the renderer's frame triangle,
-/// one raster triangle (clipping rarely makes more), and its entries in two tiles' bins.
-pub const BYTES_PER_TRIANGLE: u64 = (size_of::<[u32; 3]>()
-    + size_of::<u32>()
-    + size_of::<FrameTriangle>()
-    + size_of::<RasterTriangle>()
-    + 2 * size_of::<u32>()) as u64;
+/// Bytes per triangle: the mesh's indices and material index, one raster triangle (clipping
+/// rarely makes more; it carries its frame triangle), and its entries in two tiles' bins.
+pub const BYTES_PER_TRIANGLE: u64 =
+    (size_of::<[u32; 3]>() + size_of::<u32>() + size_of::<RasterTriangle>() + 2 * size_of::<u32>()) as u64;
 
 /// Parsing a mesh file holds the text, the parser's arrays and the baked mesh at once: about
 /// this many bytes of memory per byte of file, at worst (an OBJ face line `f 1 2 3` is 8 bytes
