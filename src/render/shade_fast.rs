@@ -83,7 +83,9 @@ impl<'f> FastLighting<'f> {
     }
 
     /// The lighting at `position` with the (side) normal `normal`: `Frame::light_material`'s
-    /// two parts, summed.
+    /// two parts, summed. The renderer lights through [`FastLighting::light_lanes`]; this
+    /// one-point form is the specification the lanes are tested against, operation for operation
+    /// the general path's.
     #[inline]
     pub fn light(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
         match self.specular {
@@ -354,7 +356,9 @@ impl<'f> FastPhong<'f> {
         })
     }
 
-    /// The colour at the point with source-triangle weights `weights`.
+    /// The colour at the point with source-triangle weights `weights`: what [`PhongBatch`]
+    /// computes for each pixel it queues (the renderer shades through the batch; tests hold the
+    /// two, and this and the general path, together bit for bit).
     #[inline]
     pub fn shade(&self, weights: Vec3) -> Vec3 {
         let frame = self.lighting.frame;
@@ -378,6 +382,13 @@ pub(crate) mod tests {
     use crate::render::raster::SamplePattern;
     use crate::render::{RenderOptions, geometry::build_frame, render};
     use crate::scene::{Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene};
+
+    /// The lightings the fast path specialises: Phong, Blinn-Phong, and no specular term.
+    const MODELS: [(LightingModel, Vec3); 3] = [
+        (LightingModel::Phong, Vec3::splat(0.7)),
+        (LightingModel::BlinnPhong, Vec3::splat(0.7)),
+        (LightingModel::Phong, Vec3::ZERO),
+    ];
 
     /// The frame triangles that reached the rasterizer, each once, in submission order.
     fn frame_triangles(frame: &Frame) -> Vec<FrameTriangle> {
@@ -454,11 +465,7 @@ pub(crate) mod tests {
     /// with the same interpolated normal), bit for bit.
     #[test]
     fn fast_path_equals_the_general_lighting_bit_for_bit() {
-        for (model, specular) in [
-            (LightingModel::Phong, Vec3::splat(0.7)),
-            (LightingModel::BlinnPhong, Vec3::splat(0.7)),
-            (LightingModel::Phong, Vec3::ZERO),
-        ] {
+        for (model, specular) in MODELS {
             for back_faces in [BackFaces::ReverseLit, BackFaces::Lit] {
                 let scene = scene(model, specular, back_faces);
                 let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
@@ -491,11 +498,7 @@ pub(crate) mod tests {
     /// both viewers, unlit lanes, reversed normals and a zero normal among them.
     #[test]
     fn lighting_eight_points_at_once_equals_lighting_each_bit_for_bit() {
-        for (model, specular) in [
-            (LightingModel::Phong, Vec3::splat(0.7)),
-            (LightingModel::BlinnPhong, Vec3::splat(0.7)),
-            (LightingModel::Phong, Vec3::ZERO),
-        ] {
+        for (model, specular) in MODELS {
             let scene = scene(model, specular, BackFaces::ReverseLit);
             let mut frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
             for viewer in [
@@ -572,11 +575,7 @@ pub(crate) mod tests {
     /// `Frame::light_material`, bit for bit; and only vertices of rasterized triangles are lit.
     #[test]
     fn gouraud_vertices_lit_by_the_fast_path_equal_the_general_lighting_bit_for_bit() {
-        for (model, specular) in [
-            (LightingModel::Phong, Vec3::splat(0.7)),
-            (LightingModel::BlinnPhong, Vec3::splat(0.7)),
-            (LightingModel::Phong, Vec3::ZERO),
-        ] {
+        for (model, specular) in MODELS {
             let mut scene = scene(model, specular, BackFaces::ReverseLit);
             for object in &mut scene.objects {
                 object.shading = Shading::Gouraud;
