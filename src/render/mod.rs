@@ -198,10 +198,11 @@ fn render_frame(
             };
             let (mut raster_time, mut shade_time, mut shaded) = (Duration::ZERO, Duration::ZERO, 0);
             let mut scratch = shade::TileScratch::default();
+            let mut visibility = raster::Visibility::new();
             for column in 0..tiles.columns as usize {
                 let index = tile_row * tiles.columns as usize + column;
                 let raster_started = Instant::now();
-                let visibility = raster::rasterize_tile(tiles.rect(index), pattern, &frame.raster, index);
+                visibility.rasterize(tiles.rect(index), pattern, &frame.raster, index);
                 let shade_started = Instant::now();
                 shaded += shade::shade_tile(
                     &frame,

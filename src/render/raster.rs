@@ -46,7 +46,7 @@ const SUBPIXEL_HALF: i64 = SUBPIXEL_ONE / 2;
 pub const GUARD_BAND_PIXELS: f32 = (1 << 20) as f32;
 
 /// A rectangle of pixels, `x0..x1` × `y0..y1` (exclusive ends).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct PixelRect {
     pub x0: u32,
     pub y0: u32,
@@ -341,6 +341,14 @@ pub fn edge_values(triangle: &RasterTriangle, x: i64, y: i64) -> [i64; 3] {
     [edge(x1, y1, x2, y2), edge(x2, y2, x0, y0), edge(x0, y0, x1, y1)]
 }
 
+/// How much [`edge_values`] change from one pixel centre to the next one to the right (one
+/// pixel, 256 units, along x): stepping by these gives exactly the values at each centre.
+#[inline]
+pub fn edge_steps_x(triangle: &RasterTriangle) -> [i64; 3] {
+    let [y0, y1, y2] = triangle.y.map(i64::from);
+    [-(y2 - y1), -(y0 - y2), -(y1 - y0)].map(|dy| dy * SUBPIXEL_ONE)
+}
+
 /// Where a pixel is sampled: fixed offsets from its centre, in 1/256 pixel, the same for every
 /// pixel (so the image does not depend on anything but the scene). The positions are Direct3D's
 /// standard multisample patterns (scaled from 1/16 pixel): rotated grids that resolve
@@ -438,58 +446,98 @@ pub const MAX_SAMPLES: usize = 16;
 pub const NO_TRIANGLE: u32 = u32::MAX;
 
 /// The nearest triangle at each sample of one tile.
+///
+/// Triangles are named by their index in `raster_ids` (the tile's triangles in the order they
+/// were rasterized), not by their frame-wide raster id: shading keeps a dense table per tile
+/// indexed by them (one shader or colour per triangle, no hashing).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Visibility {
     pub rect: PixelRect,
     pub pattern: SamplePattern,
     /// Reversed-Z depth of the nearest surface (−∞ where none), `pattern.len()` per pixel.
     pub depth: Vec<f32>,
-    /// Index into the frame's raster triangles, or [`NO_TRIANGLE`], `pattern.len()` per pixel.
+    /// Index into `raster_ids`, or [`NO_TRIANGLE`], `pattern.len()` per pixel.
     pub triangle: Vec<u32>,
+    /// The frame's raster id of each triangle rasterized into the tile, in order.
+    pub raster_ids: Vec<u32>,
 }
 
-/// Rasterizes tile `tile` (the pixels `rect`): every chunk's triangles binned to it, chunk by
-/// chunk and in order within each, keeping the nearest at every sample.
+impl Visibility {
+    /// An empty buffer, to rasterize tiles into with [`Visibility::rasterize`].
+    pub fn new() -> Self {
+        Visibility {
+            rect: PixelRect::default(),
+            pattern: SamplePattern::SINGLE,
+            depth: Vec::new(),
+            triangle: Vec::new(),
+            raster_ids: Vec::new(),
+        }
+    }
+
+    /// Rasterizes tile `tile` (the pixels `rect`) into this buffer, replacing what it held:
+    /// every chunk's triangles binned to it, chunk by chunk and in order within each, keeping
+    /// the nearest at every sample. The arrays keep their capacity from tile to tile.
+    pub fn rasterize(
+        &mut self,
+        rect: PixelRect,
+        pattern: SamplePattern,
+        chunks: &[RasterChunk],
+        tile: usize,
+    ) {
+        let samples = pattern.len();
+        let sample_count = (rect.width() * rect.height()) as usize * samples;
+        self.rect = rect;
+        self.pattern = pattern;
+        self.depth.clear();
+        self.depth.resize(sample_count, f32::NEG_INFINITY);
+        self.triangle.clear();
+        self.triangle.resize(sample_count, NO_TRIANGLE);
+        self.raster_ids.clear();
+        debug_assert!(rect.width() <= TILE_SIZE);
+        let tile_width = rect.width() as usize;
+        for (chunk_index, chunk) in chunks.iter().enumerate() {
+            for &index in chunk.tile_triangles(tile) {
+                let triangle = &chunk.triangles[index as usize];
+                let local = self.raster_ids.len() as u32;
+                self.raster_ids.push(raster_id(chunk_index, index as usize));
+                if samples == 1 {
+                    rasterize_single_sample(triangle, local, self);
+                    continue;
+                }
+                for_each_covered_sample(triangle, rect, pattern, |px, py, sample, depth| {
+                    let slot =
+                        ((py - rect.y0) as usize * tile_width + (px - rect.x0) as usize) * samples + sample;
+                    if depth > self.depth[slot] {
+                        self.depth[slot] = depth;
+                        self.triangle[slot] = local;
+                    }
+                });
+            }
+        }
+    }
+
+    /// The frame's raster id of the tile's triangle `local` (a value of `triangle`).
+    #[inline]
+    pub fn raster_id(&self, local: u32) -> u32 {
+        self.raster_ids[local as usize]
+    }
+}
+
+impl Default for Visibility {
+    fn default() -> Self {
+        Visibility::new()
+    }
+}
+
+/// Rasterizes tile `tile` (the pixels `rect`) into a new [`Visibility`].
 pub fn rasterize_tile(
     rect: PixelRect,
     pattern: SamplePattern,
     chunks: &[RasterChunk],
     tile: usize,
 ) -> Visibility {
-    let samples = pattern.len();
-    let sample_count = (rect.width() * rect.height()) as usize * samples;
-    let mut visibility = Visibility {
-        rect,
-        pattern,
-        depth: vec![f32::NEG_INFINITY; sample_count],
-        triangle: vec![NO_TRIANGLE; sample_count],
-    };
-    debug_assert!(rect.width() <= TILE_SIZE);
-    let tile_width = rect.width() as usize;
-    if samples == 1 {
-        for (chunk_index, chunk) in chunks.iter().enumerate() {
-            for &index in chunk.tile_triangles(tile) {
-                let triangle = &chunk.triangles[index as usize];
-                let id = raster_id(chunk_index, index as usize);
-                rasterize_single_sample(triangle, id, &mut visibility);
-            }
-        }
-        return visibility;
-    }
-    for (chunk_index, chunk) in chunks.iter().enumerate() {
-        for &index in chunk.tile_triangles(tile) {
-            let triangle = &chunk.triangles[index as usize];
-            let id = raster_id(chunk_index, index as usize);
-            for_each_covered_sample(triangle, rect, pattern, |px, py, sample, depth| {
-                let slot =
-                    ((py - rect.y0) as usize * tile_width + (px - rect.x0) as usize) * samples + sample;
-                if depth > visibility.depth[slot] {
-                    visibility.depth[slot] = depth;
-                    visibility.triangle[slot] = id;
-                }
-            });
-        }
-    }
+    let mut visibility = Visibility::new();
+    visibility.rasterize(rect, pattern, chunks, tile);
     visibility
 }
 

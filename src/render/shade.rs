@@ -21,7 +21,9 @@ use crate::render::geometry::{
     Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted,
 };
 use crate::render::lanes::{LANES, Mask, Vec3s};
-use crate::render::raster::{NO_TRIANGLE, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_values};
+use crate::render::raster::{
+    NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_values,
+};
 use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch};
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
@@ -86,14 +88,25 @@ struct TileCaches {
 }
 
 /// What the shading of a band's tiles keeps from tile to tile, so a frame allocates it once per
-/// band rather than once per tile.
+/// band rather than once per tile. Every table is indexed by the tile's triangles (the values of
+/// `Visibility::triangle`).
 #[derive(Default)]
 pub struct TileScratch<'f> {
     flat: FlatBatch<'f>,
+    /// Per triangle of the tile: whether a pixel shows it (one more entry, never read, for the
+    /// pixels that show nothing).
+    seen: Vec<bool>,
+    /// Per triangle of the tile: its colour when one colour fills its pixels; the last entry is
+    /// the background.
+    fills: Vec<Vec3>,
+    /// Per triangle of the tile: whether `fills` holds its colour (true for the background
+    /// entry too), rather than its pixels being shaded one by one.
+    filled: Vec<bool>,
+    /// Triangles whose colours wait in `flat`: (triangle, index in the batch).
+    flat_waiting: Vec<(u32, u16)>,
 }
 
-/// The fast-path flat triangles a tile shows, lit together once the tile's pixels are known,
-/// and the runs of pixels that show them. One at a time, each triangle waits on its own cache
+/// The fast-path flat triangles a tile shows, lit together once the tile's pixels are known. One at a time, each triangle waits on its own cache
 /// misses (its corners) and its own chain of square roots and divisions; together, the corner
 /// loads overlap and the arithmetic runs [`LANES`] wide.
 #[derive(Default)]
@@ -101,40 +114,21 @@ struct FlatBatch<'f> {
     /// Per waiting triangle: its lighting, the triangle and its side.
     waiting: Vec<(FastLighting<'f>, FrameTriangle, bool)>,
     colors: Vec<Vec3>,
-    /// (first pixel in the band, pixel count, index of the triangle).
-    runs: Vec<(usize, u16, u16)>,
 }
 
-// A tile has at most `TILE_SIZE²` runs, so triangles waiting in one tile are numbered by `u16`.
+// A tile's pixels show at most `TILE_SIZE²` triangles, so those waiting are numbered by `u16`.
 const _: () = assert!(TILE_SIZE * TILE_SIZE <= u16::MAX as u32);
 
 impl<'f> FlatBatch<'f> {
     fn clear(&mut self) {
         self.waiting.clear();
         self.colors.clear();
-        self.runs.clear();
     }
 
     /// Queues `triangle`, seen from the back if `back_facing`; returns its index.
     fn add(&mut self, lighting: FastLighting<'f>, triangle: FrameTriangle, back_facing: bool) -> u16 {
         self.waiting.push((lighting, triangle, back_facing));
         (self.waiting.len() - 1) as u16
-    }
-
-    /// `count` pixels of the band from `first` on show waiting triangle `index`.
-    #[inline]
-    fn cover(&mut self, first: usize, count: u16, index: u16) {
-        self.runs.push((first, count, index));
-    }
-
-    /// Lights the waiting triangles as `Frame::flat_colors` does (at the centroid, with the
-    /// face normal on the side the camera sees), consecutive ones with the same lighting
-    /// together, and writes their runs of pixels.
-    fn light_and_fill(&mut self, frame: &Frame, color: &mut [Vec3]) {
-        self.light(frame);
-        for &(first, count, index) in &self.runs {
-            color[first..first + usize::from(count)].fill(self.colors[usize::from(index)]);
-        }
     }
 
     /// The colour of every waiting triangle, into `colors`.
@@ -203,76 +197,7 @@ pub fn shade_tile<'f>(
         flat_waiting: TriangleColorCache::new(),
     };
     if samples == 1 {
-        // One sample at the pixel centre: the general loop below with `seen` holding one entry
-        // at offset zero, and the same result bit for bit. What depends only on the triangle
-        // is looked up once per run of pixels showing it. Every pixel of the tile is written
-        // exactly once, the background included.
-        let phong_allowed = FastPhong::frame_allows(frame);
-        let flat = &mut scratch.flat;
-        flat.clear();
-        let mut phong = PhongBatch::default();
-        let mut current: Option<(u32, &RasterTriangle, [Vec3; 3], RunShader)> = None;
-        let rows = visibility.triangle.chunks_exact(tile_width);
-        for (row, ids) in rows.enumerate() {
-            let row_start = row * stride + rect.x0 as usize;
-            let y = i64::from(rect.y0 + row as u32) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
-            // Coverage for the whole row in one vectorisable pass (a fill per run would be a
-            // `memset` call per run, and runs are a few pixels long on dense meshes).
-            let covered = &mut target.covered[row_start..row_start + tile_width];
-            for (covered, &id) in covered.iter_mut().zip(ids) {
-                *covered = id != NO_TRIANGLE;
-            }
-            // The row in runs of pixels that show the same triangle (or nothing), each handled
-            // as a whole: one dispatch per run, and background and solid runs written as fills.
-            let mut column = 0;
-            while column < tile_width {
-                let id = ids[column];
-                let run_length = ids[column..].iter().take_while(|&&other| other == id).count();
-                let run = row_start + column..row_start + column + run_length;
-                let columns = column..column + run_length;
-                column += run_length;
-                if id == NO_TRIANGLE {
-                    target.color[run].fill(background);
-                    continue;
-                }
-                shaded += run_length;
-                let (_, raster, corners, shader) = match &current {
-                    Some((current_id, ..)) if *current_id == id => current.as_ref().expect("matched"),
-                    _ => {
-                        let raster = frame.raster_triangle(id);
-                        let corners = frame.corner_weights(id);
-                        let shader = RunShader::new(frame, raster, phong_allowed, &mut caches, flat);
-                        current.insert((id, raster, corners, shader))
-                    }
-                };
-                let pixel_x =
-                    |column: usize| i64::from(rect.x0 + column as u32) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
-                match shader {
-                    RunShader::FlatWaiting(index) => flat.cover(run.start, run_length as u16, *index),
-                    RunShader::Solid(color) => target.color[run].fill(*color),
-                    RunShader::Gouraud([a, b, c]) => {
-                        for (column, color) in columns.zip(&mut target.color[run]) {
-                            let weights = source_weights(raster, corners, (pixel_x(column), y));
-                            *color = *a * weights.x + *b * weights.y + *c * weights.z;
-                        }
-                    }
-                    RunShader::Phong(fast) => {
-                        for column in columns {
-                            let weights = source_weights(raster, corners, (pixel_x(column), y));
-                            phong.push(fast, weights, row_start + column, target.color);
-                        }
-                    }
-                    RunShader::General => {
-                        for (column, color) in columns.zip(&mut target.color[run]) {
-                            *color = shade_sample(frame, raster, corners, (pixel_x(column), y), &mut caches);
-                        }
-                    }
-                }
-            }
-        }
-        phong.flush(target.color);
-        flat.light_and_fill(frame, target.color);
-        return shaded;
+        return shade_single_sample(frame, visibility, background, target, scratch, &mut caches);
     }
     for row in 0..rect.height() as usize {
         let start = row * stride + rect.x0 as usize;
@@ -281,7 +206,7 @@ pub fn shade_tile<'f>(
     }
     // The tile's pixel `slot` (row-major within the tile) in the band.
     let at_slot = |slot: usize| (slot / tile_width) * stride + rect.x0 as usize + slot % tile_width;
-    // Distinct triangles at the current pixel: id, samples covered, sum of their offsets.
+    // Distinct triangles at the current pixel: triangle, samples covered, sum of their offsets.
     let mut seen: Vec<(u32, u32, i64, i64)> = Vec::with_capacity(samples);
     let depth_view = frame.debug_view == Some(DebugView::Depth);
     for slot in 0..pixel_count {
@@ -310,7 +235,8 @@ pub fn shade_tile<'f>(
         let mut sum = Vec3::ZERO;
         let mut covered_samples = 0;
         shaded += seen.len();
-        for &(id, count, offset_x, offset_y) in &seen {
+        for &(local, count, offset_x, offset_y) in &seen {
+            let id = visibility.raster_id(local);
             let n = i64::from(count);
             let at = (
                 centre_x + offset_x.div_euclid(n),
@@ -332,9 +258,192 @@ pub fn shade_tile<'f>(
     shaded
 }
 
-/// How the pixels of one run (consecutive pixels showing the same triangle) are shaded, decided
-/// once for the run. Each case computes exactly what [`shade_sample`] would, in the same order.
-enum RunShader<'f> {
+/// [`shade_tile`] with one sample at each pixel centre: the general loop with `seen` holding one
+/// entry at offset zero, and the same result bit for bit, computed triangle by triangle instead
+/// of pixel by pixel. A pass over the pixels finds the triangles they show (the rasterizer
+/// numbered the tile's triangles, so tables indexed by that number replace caches); each of
+/// those gets its shader once; a triangle shaded per pixel (Gouraud, Phong) shades the pixels
+/// of its bounds that show it, at once; the triangles of one colour (flat, constant) are lit
+/// eight at a time and written with the background in one last pass over the pixels. No
+/// decision is taken per run of pixels (runs are two or three pixels long on dense meshes).
+fn shade_single_sample<'f>(
+    frame: &'f Frame,
+    visibility: &Visibility,
+    background: Vec3,
+    target: &mut TileTarget,
+    scratch: &mut TileScratch<'f>,
+    caches: &mut TileCaches,
+) -> usize {
+    let rect = visibility.rect;
+    let tile_width = rect.width() as usize;
+    let stride = target.stride;
+    let count = visibility.raster_ids.len();
+    if count == 0 {
+        // No triangle reaches the tile: all background.
+        for row in 0..rect.height() as usize {
+            let row_start = row * stride + rect.x0 as usize;
+            target.color[row_start..row_start + tile_width].fill(background);
+            target.covered[row_start..row_start + tile_width].fill(false);
+        }
+        return 0;
+    }
+    let TileScratch {
+        flat,
+        seen,
+        fills,
+        filled,
+        flat_waiting,
+    } = scratch;
+    flat.clear();
+    flat_waiting.clear();
+    filled.clear();
+    filled.resize(count + 1, false);
+    filled[count] = true;
+    seen.clear();
+    seen.resize(count + 1, false);
+    fills.clear();
+    fills.resize(count + 1, Vec3::ZERO);
+    fills[count] = background;
+    // `NO_TRIANGLE` (u32::MAX) becomes `count`: the background's entry.
+    let entry = |id: u32| (id as usize).min(count);
+
+    // Coverage, and which triangles are seen.
+    // (Separate loops: the first vectorises, the second is one store per pixel.)
+    let mut shaded = 0;
+    for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
+        let row_start = row * stride + rect.x0 as usize;
+        for (covered, &id) in target.covered[row_start..row_start + tile_width]
+            .iter_mut()
+            .zip(ids)
+        {
+            *covered = id != NO_TRIANGLE;
+        }
+        shaded += target.covered[row_start..row_start + tile_width]
+            .iter()
+            .filter(|&&covered| covered)
+            .count();
+    }
+    for &id in &visibility.triangle {
+        seen[entry(id)] = true;
+    }
+
+    // One shader per seen triangle, in the order they were rasterized. Triangles shaded pixel by
+    // pixel are shaded at once; the others get their colour in `fills`.
+    let phong_allowed = FastPhong::frame_allows(frame);
+    let mut phong = PhongBatch::default();
+    for local in 0..count {
+        if !seen[local] {
+            continue;
+        }
+        let id = visibility.raster_id(local as u32);
+        let raster = frame.raster_triangle(id);
+        let shader = TriangleShader::new(frame, raster, phong_allowed, caches, flat);
+        let corners = match shader {
+            TriangleShader::Solid(color) => {
+                fills[local] = color;
+                filled[local] = true;
+                continue;
+            }
+            TriangleShader::FlatWaiting(index) => {
+                flat_waiting.push((local as u32, index));
+                filled[local] = true;
+                continue;
+            }
+            _ => frame.corner_weights(id),
+        };
+        let Some(area) = raster.bounds.intersect(&rect) else {
+            continue;
+        };
+        let pixels = ShownPixels {
+            visibility,
+            local: local as u32,
+            raster,
+            area,
+            stride,
+        };
+        match shader {
+            TriangleShader::Gouraud([a, b, c]) => pixels.for_each(|offset, _, edges| {
+                let weights = weights_from_edges(raster, &corners, edges);
+                target.color[offset] = a * weights.x + b * weights.y + c * weights.z;
+            }),
+            TriangleShader::Phong(fast) => pixels.for_each(|offset, _, edges| {
+                let weights = weights_from_edges(raster, &corners, edges);
+                phong.push(&fast, weights, offset, target.color);
+            }),
+            TriangleShader::General => pixels.for_each(|offset, at, _| {
+                target.color[offset] = shade_sample(frame, raster, &corners, at, caches);
+            }),
+            TriangleShader::Solid(_) | TriangleShader::FlatWaiting(_) => {}
+        }
+    }
+    phong.flush(target.color);
+    flat.light(frame);
+    for &(local, index) in flat_waiting.iter() {
+        fills[local as usize] = flat.colors[usize::from(index)];
+    }
+
+    // The background and the one-colour triangles, in one pass over the pixels.
+    let per_pixel = filled.iter().any(|&filled| !filled);
+    for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
+        let row_start = row * stride + rect.x0 as usize;
+        let colors = &mut target.color[row_start..row_start + tile_width];
+        if per_pixel {
+            for (color, &id) in colors.iter_mut().zip(ids) {
+                if filled[entry(id)] {
+                    *color = fills[entry(id)];
+                }
+            }
+        } else {
+            for (color, &id) in colors.iter_mut().zip(ids) {
+                *color = fills[entry(id)];
+            }
+        }
+    }
+    shaded
+}
+
+/// The pixels of `area` (within the tile of `visibility`) that show the tile's triangle `local`,
+/// which is `raster`.
+struct ShownPixels<'v> {
+    visibility: &'v Visibility,
+    local: u32,
+    raster: &'v RasterTriangle,
+    area: PixelRect,
+    /// Pixels per row of the band the tile is written into.
+    stride: usize,
+}
+
+impl ShownPixels<'_> {
+    /// Calls `visit(offset, at, edges)` for each, row by row: `offset` in the band, `at` the
+    /// pixel centre in 1/256 pixel, `edges` the triangle's edge functions there (stepped
+    /// along the row: exact integers, the values `edge_values` gives).
+    #[inline]
+    fn for_each(&self, mut visit: impl FnMut(usize, (i64, i64), [i64; 3])) {
+        let rect = self.visibility.rect;
+        let tile_width = rect.width() as usize;
+        let (first, last) = (
+            (self.area.x0 - rect.x0) as usize,
+            (self.area.x1 - rect.x0) as usize,
+        );
+        let step = edge_steps_x(self.raster);
+        let centre = |p: u32| i64::from(p) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+        for py in self.area.y0..self.area.y1 {
+            let row = (py - rect.y0) as usize;
+            let ids = &self.visibility.triangle[row * tile_width..][first..last];
+            let y = centre(py);
+            let mut edges = edge_values(self.raster, centre(self.area.x0), y);
+            for (px, &id) in (self.area.x0..).zip(ids) {
+                if id == self.local {
+                    visit(row * self.stride + px as usize, (centre(px), y), edges);
+                }
+                edges = [edges[0] + step[0], edges[1] + step[1], edges[2] + step[2]];
+            }
+        }
+    }
+}
+
+/// How the pixels of one triangle are shaded, decided once per triangle and tile. Each case computes exactly what [`shade_sample`] would, in the same order.
+enum TriangleShader<'f> {
     /// Flat or constant shading without a colour texture: one colour for the whole triangle.
     Solid(Vec3),
     /// Flat shading on the fast path: the triangle waits in the tile's [`FlatBatch`] at this
@@ -348,7 +457,7 @@ enum RunShader<'f> {
     General,
 }
 
-impl<'f> RunShader<'f> {
+impl<'f> TriangleShader<'f> {
     fn new(
         frame: &'f Frame,
         raster: &'f RasterTriangle,
@@ -363,10 +472,12 @@ impl<'f> RunShader<'f> {
             && material.textures.diffuse.is_none()
             && material.textures.ambient.is_none();
         match style.shading {
-            Shading::Constant if plain => RunShader::Solid(frame.constant_colors[triangle.material as usize]),
+            Shading::Constant if plain => {
+                TriangleShader::Solid(frame.constant_colors[triangle.material as usize])
+            }
             Shading::Flat if plain => {
                 if let Some(index) = caches.flat_waiting.get(raster.source) {
-                    return RunShader::FlatWaiting(index);
+                    return TriangleShader::FlatWaiting(index);
                 }
                 let back_facing = raster.back_facing;
                 let fast = phong_allowed
@@ -375,23 +486,25 @@ impl<'f> RunShader<'f> {
                 if let Some(lighting) = fast {
                     let index = flat.add(lighting, raster.triangle, back_facing);
                     caches.flat_waiting.insert(raster.source, index);
-                    return RunShader::FlatWaiting(index);
+                    return TriangleShader::FlatWaiting(index);
                 }
                 let (_, rest) = caches
                     .flat
                     .get_or_insert_with(raster.source, || frame.flat_colors(triangle, back_facing));
-                RunShader::Solid(rest)
+                TriangleShader::Solid(rest)
             }
             Shading::Gouraud if plain && raster.back_facing => {
                 let colors = caches.back.get_or_insert_with(raster.source, || {
                     back_gouraud_colors(frame, triangle, material, style)
                 });
-                RunShader::Gouraud(colors.map(|(_, rest)| rest))
+                TriangleShader::Gouraud(colors.map(|(_, rest)| rest))
             }
-            Shading::Gouraud if plain => RunShader::Gouraud(triangle.vertices.map(|v| frame.colors(v).color)),
+            Shading::Gouraud if plain => {
+                TriangleShader::Gouraud(triangle.vertices.map(|v| frame.colors(v).color))
+            }
             Shading::Phong if phong_allowed => FastPhong::new(frame, triangle, raster.back_facing)
-                .map_or(RunShader::General, RunShader::Phong),
-            _ => RunShader::General,
+                .map_or(TriangleShader::General, TriangleShader::Phong),
+            _ => TriangleShader::General,
         }
     }
 }
@@ -421,7 +534,13 @@ fn back_gouraud_colors(
 /// point `at` (1/256 pixel); `corners` are the triangle's corner weights
 /// (`Frame::corner_weights`).
 pub fn source_weights(triangle: &RasterTriangle, corners: &[Vec3; 3], at: (i64, i64)) -> Vec3 {
-    let [e0, e1, e2] = edge_values(triangle, at.0, at.1);
+    weights_from_edges(triangle, corners, edge_values(triangle, at.0, at.1))
+}
+
+/// [`source_weights`] at a point where the edge functions take the values `edges`.
+#[inline]
+fn weights_from_edges(triangle: &RasterTriangle, corners: &[Vec3; 3], edges: [i64; 3]) -> Vec3 {
+    let [e0, e1, e2] = edges;
     let screen = Vec3::new(e0 as f32, e1 as f32, e2 as f32) * triangle.inv_area;
     let [w0, w1, w2] = triangle.inv_w;
     let over_w = screen * Vec3::new(w0, w1, w2);
@@ -643,7 +762,7 @@ mod tests {
     /// Every visible pixel, shaded by the per-run shaders and by the general `shade_sample`:
     /// the same bits, for each shading mode and back-face mode.
     #[test]
-    fn run_shaders_equal_the_general_path_bit_for_bit() {
+    fn triangle_shaders_equal_the_general_path_bit_for_bit() {
         for shading in [Shading::Constant, Shading::Flat, Shading::Gouraud, Shading::Phong] {
             for (back_faces, view) in [
                 (BackFaces::ReverseLit, None),
@@ -685,24 +804,30 @@ mod tests {
                             px * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
                             py * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
                         );
+                        let id = visibility.raster_id(id);
                         let raster = frame.raster_triangle(id);
                         let corners = frame.corner_weights(id);
                         let general = shade_sample(&frame, raster, &corners, at, &mut general_caches);
-                        let run =
-                            match RunShader::new(&frame, raster, phong_allowed, &mut run_caches, &mut flat) {
-                                RunShader::FlatWaiting(index) => {
-                                    flat.light(&frame);
-                                    flat_lit += 1;
-                                    flat.colors[usize::from(index)]
-                                }
-                                RunShader::Solid(color) => color,
-                                RunShader::Gouraud([a, b, c]) => {
-                                    let w = source_weights(raster, &corners, at);
-                                    a * w.x + b * w.y + c * w.z
-                                }
-                                RunShader::Phong(fast) => fast.shade(source_weights(raster, &corners, at)),
-                                RunShader::General => continue,
-                            };
+                        let run = match TriangleShader::new(
+                            &frame,
+                            raster,
+                            phong_allowed,
+                            &mut run_caches,
+                            &mut flat,
+                        ) {
+                            TriangleShader::FlatWaiting(index) => {
+                                flat.light(&frame);
+                                flat_lit += 1;
+                                flat.colors[usize::from(index)]
+                            }
+                            TriangleShader::Solid(color) => color,
+                            TriangleShader::Gouraud([a, b, c]) => {
+                                let w = source_weights(raster, &corners, at);
+                                a * w.x + b * w.y + c * w.z
+                            }
+                            TriangleShader::Phong(fast) => fast.shade(source_weights(raster, &corners, at)),
+                            TriangleShader::General => continue,
+                        };
                         assert_eq!(run, general, "{shading:?} {back_faces:?} {view:?} at {px}, {py}");
                         shaded += 1;
                         back_seen += usize::from(raster.back_facing);
@@ -727,6 +852,96 @@ mod tests {
                         "{shading:?}: {back_seen} back-facing pixels compared"
                     );
                 }
+            }
+        }
+    }
+
+    /// Whole tiles as `shade_tile` writes them, against the general path pixel by pixel: every
+    /// pixel written with the general path's bits, the background where nothing is seen, and
+    /// the coverage. The two spheres take different shading modes, so that tiles mix
+    /// triangles of one colour with triangles shaded per pixel, and the image is wider than
+    /// the spheres, so that some tiles have no triangle at all.
+    #[test]
+    fn shade_tile_writes_the_general_paths_colours() {
+        use Shading::{Constant, Flat, Gouraud, Phong};
+        let modes = [
+            (Flat, Gouraud),
+            (Phong, Flat),
+            (Constant, Phong),
+            (Gouraud, Gouraud),
+            (Flat, Flat),
+        ];
+        for (first, second) in modes {
+            for back_faces in [BackFaces::ReverseLit, BackFaces::Lit] {
+                let mut scene =
+                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces);
+                scene.objects[0].shading = first;
+                scene.objects[1].shading = second;
+                scene.image.width = 260;
+                scene.image.height = 140;
+                scene.image.background = Vec3::new(0.25, 0.5, 0.75);
+                // Cut the spheres open so that back faces are seen too.
+                scene.camera.projection = crate::scene::Projection::Perspective {
+                    fov_y_degrees: 40.0,
+                    near: 4.9,
+                    far: 100.0,
+                };
+                let background = scene.image.background;
+                let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+                let width = scene.image.width as usize;
+                let mut caches = TileCaches {
+                    flat: TriangleColorCache::new(),
+                    back: TriangleColorCache::new(),
+                    flat_waiting: TriangleColorCache::new(),
+                };
+                let mut scratch = TileScratch::default();
+                let (mut empty_tiles, mut covered_pixels) = (0, 0);
+                for tile in 0..frame.tiles.count() {
+                    let rect = frame.tiles.rect(tile);
+                    let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+                    // NaN and `true` everywhere: a pixel the tile does not write is caught.
+                    let band = rect.height() as usize * width;
+                    let (mut color, mut covered) = (vec![Vec3::NAN; band], vec![true; band]);
+                    let mut target = TileTarget {
+                        color: &mut color,
+                        covered: &mut covered,
+                        stride: width,
+                    };
+                    let shaded = shade_tile(&frame, &visibility, background, &mut target, &mut scratch);
+                    empty_tiles += usize::from(visibility.raster_ids.is_empty());
+                    let mut seen = 0;
+                    for (slot, &id) in visibility.triangle.iter().enumerate() {
+                        let px = rect.x0 + slot as u32 % rect.width();
+                        let py = rect.y0 + slot as u32 / rect.width();
+                        let offset = (py - rect.y0) as usize * width + px as usize;
+                        let expected = if id == NO_TRIANGLE {
+                            background
+                        } else {
+                            seen += 1;
+                            let id = visibility.raster_id(id);
+                            let at = (
+                                i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
+                                i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
+                            );
+                            let corners = frame.corner_weights(id);
+                            shade_sample(&frame, frame.raster_triangle(id), &corners, at, &mut caches)
+                        };
+                        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                        assert_eq!(
+                            bits(color[offset]),
+                            bits(expected),
+                            "{first:?}/{second:?} {back_faces:?} at {px}, {py}: {} against {expected}",
+                            color[offset]
+                        );
+                        assert_eq!(covered[offset], id != NO_TRIANGLE);
+                    }
+                    assert_eq!(shaded, seen);
+                    covered_pixels += seen;
+                }
+                assert!(
+                    empty_tiles > 0 && covered_pixels > 2000,
+                    "{empty_tiles} empty tiles, {covered_pixels} pixels"
+                );
             }
         }
     }
