@@ -106,7 +106,8 @@ pub struct TileScratch<'f> {
     flat_waiting: Vec<(u32, u16)>,
 }
 
-/// The fast-path flat triangles a tile shows, lit together once the tile's pixels are known. One at a time, each triangle waits on its own cache
+/// The fast-path flat triangles a tile shows, lit together once the tile's pixels are known.
+/// One at a time, each triangle waits on its own cache
 /// misses (its corners) and its own chain of square roots and divisions; together, the corner
 /// loads overlap and the arithmetic runs [`LANES`] wide.
 #[derive(Default)]
