@@ -107,9 +107,9 @@ pub struct TileScratch<'f> {
 }
 
 /// The fast-path flat triangles a tile shows, lit together once the tile's pixels are known.
-/// One at a time, each triangle waits on its own cache
-/// misses (its corners) and its own chain of square roots and divisions; together, the corner
-/// loads overlap and the arithmetic runs [`LANES`] wide.
+/// One at a time, each triangle waits on its own cache misses (its corners) and its own chain of
+/// square roots and divisions; together, the corner loads overlap and the arithmetic runs
+/// [`LANES`] wide.
 #[derive(Default)]
 struct FlatBatch<'f> {
     /// Per waiting triangle: its lighting, the triangle and its side.
