@@ -13,7 +13,7 @@
 use glam::Vec3;
 
 use crate::render::TILE_SIZE;
-use crate::render::raster::{NO_TRIANGLE, PixelRect, RasterTriangle};
+use crate::render::raster::{Corners, NO_TRIANGLE, PixelRect, RasterTriangle};
 
 /// The image cut into `TILE_SIZE` squares (smaller at the right and bottom edges), numbered
 /// row by row from the top-left.
@@ -150,7 +150,7 @@ impl RasterChunk {
 
     /// The corner weights of raster triangle `index` of this chunk.
     #[inline]
-    pub fn corner_weights(&self, index: usize) -> [Vec3; 3] {
+    pub fn corner_weights(&self, index: usize) -> Corners {
         self.triangles[index]
             .corner_weights
             .resolve(&self.clipped_weights)

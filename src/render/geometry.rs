@@ -26,7 +26,7 @@ use crate::render::clip::{Clipped, clip_triangle};
 use crate::render::lanes::LANES;
 pub use crate::render::raster::FrameTriangle;
 use crate::render::raster::{
-    GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, SourceTriangle,
+    Corners, GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, SourceTriangle,
     setup_snapped, setup_triangle,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong};
@@ -78,7 +78,8 @@ pub struct Frame {
 pub struct FrameVertex {
     pub position: Vec3,
     /// Unit normal, or zero when the mesh gives none usable, or when nothing reads it (objects
-    /// shaded flat or constant, depth-only frames).
+    /// shaded flat or constant, depth-only frames, Gouraud vertices no rasterized triangle
+    /// uses).
     pub normal: Vec3,
 }
 
@@ -179,7 +180,7 @@ impl Frame {
 
     /// The corner weights of the raster triangle with id `id` (see `CornerWeights`).
     #[inline]
-    pub fn corner_weights(&self, id: u32) -> [Vec3; 3] {
+    pub fn corner_weights(&self, id: u32) -> Corners {
         let (chunk, index) = bin::split_raster_id(id);
         self.raster[chunk].corner_weights(index)
     }
@@ -517,13 +518,17 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
         .collect();
     let mut colors = std::mem::take(&mut frame.vertex_colors);
     colors.resize(frame.vertices.len(), VertexColors::default());
+    // The vertices are moved out so that the pass can give normals to those that wait for one
+    // while it reads the frame's lights and materials (which never read the vertices).
+    let mut vertices = std::mem::take(&mut frame.vertices);
     let lit_frame = &*frame;
     let fast_allowed = FastPhong::frame_allows(lit_frame);
     colors
         .par_chunks_mut(VERTEX_CHUNK)
+        .zip(vertices.par_chunks_mut(VERTEX_CHUNK))
         .zip(seen.par_chunks(VERTEX_CHUNK))
         .enumerate()
-        .for_each(|(chunk, (colors, seen))| {
+        .for_each(|(chunk, ((colors, vertices), seen))| {
             let first = chunk * VERTEX_CHUNK;
             let mut object = placed.partition_point(|place| place.vertex_base as usize <= first) - 1;
             // The fast lighting of the last (object, material) met, when it may take it.
@@ -544,7 +549,17 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                     Some(materials) => materials[v],
                     None => place.material_base,
                 };
-                let vertex = &lit_frame.vertices[vertex_index];
+                let vertex = &mut vertices[offset];
+                if place.normal_when_lit {
+                    let normal = scene.objects[object]
+                        .mesh
+                        .normals
+                        .get(v)
+                        .copied()
+                        .unwrap_or(Vec3::ZERO);
+                    vertex.normal = (place.normal_matrix * normal).normalize_or_zero();
+                }
+                let vertex = *vertex;
                 let style = &lit_frame.objects[object];
                 if fast_allowed {
                     let lighting = match fast {
@@ -590,6 +605,7 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                 batch.flush(&lighting, colors);
             }
         });
+    frame.vertices = vertices;
     frame.vertex_colors = colors;
 }
 
@@ -662,6 +678,11 @@ struct PlacedObject {
     vertex_count: u32,
     material_base: u32,
     uses_mesh_materials: bool,
+    /// From model to eye-relative world normals (inverse transpose).
+    normal_matrix: Mat3,
+    /// The vertices' normals are left zero by the vertex pass and set when the vertex is lit
+    /// (Gouraud; see `add_object_vertices`).
+    normal_when_lit: bool,
     mirrored: bool,
     /// Back faces can never be seen: skip them (see [`back_faces_hidden`]).
     skip_back_faces: bool,
@@ -871,8 +892,12 @@ fn add_object_vertices(
     projected.resize(end, ProjectedVertex::default());
     let (width, height) = (viewport.width as f32, viewport.height as f32);
     // Only smooth shading reads vertex normals: flat and constant shading light with the face
-    // normal, and depth-only frames light nothing.
-    let needs_normals = frame.lit && matches!(style.shading, Shading::Gouraud | Shading::Phong);
+    // normal, and depth-only frames light nothing. Gouraud shading reads only those of the
+    // vertices it lights, which get theirs then (`light_gouraud_vertices`): the triangles
+    // tell which (debug views read the others).
+    let normal_when_lit = frame.lit && style.shading == Shading::Gouraud && frame.debug_view.is_none();
+    let needs_normals =
+        frame.lit && matches!(style.shading, Shading::Gouraud | Shading::Phong) && !normal_when_lit;
     frame.vertices[vertex_base as usize..]
         .par_chunks_mut(VERTEX_CHUNK)
         .zip(projected[vertex_base as usize..].par_chunks_mut(VERTEX_CHUNK))
@@ -946,6 +971,8 @@ fn add_object_vertices(
         vertex_count: vertex_count as u32,
         material_base,
         uses_mesh_materials,
+        normal_matrix: transforms.normal_matrix,
+        normal_when_lit,
         mirrored: transforms.mirrored,
         skip_back_faces: frame.lit && back_faces_hidden(object, camera),
     }

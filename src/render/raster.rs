@@ -142,11 +142,48 @@ impl CornerWeights {
 
     /// The weights, given the table of the chunk the triangle belongs to.
     #[inline]
-    pub fn resolve(self, table: &[[Vec3; 3]]) -> [Vec3; 3] {
+    pub fn resolve(self, table: &[[Vec3; 3]]) -> Corners {
         match self {
-            CornerWeights::IDENTITY => Vec3::AXES,
-            CornerWeights::SWAPPED => Self::SWAPPED_AXES,
-            CornerWeights(row) => table[row as usize],
+            CornerWeights::IDENTITY => Corners::Identity,
+            CornerWeights::SWAPPED => Corners::Swapped,
+            CornerWeights(row) => Corners::Clipped(table[row as usize]),
+        }
+    }
+}
+
+/// A raster triangle's corner weights (see [`CornerWeights`]), resolved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Corners {
+    /// `[X, Y, Z]`: an unclipped triangle.
+    Identity,
+    /// `[X, Z, Y]`: an unclipped triangle whose corners 1 and 2 setup swapped.
+    Swapped,
+    /// The weights of a piece of a clipped triangle.
+    Clipped([Vec3; 3]),
+}
+
+impl Corners {
+    /// The weights of each corner.
+    pub fn to_array(self) -> [Vec3; 3] {
+        match self {
+            Corners::Identity => Vec3::AXES,
+            Corners::Swapped => CornerWeights::SWAPPED_AXES,
+            Corners::Clipped(weights) => weights,
+        }
+    }
+
+    /// The source-triangle weights of the point with weights `w` over the corners:
+    /// `c₀·w.x + c₁·w.y + c₂·w.z`. For the identity and its swap that sum adds exact zeros to
+    /// each component of `w` (or its swap): it is that component, bit for bit, unless the
+    /// component is −0 or a term is NaN, which the weights of a triangle's points never are
+    /// (they are `+0` or more at the centres it covers, and finite elsewhere). So the sum is
+    /// skipped for them: nearly every triangle is unclipped.
+    #[inline]
+    pub fn apply(&self, w: Vec3) -> Vec3 {
+        match self {
+            Corners::Identity => w,
+            Corners::Swapped => Vec3::new(w.x, w.z, w.y),
+            Corners::Clipped([a, b, c]) => *a * w.x + *b * w.y + *c * w.z,
         }
     }
 }
@@ -748,7 +785,7 @@ mod tests {
         assert_eq!(table.len(), 2, "the identity and its swap take no row");
         for (weights, stored) in [Vec3::AXES, swapped, clipped, negative_zero].iter().zip(stored) {
             let bits = |w: &[Vec3; 3]| w.map(|v| v.to_array().map(f32::to_bits));
-            assert_eq!(bits(&stored.resolve(&table)), bits(weights));
+            assert_eq!(bits(&stored.resolve(&table).to_array()), bits(weights));
         }
     }
 

@@ -22,7 +22,7 @@ use crate::render::geometry::{
 };
 use crate::render::lanes::{LANES, Mask, Vec3s};
 use crate::render::raster::{
-    NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_values,
+    Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_values,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch};
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
@@ -534,26 +534,26 @@ fn back_gouraud_colors(
 /// Perspective-correct barycentric weights of the source triangle's vertices at the fixed-point
 /// point `at` (1/256 pixel); `corners` are the triangle's corner weights
 /// (`Frame::corner_weights`).
-pub fn source_weights(triangle: &RasterTriangle, corners: &[Vec3; 3], at: (i64, i64)) -> Vec3 {
+pub fn source_weights(triangle: &RasterTriangle, corners: &Corners, at: (i64, i64)) -> Vec3 {
     weights_from_edges(triangle, corners, edge_values(triangle, at.0, at.1))
 }
 
 /// [`source_weights`] at a point where the edge functions take the values `edges`.
 #[inline]
-fn weights_from_edges(triangle: &RasterTriangle, corners: &[Vec3; 3], edges: [i64; 3]) -> Vec3 {
+fn weights_from_edges(triangle: &RasterTriangle, corners: &Corners, edges: [i64; 3]) -> Vec3 {
     let [e0, e1, e2] = edges;
     let screen = Vec3::new(e0 as f32, e1 as f32, e2 as f32) * triangle.inv_area;
     let [w0, w1, w2] = triangle.inv_w;
     let over_w = screen * Vec3::new(w0, w1, w2);
     let sum = over_w.element_sum();
     let corner = if sum > 0.0 { over_w / sum } else { screen };
-    corners[0] * corner.x + corners[1] * corner.y + corners[2] * corner.z
+    corners.apply(corner)
 }
 
 fn shade_sample(
     frame: &Frame,
     raster: &RasterTriangle,
-    corners: &[Vec3; 3],
+    corners: &Corners,
     at: (i64, i64),
     caches: &mut TileCaches,
 ) -> Vec3 {
