@@ -47,8 +47,13 @@ pub const TRIANGLE_CHUNK: usize = 4096;
 #[derive(Debug, Clone)]
 pub struct Frame {
     pub vertices: Vec<FrameVertex>,
-    /// Per vertex, the lit colours of Gouraud objects; empty when no object is Gouraud-shaded.
-    pub vertex_colors: Vec<VertexColors>,
+    /// Per vertex, the lit colour of Gouraud objects (see [`VertexColors::color`]); empty when
+    /// no object is Gouraud-shaded.
+    pub vertex_colors: Vec<Vec3>,
+    /// Per vertex, [`VertexColors::color_textured`]; empty unless a material has a colour
+    /// texture. Apart from `vertex_colors` because it is rarely needed: the common frame
+    /// writes, and its tiles read, half the bytes.
+    pub vertex_colors_textured: Vec<Vec3>,
     /// Per vertex, texture coordinates, tint and tangent; empty when no mesh has any of them.
     pub vertex_attributes: Vec<VertexAttributes>,
     /// The raster triangles of each chunk of the triangle stream, binned into tiles.
@@ -202,12 +207,23 @@ impl Frame {
             .unwrap_or_default()
     }
 
+    /// [`VertexColors::color`] of `vertex`: the whole colour for a material without a colour
+    /// texture.
     #[inline]
-    pub fn colors(&self, vertex: u32) -> VertexColors {
+    pub fn color(&self, vertex: u32) -> Vec3 {
         self.vertex_colors
             .get(vertex as usize)
             .copied()
-            .unwrap_or_default()
+            .unwrap_or(Vec3::ZERO)
+    }
+
+    #[inline]
+    pub fn colors(&self, vertex: u32) -> VertexColors {
+        let at = |colors: &[Vec3]| colors.get(vertex as usize).copied().unwrap_or(Vec3::ZERO);
+        VertexColors {
+            color: at(&self.vertex_colors),
+            color_textured: at(&self.vertex_colors_textured),
+        }
     }
 
     /// Unit geometric normal of the triangle's front side, zero for a degenerate triangle.
@@ -363,7 +379,7 @@ pub fn build_frame_in(
 #[derive(Default)]
 pub struct SpareBuffers {
     vertices: Vec<FrameVertex>,
-    vertex_colors: Vec<VertexColors>,
+    vertex_colors: Vec<Vec3>,
     /// The chunks' bin arrays, and their triangle arrays (taken back by the next frame's chunk
     /// of the same index).
     raster: Vec<RasterChunk>,
@@ -429,6 +445,7 @@ fn build(
             std::mem::take(&mut spare.vertex_colors),
             if needs_colors { vertex_count } else { 0 },
         ),
+        vertex_colors_textured: Vec::new(),
         vertex_attributes: Vec::with_capacity(if needs_attributes { vertex_count } else { 0 }),
         raster: Vec::new(),
         tiles: TileGrid::new(width, height),
@@ -517,18 +534,20 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
         })
         .collect();
     let mut colors = std::mem::take(&mut frame.vertex_colors);
-    colors.resize(frame.vertices.len(), VertexColors::default());
+    colors.resize(frame.vertices.len(), Vec3::ZERO);
     // The vertices are moved out so that the pass can give normals to those that wait for one
     // while it reads the frame's lights and materials (which never read the vertices).
     let mut vertices = std::mem::take(&mut frame.vertices);
     let lit_frame = &*frame;
     let fast_allowed = FastPhong::frame_allows(lit_frame);
-    colors
+    // Per chunk, the textured parts of its vertices that have one (rare: allocated only then).
+    let textured_parts: Vec<Vec<(usize, Vec3)>> = colors
         .par_chunks_mut(VERTEX_CHUNK)
         .zip(vertices.par_chunks_mut(VERTEX_CHUNK))
         .zip(seen.par_chunks(VERTEX_CHUNK))
         .enumerate()
-        .for_each(|(chunk, ((colors, vertices), seen))| {
+        .map(|(chunk, ((colors, vertices), seen))| {
+            let mut textured_parts = Vec::new();
             let first = chunk * VERTEX_CHUNK;
             let mut object = placed.partition_point(|place| place.vertex_base as usize <= first) - 1;
             // The fast lighting of the last (object, material) met, when it may take it.
@@ -590,23 +609,27 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                 let (textured, rest) =
                     lit_frame.light_material(&material, style, vertex.position, vertex.normal, false);
                 colors[offset] = if has_color_texture(&material) {
-                    VertexColors {
-                        color: rest,
-                        color_textured: textured,
-                    }
+                    textured_parts.push((vertex_index, textured));
+                    rest
                 } else {
-                    VertexColors {
-                        color: textured + rest,
-                        color_textured: Vec3::ZERO,
-                    }
+                    textured + rest
                 };
             }
             if let Some((.., Some(lighting))) = fast {
                 batch.flush(&lighting, colors);
             }
-        });
+            textured_parts
+        })
+        .collect();
     frame.vertices = vertices;
     frame.vertex_colors = colors;
+    let mut textured = std::mem::take(&mut frame.vertex_colors_textured);
+    textured.clear();
+    for (vertex, part) in textured_parts.into_iter().flatten() {
+        textured.resize(frame.vertices.len(), Vec3::ZERO);
+        textured[vertex] = part;
+    }
+    frame.vertex_colors_textured = textured;
 }
 
 /// Up to [`LANES`] vertices of one (object, material) waiting to be lit together, and where
@@ -631,7 +654,7 @@ impl LightingBatch {
 
     /// Lights the waiting vertices into `colors` and empties the batch. The unused lanes of a
     /// partial batch repeat its first vertex, and their results are dropped.
-    fn flush(&mut self, lighting: &FastLighting, colors: &mut [VertexColors]) {
+    fn flush(&mut self, lighting: &FastLighting, colors: &mut [Vec3]) {
         if self.len == 0 {
             return;
         }
@@ -641,10 +664,7 @@ impl LightingBatch {
         }
         let lit = lighting.light_lanes(&self.positions, &self.normals);
         for (&slot, &color) in self.slots[..self.len].iter().zip(&lit) {
-            colors[slot] = VertexColors {
-                color,
-                color_textured: Vec3::ZERO,
-            };
+            colors[slot] = color;
         }
         self.len = 0;
     }

@@ -500,9 +500,7 @@ impl<'f> TriangleShader<'f> {
                 });
                 TriangleShader::Gouraud(colors.map(|(_, rest)| rest))
             }
-            Shading::Gouraud if plain => {
-                TriangleShader::Gouraud(triangle.vertices.map(|v| frame.colors(v).color))
-            }
+            Shading::Gouraud if plain => TriangleShader::Gouraud(triangle.vertices.map(|v| frame.color(v))),
             Shading::Phong if phong_allowed => FastPhong::new(frame, triangle, raster.back_facing)
                 .map_or(TriangleShader::General, TriangleShader::Phong),
             _ => TriangleShader::General,

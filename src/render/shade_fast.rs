@@ -585,7 +585,7 @@ pub(crate) mod tests {
             let mut lit = 0;
             for triangle in &frame_triangles(&frame) {
                 for v in triangle.vertices {
-                    let color = frame.vertex_colors[v as usize].color;
+                    let color = frame.vertex_colors[v as usize];
                     if color == Vec3::ZERO {
                         continue; // a vertex only hidden back faces use: never lit, never read
                     }
@@ -599,11 +599,7 @@ pub(crate) mod tests {
                 }
             }
             assert!(lit > 1000, "{lit}");
-            let unlit = frame
-                .vertex_colors
-                .iter()
-                .filter(|c| c.color == Vec3::ZERO)
-                .count();
+            let unlit = frame.vertex_colors.iter().filter(|&&c| c == Vec3::ZERO).count();
             assert!(
                 unlit > frame.vertices.len() / 4,
                 "hidden back vertices are not lit: {unlit}"
