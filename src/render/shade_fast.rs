@@ -12,7 +12,9 @@
 
 use glam::Vec3;
 
-use crate::lighting::{MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, attenuate, reflect, specular_power};
+use crate::lighting::{
+    MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, attenuate, reflect, specular_power, whole_exponent,
+};
 use crate::render::geometry::{Frame, FrameTriangle, ObjectStyle, Viewer};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::shade::renormalize_or_else;
@@ -171,14 +173,31 @@ impl<'f> FastLighting<'f> {
                     reflected.dot(to_viewer)
                 };
                 let intensity = color.scale(strength);
-                // `powf` has no lane-wise form with the same bits: one call per lit lane.
-                let power = Floats(std::array::from_fn(|i| {
-                    if lit.lane(i) {
-                        specular_power(cosine.0[i], material.shininess)
-                    } else {
-                        0.0
+                let power = match whole_exponent(material.shininess) {
+                    // `specular_power`'s squaring, lane-wise, multiplication for multiplication.
+                    Some(exponent) => {
+                        let base = cosine.max(Floats::splat(0.0));
+                        let (mut result, mut square, mut rest) = (Floats::splat(1.0), base, exponent);
+                        while rest > 0 {
+                            if rest & 1 == 1 {
+                                result = result * square;
+                            }
+                            rest >>= 1;
+                            if rest > 0 {
+                                square = square * square;
+                            }
+                        }
+                        result
                     }
-                }));
+                    // `powf` has no lane-wise form with the same bits: one call per lit lane.
+                    None => Floats(std::array::from_fn(|i| {
+                        if lit.lane(i) {
+                            specular_power(cosine.0[i], material.shininess)
+                        } else {
+                            0.0
+                        }
+                    })),
+                };
                 let added = specular + (Vec3s::splat(material.specular) * intensity).scale(power);
                 specular = lit.select3(added, specular);
             }
@@ -498,8 +517,12 @@ pub(crate) mod tests {
     /// both viewers, unlit lanes, reversed normals and a zero normal among them.
     #[test]
     fn lighting_eight_points_at_once_equals_lighting_each_bit_for_bit() {
-        for (model, specular) in MODELS {
-            let scene = scene(model, specular, BackFaces::ReverseLit);
+        // A whole shininess is raised by squaring, lane-wise; another goes through `powf`.
+        for ((model, specular), shininess) in MODELS.into_iter().flat_map(|m| [(m, 17.0), (m, 17.5)]) {
+            let mut scene = scene(model, specular, BackFaces::ReverseLit);
+            for object in &mut scene.objects {
+                object.material.as_mut().expect("a material").shininess = shininess;
+            }
             let mut frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
             for viewer in [
                 frame.viewer,
