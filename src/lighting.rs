@@ -234,7 +234,7 @@ pub fn reflect(to_light: Vec3, normal: Vec3) -> Vec3 {
 pub fn specular_power(cosine: f32, shininess: f32) -> f32 {
     let base = cosine.max(0.0);
     match whole_exponent(shininess) {
-        Some(exponent) => power_by_squaring(base, exponent),
+        Some(exponent) => power_by_squaring(base, 1.0, exponent),
         None => base.powf(shininess),
     }
 }
@@ -249,18 +249,19 @@ pub fn whole_exponent(shininess: f32) -> Option<u32> {
     whole.then_some(shininess as u32)
 }
 
-/// `base^exponent` by binary exponentiation: the multiplications the lane-wise form
-/// (`FastLighting`) repeats in the same order.
+/// `base^exponent` by binary exponentiation, `one` being the multiplicative identity: for an
+/// `f32`, or lane-wise for the eight-lane lighting (`FastLighting`), with the same
+/// multiplications in the same order, so the same bits per lane.
 #[inline]
-pub fn power_by_squaring(base: f32, exponent: u32) -> f32 {
-    let (mut result, mut square, mut rest) = (1.0, base, exponent);
+pub fn power_by_squaring<T: Copy + std::ops::Mul<Output = T>>(base: T, one: T, exponent: u32) -> T {
+    let (mut result, mut square, mut rest) = (one, base, exponent);
     while rest > 0 {
         if rest & 1 == 1 {
-            result *= square;
+            result = result * square;
         }
         rest >>= 1;
         if rest > 0 {
-            square *= square;
+            square = square * square;
         }
     }
     result
@@ -653,7 +654,7 @@ mod cook_torrance_tests {
         for exponent in [0, 1, 2, 5, 17, 20, 128, 1000, MAX_SQUARED_EXPONENT] {
             for i in 0..=1000 {
                 let base = i as f32 / 1000.0;
-                let squared = power_by_squaring(base, exponent);
+                let squared = power_by_squaring(base, 1.0, exponent);
                 let exact = f64::from(base).powi(exponent as i32);
                 let bound = exact * f64::from(exponent.max(1)) * f64::from(f32::EPSILON) + 1e-38;
                 assert!(

@@ -623,13 +623,14 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
         .collect();
     frame.vertices = vertices;
     frame.vertex_colors = colors;
-    let mut textured = std::mem::take(&mut frame.vertex_colors_textured);
-    textured.clear();
-    for (vertex, part) in textured_parts.into_iter().flatten() {
-        textured.resize(frame.vertices.len(), Vec3::ZERO);
-        textured[vertex] = part;
+    let mut textured_parts = textured_parts.into_iter().flatten().peekable();
+    if textured_parts.peek().is_some() {
+        let mut textured = vec![Vec3::ZERO; frame.vertices.len()];
+        for (vertex, part) in textured_parts {
+            textured[vertex] = part;
+        }
+        frame.vertex_colors_textured = textured;
     }
-    frame.vertex_colors_textured = textured;
 }
 
 /// Up to [`LANES`] vertices of one (object, material) waiting to be lit together, and where

@@ -13,7 +13,8 @@
 use glam::Vec3;
 
 use crate::lighting::{
-    MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, attenuate, reflect, specular_power, whole_exponent,
+    MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, attenuate, power_by_squaring, reflect, specular_power,
+    whole_exponent,
 };
 use crate::render::geometry::{Frame, FrameTriangle, ObjectStyle, Viewer};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
@@ -174,20 +175,9 @@ impl<'f> FastLighting<'f> {
                 };
                 let intensity = color.scale(strength);
                 let power = match whole_exponent(material.shininess) {
-                    // `specular_power`'s squaring, lane-wise, multiplication for multiplication.
+                    // `specular_power`'s squaring, lane-wise.
                     Some(exponent) => {
-                        let base = cosine.max(Floats::splat(0.0));
-                        let (mut result, mut square, mut rest) = (Floats::splat(1.0), base, exponent);
-                        while rest > 0 {
-                            if rest & 1 == 1 {
-                                result = result * square;
-                            }
-                            rest >>= 1;
-                            if rest > 0 {
-                                square = square * square;
-                            }
-                        }
-                        result
+                        power_by_squaring(cosine.max(Floats::splat(0.0)), Floats::splat(1.0), exponent)
                     }
                     // `powf` has no lane-wise form with the same bits: one call per lit lane.
                     None => Floats(std::array::from_fn(|i| {
