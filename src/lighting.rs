@@ -536,6 +536,31 @@ mod tests {
         );
         check(terms.total(), Vec3::new(0.1, 0.7, 0.1));
     }
+
+    #[test]
+    fn whole_exponents_are_raised_by_squaring_within_n_rounding_errors_of_powf() {
+        assert_eq!(whole_exponent(20.0), Some(20));
+        assert_eq!(whole_exponent(0.0), Some(0));
+        assert_eq!(whole_exponent(76.8), None);
+        assert_eq!(whole_exponent(2048.0), None);
+        assert_eq!(whole_exponent(f32::NAN), None);
+        assert_eq!(whole_exponent(-2.0), None);
+        for exponent in [0, 1, 2, 5, 17, 20, 128, 1000, MAX_SQUARED_EXPONENT] {
+            for i in 0..=1000 {
+                let base = i as f32 / 1000.0;
+                let squared = power_by_squaring(base, 1.0, exponent);
+                let exact = f64::from(base).powi(exponent as i32);
+                let bound = exact * f64::from(exponent.max(1)) * f64::from(f32::EPSILON) + 1e-38;
+                assert!(
+                    (f64::from(squared) - exact).abs() <= bound,
+                    "{base}^{exponent}: {squared} against {exact}"
+                );
+                assert_eq!(specular_power(base, exponent as f32), squared);
+            }
+        }
+        // Other exponents keep `powf`.
+        assert_eq!(specular_power(0.5, 76.8), 0.5f32.powf(76.8));
+    }
 }
 
 #[cfg(test)]
@@ -641,30 +666,5 @@ mod cook_torrance_tests {
         let terms = illuminate(&material, &[light], Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z);
         check(terms.diffuse.x, 1.0 - 0.04);
         check(terms.specular.x, 0.04);
-    }
-
-    #[test]
-    fn whole_exponents_are_raised_by_squaring_within_n_rounding_errors_of_powf() {
-        assert_eq!(whole_exponent(20.0), Some(20));
-        assert_eq!(whole_exponent(0.0), Some(0));
-        assert_eq!(whole_exponent(76.8), None);
-        assert_eq!(whole_exponent(2048.0), None);
-        assert_eq!(whole_exponent(f32::NAN), None);
-        assert_eq!(whole_exponent(-2.0), None);
-        for exponent in [0, 1, 2, 5, 17, 20, 128, 1000, MAX_SQUARED_EXPONENT] {
-            for i in 0..=1000 {
-                let base = i as f32 / 1000.0;
-                let squared = power_by_squaring(base, 1.0, exponent);
-                let exact = f64::from(base).powi(exponent as i32);
-                let bound = exact * f64::from(exponent.max(1)) * f64::from(f32::EPSILON) + 1e-38;
-                assert!(
-                    (f64::from(squared) - exact).abs() <= bound,
-                    "{base}^{exponent}: {squared} against {exact}"
-                );
-                assert_eq!(specular_power(base, exponent as f32), squared);
-            }
-        }
-        // Other exponents keep `powf`.
-        assert_eq!(specular_power(0.5, 76.8), 0.5f32.powf(76.8));
     }
 }
