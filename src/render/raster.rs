@@ -163,8 +163,9 @@ pub enum Corners {
 }
 
 impl Corners {
-    /// The weights of each corner.
-    pub fn to_array(self) -> [Vec3; 3] {
+    /// The weights of each corner (what `CornerWeights::store` was given).
+    #[cfg(test)]
+    fn to_array(self) -> [Vec3; 3] {
         match self {
             Corners::Identity => Vec3::AXES,
             Corners::Swapped => CornerWeights::SWAPPED_AXES,
