@@ -390,7 +390,7 @@ pub struct SpareBuffers {
 impl SpareBuffers {
     /// Keeps `frame`'s arrays for the next frame.
     pub fn keep(&mut self, frame: Frame) {
-        self.vertices = emptied(frame.vertices, 0);
+        self.vertices = frame.vertices;
         self.vertex_colors = emptied(frame.vertex_colors, 0);
         self.raster = frame.raster;
     }
@@ -400,6 +400,14 @@ impl SpareBuffers {
 fn emptied<T>(mut vector: Vec<T>, count: usize) -> Vec<T> {
     vector.clear();
     vector.reserve(count);
+    vector
+}
+
+/// `vector` with exactly `count` elements, for a pass that overwrites every one of them: the
+/// elements it already has are kept as they are, so a stream of same-sized frames fills
+/// nothing (a fill of the vertex arrays was 40 MB of `memset` a frame on S2).
+fn overwritable<T: Default + Clone>(mut vector: Vec<T>, count: usize) -> Vec<T> {
+    vector.resize(count, T::default());
     vector
 }
 
@@ -440,7 +448,7 @@ fn build(
         !mesh.uvs.is_empty() || !mesh.uvs1.is_empty() || !mesh.colors.is_empty() || !mesh.tangents.is_empty()
     });
     let mut frame = Frame {
-        vertices: emptied(std::mem::take(&mut spare.vertices), vertex_count),
+        vertices: overwritable(std::mem::take(&mut spare.vertices), vertex_count),
         vertex_colors: emptied(
             std::mem::take(&mut spare.vertex_colors),
             if needs_colors { vertex_count } else { 0 },
@@ -468,20 +476,24 @@ fn build(
         guard_x: GUARD_BAND_PIXELS / width as f32,
         guard_y: GUARD_BAND_PIXELS / height as f32,
     };
-    let mut projected = emptied(std::mem::take(&mut spare.projected), vertex_count);
+    let mut projected = overwritable(std::mem::take(&mut spare.projected), vertex_count);
+    let mut vertex_base = 0;
     let placed: Vec<PlacedObject> = scene
         .objects
         .iter()
         .enumerate()
         .map(|(index, object)| {
-            add_object_vertices(
+            let place = add_object_vertices(
                 &mut frame,
                 &mut projected,
+                vertex_base,
                 index as u32,
                 object,
                 &camera,
                 &viewport,
-            )
+            );
+            vertex_base += place.vertex_count;
+            place
         })
         .collect();
     // Gouraud vertices are lit after the triangles are known, and only those that a triangle
@@ -869,7 +881,8 @@ impl ObjectTransforms {
 /// Materials, and the per-vertex work of one object: transform, projection, Gouraud lighting.
 fn add_object_vertices(
     frame: &mut Frame,
-    projected: &mut Vec<ProjectedVertex>,
+    projected: &mut [ProjectedVertex],
+    vertex_base: u32,
     object_index: u32,
     object: &Object,
     camera: &CameraSetup,
@@ -903,14 +916,12 @@ fn add_object_vertices(
     }
     let material_count = frame.materials.len() as u32 - material_base;
     let uses_mesh_materials = object.material.is_none() && !mesh.materials.is_empty();
-    let vertex_base = frame.vertices.len() as u32;
     let vertex_count = mesh.positions.len();
 
     // Positions and normals, transformed and projected once per vertex (not per triangle
-    // corner), in chunks: one parallel pass over the object's vertices.
-    let end = vertex_base as usize + vertex_count;
-    frame.vertices.resize(end, FrameVertex::default());
-    projected.resize(end, ProjectedVertex::default());
+    // corner), in chunks: one parallel pass over the object's vertices, which writes every
+    // element of its ranges of `frame.vertices` and `projected` (see `overwritable`).
+    let range = vertex_base as usize..vertex_base as usize + vertex_count;
     let (width, height) = (viewport.width as f32, viewport.height as f32);
     // Only smooth shading reads vertex normals: flat and constant shading light with the face
     // normal, and depth-only frames light nothing. Gouraud shading reads only those of the
@@ -919,9 +930,9 @@ fn add_object_vertices(
     let normal_when_lit = frame.lit && style.shading == Shading::Gouraud && frame.debug_view.is_none();
     let needs_normals =
         frame.lit && matches!(style.shading, Shading::Gouraud | Shading::Phong) && !normal_when_lit;
-    frame.vertices[vertex_base as usize..]
+    frame.vertices[range.clone()]
         .par_chunks_mut(VERTEX_CHUNK)
-        .zip(projected[vertex_base as usize..].par_chunks_mut(VERTEX_CHUNK))
+        .zip(projected[range].par_chunks_mut(VERTEX_CHUNK))
         .enumerate()
         .for_each(|(chunk, (vertices, projected))| {
             let first = chunk * VERTEX_CHUNK;
