@@ -387,6 +387,13 @@ pub fn edge_steps_x(triangle: &RasterTriangle) -> [i64; 3] {
     [-(y2 - y1), -(y0 - y2), -(y1 - y0)].map(|dy| dy * SUBPIXEL_ONE)
 }
 
+/// How much [`edge_values`] change from one pixel centre to the next one down.
+#[inline]
+pub fn edge_steps_y(triangle: &RasterTriangle) -> [i64; 3] {
+    let [x0, x1, x2] = triangle.x.map(i64::from);
+    [x2 - x1, x0 - x2, x1 - x0].map(|dx| dx * SUBPIXEL_ONE)
+}
+
 /// Where a pixel is sampled: fixed offsets from its centre, in 1/256 pixel, the same for every
 /// pixel (so the image does not depend on anything but the scene). The positions are Direct3D's
 /// standard multisample patterns (scaled from 1/16 pixel): rotated grids that resolve

@@ -22,7 +22,8 @@ use crate::render::geometry::{
 };
 use crate::render::lanes::{LANES, Mask, Vec3s};
 use crate::render::raster::{
-    Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_values,
+    Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_steps_y,
+    edge_values,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch};
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
@@ -99,11 +100,56 @@ pub struct TileScratch<'f> {
     /// Per triangle of the tile: its colour when one colour fills its pixels; the last entry is
     /// the background.
     fills: Vec<Vec3>,
-    /// Per triangle of the tile: whether `fills` holds its colour (true for the background
-    /// entry too), rather than its pixels being shaded one by one.
-    filled: Vec<bool>,
+    /// Per triangle of the tile: where its pixels' colours come from in the last pass over the
+    /// pixels (the background entry is `Fill`).
+    sources: Vec<PixelSource>,
+    /// The Gouraud triangles the last pass interpolates, numbered by `PixelSource::Gouraud`.
+    gouraud: Vec<GouraudPlane>,
     /// Triangles whose colours wait in `flat`: (triangle, index in the batch).
     flat_waiting: Vec<(u32, u16)>,
+}
+
+/// How the last pass over a tile's pixels colours the pixels that show a triangle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum PixelSource {
+    /// They are written already (shaded triangle by triangle).
+    Shaded,
+    /// One colour, in `TileScratch::fills`.
+    Fill,
+    /// Interpolated from `TileScratch::gouraud[i]` (a tile shows at most `TILE_SIZE²`
+    /// triangles, so `u16` numbers them).
+    Gouraud(u16),
+}
+
+/// A Gouraud triangle of a tile, for the interpolation of its colours in pixel order: its edge
+/// functions as planes over the tile's pixel centres (exact integers: the values
+/// `edge_values` gives) and what [`weights_from_edges`] reads of it, in one record.
+struct GouraudPlane {
+    /// The edge functions at the tile's first pixel centre, and their steps one pixel right
+    /// and one pixel down.
+    origin: [i64; 3],
+    step_x: [i64; 3],
+    step_y: [i64; 3],
+    inv_area: f32,
+    inv_w: [f32; 3],
+    /// The triangle's corner weights (never `Corners::Clipped`: those shade triangle by
+    /// triangle).
+    corners: Corners,
+    colors: [Vec3; 3],
+}
+
+impl GouraudPlane {
+    /// The colour at the pixel `(column, row)` of the tile: what the per-triangle loop writes,
+    /// bit for bit.
+    #[inline]
+    fn color_at(&self, column: i64, row: i64) -> Vec3 {
+        let edges = std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row);
+        let weights = self
+            .corners
+            .apply(perspective_weights(self.inv_area, self.inv_w, edges));
+        let [a, b, c] = self.colors;
+        a * weights.x + b * weights.y + c * weights.z
+    }
 }
 
 /// The fast-path flat triangles a tile shows, lit together once the tile's pixels are known.
@@ -263,10 +309,13 @@ pub fn shade_tile<'f>(
 /// entry at offset zero, and the same result bit for bit, computed triangle by triangle instead
 /// of pixel by pixel. A pass over the pixels finds the triangles they show (the rasterizer
 /// numbered the tile's triangles, so tables indexed by that number replace caches); each of
-/// those gets its shader once; a triangle shaded per pixel (Gouraud, Phong) shades the pixels
-/// of its bounds that show it, at once; the triangles of one colour (flat, constant) are lit
-/// eight at a time and written with the background in one last pass over the pixels. No
-/// decision is taken per run of pixels (runs are two or three pixels long on dense meshes).
+/// those gets its shader once; a Phong triangle shades the pixels of its bounds that show it,
+/// at once; the triangles of one colour (flat, constant) are lit eight at a time, and they, the
+/// background and the Gouraud triangles' interpolated colours are written in one last pass
+/// over the pixels, in pixel order (a small triangle's bounds hold more pixels that do not show
+/// it than pixels that do, and each costs a mispredicted branch when walked triangle by
+/// triangle). No decision is taken per run of pixels (runs are two or three pixels long on
+/// dense meshes).
 fn shade_single_sample<'f>(
     frame: &'f Frame,
     visibility: &Visibility,
@@ -292,14 +341,16 @@ fn shade_single_sample<'f>(
         flat,
         seen,
         fills,
-        filled,
+        sources,
+        gouraud,
         flat_waiting,
     } = scratch;
     flat.clear();
     flat_waiting.clear();
-    filled.clear();
-    filled.resize(count + 1, false);
-    filled[count] = true;
+    gouraud.clear();
+    sources.clear();
+    sources.resize(count + 1, PixelSource::Shaded);
+    sources[count] = PixelSource::Fill;
     seen.clear();
     seen.resize(count + 1, false);
     fills.clear();
@@ -342,16 +393,32 @@ fn shade_single_sample<'f>(
         let corners = match shader {
             TriangleShader::Solid(color) => {
                 fills[local] = color;
-                filled[local] = true;
+                sources[local] = PixelSource::Fill;
                 continue;
             }
             TriangleShader::FlatWaiting(index) => {
                 flat_waiting.push((local as u32, index));
-                filled[local] = true;
+                sources[local] = PixelSource::Fill;
                 continue;
             }
             _ => frame.corner_weights(id),
         };
+        // Gouraud pixels are interpolated in the last pass, in pixel order: walking each small
+        // triangle's bounds here would take a branch per pixel on which triangle it shows.
+        if let (TriangleShader::Gouraud(colors), Corners::Identity | Corners::Swapped) = (&shader, corners) {
+            let centre = |p: u32| i64::from(p) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+            sources[local] = PixelSource::Gouraud(gouraud.len() as u16);
+            gouraud.push(GouraudPlane {
+                origin: edge_values(raster, centre(rect.x0), centre(rect.y0)),
+                step_x: edge_steps_x(raster),
+                step_y: edge_steps_y(raster),
+                inv_area: raster.inv_area,
+                inv_w: raster.inv_w,
+                corners,
+                colors: *colors,
+            });
+            continue;
+        }
         let Some(area) = raster.bounds.intersect(&rect) else {
             continue;
         };
@@ -383,15 +450,19 @@ fn shade_single_sample<'f>(
         fills[local as usize] = flat.colors[usize::from(index)];
     }
 
-    // The background and the one-colour triangles, in one pass over the pixels.
-    let per_pixel = filled.iter().any(|&filled| !filled);
+    // The background, the one-colour triangles and the Gouraud ones, in one pass over the pixels.
+    let per_pixel = sources.iter().any(|&source| source != PixelSource::Fill);
     for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
         let row_start = row * stride + rect.x0 as usize;
         let colors = &mut target.color[row_start..row_start + tile_width];
         if per_pixel {
-            for (color, &id) in colors.iter_mut().zip(ids) {
-                if filled[entry(id)] {
-                    *color = fills[entry(id)];
+            for (column, (color, &id)) in colors.iter_mut().zip(ids).enumerate() {
+                match sources[entry(id)] {
+                    PixelSource::Fill => *color = fills[entry(id)],
+                    PixelSource::Gouraud(plane) => {
+                        *color = gouraud[usize::from(plane)].color_at(column as i64, row as i64)
+                    }
+                    PixelSource::Shaded => {}
                 }
             }
         } else {
@@ -539,13 +610,19 @@ pub fn source_weights(triangle: &RasterTriangle, corners: &Corners, at: (i64, i6
 /// [`source_weights`] at a point where the edge functions take the values `edges`.
 #[inline]
 fn weights_from_edges(triangle: &RasterTriangle, corners: &Corners, edges: [i64; 3]) -> Vec3 {
+    corners.apply(perspective_weights(triangle.inv_area, triangle.inv_w, edges))
+}
+
+/// The perspective-correct weights of a raster triangle's corners where its edge functions
+/// take the values `edges` (`inv_area` and `inv_w` are the triangle's).
+#[inline]
+fn perspective_weights(inv_area: f32, inv_w: [f32; 3], edges: [i64; 3]) -> Vec3 {
     let [e0, e1, e2] = edges;
-    let screen = Vec3::new(e0 as f32, e1 as f32, e2 as f32) * triangle.inv_area;
-    let [w0, w1, w2] = triangle.inv_w;
+    let screen = Vec3::new(e0 as f32, e1 as f32, e2 as f32) * inv_area;
+    let [w0, w1, w2] = inv_w;
     let over_w = screen * Vec3::new(w0, w1, w2);
     let sum = over_w.element_sum();
-    let corner = if sum > 0.0 { over_w / sum } else { screen };
-    corners.apply(corner)
+    if sum > 0.0 { over_w / sum } else { screen }
 }
 
 fn shade_sample(
