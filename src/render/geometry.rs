@@ -23,7 +23,7 @@ use crate::lighting::{LightingTerms, ShadingLight, ShadingLightKind, illuminate_
 use crate::render::DebugView;
 use crate::render::bin::{self, RasterChunk, TileGrid};
 use crate::render::clip::{Clipped, clip_triangle};
-use crate::render::lanes::LANES;
+use crate::render::lanes::{LANES, Vec3s};
 pub use crate::render::raster::FrameTriangle;
 use crate::render::raster::{
     Corners, GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, SourceTriangle,
@@ -580,39 +580,45 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                     Some(materials) => materials[v],
                     None => place.material_base,
                 };
-                let vertex = &mut vertices[offset];
-                if place.normal_when_lit {
-                    let normal = scene.objects[object]
+                // The model normal, when the vertex's normal is set here (see `normal_when_lit`).
+                let model_normal = place.normal_when_lit.then(|| {
+                    scene.objects[object]
                         .mesh
                         .normals
                         .get(v)
                         .copied()
-                        .unwrap_or(Vec3::ZERO);
-                    vertex.normal = (place.normal_matrix * normal).normalize_or_zero();
-                }
-                let vertex = *vertex;
+                        .unwrap_or(Vec3::ZERO)
+                });
                 let style = &lit_frame.objects[object];
                 if fast_allowed {
                     let lighting = match fast {
                         Some((o, m, lighting)) if o == object && m == material => lighting,
                         _ => {
                             if let Some((.., Some(previous))) = fast {
-                                batch.flush(&previous, colors);
+                                batch.flush(&previous, colors, vertices);
                             }
                             let lighting =
                                 FastLighting::new(lit_frame, material, style, Shading::Gouraud, false);
                             fast = Some((object, material, lighting));
+                            batch.normal_matrix = place.normal_when_lit.then_some(place.normal_matrix);
                             lighting
                         }
                     };
                     if let Some(lighting) = lighting {
-                        let normal = style.side_normal(vertex.normal, false);
+                        // The front side's normal is the vertex normal (`side_normal(n, false)`).
+                        let vertex = &vertices[offset];
+                        let normal = model_normal.unwrap_or(vertex.normal);
                         if batch.push(offset, vertex.position, normal) {
-                            batch.flush(&lighting, colors);
+                            batch.flush(&lighting, colors, vertices);
                         }
                         continue;
                     }
                 }
+                let vertex = &mut vertices[offset];
+                if let Some(normal) = model_normal {
+                    vertex.normal = (place.normal_matrix * normal).normalize_or_zero();
+                }
+                let vertex = *vertex;
                 let material = &lit_frame.materials[material as usize];
                 let material = match scene.objects[object].mesh.colors.get(v) {
                     Some(tint) => tinted(material, tint.truncate()),
@@ -628,7 +634,7 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                 };
             }
             if let Some((.., Some(lighting))) = fast {
-                batch.flush(&lighting, colors);
+                batch.flush(&lighting, colors, vertices);
             }
             textured_parts
         })
@@ -652,7 +658,11 @@ struct LightingBatch {
     len: usize,
     slots: [usize; LANES],
     positions: [Vec3; LANES],
+    /// Model normals when `normal_matrix` is set, else the vertices' normals.
     normals: [Vec3; LANES],
+    /// The object's normal matrix when the batch sets its vertices' normals (`normal_when_lit`):
+    /// they are transformed and normalised lane-wise, with the scalar path's bits.
+    normal_matrix: Option<Mat3>,
 }
 
 impl LightingBatch {
@@ -665,9 +675,10 @@ impl LightingBatch {
         self.len == LANES
     }
 
-    /// Lights the waiting vertices into `colors` and empties the batch. The unused lanes of a
+    /// Lights the waiting vertices into `colors` (setting their normals in `vertices` first,
+    /// when the batch has a normal matrix) and empties the batch. The unused lanes of a
     /// partial batch repeat its first vertex, and their results are dropped.
-    fn flush(&mut self, lighting: &FastLighting, colors: &mut [Vec3]) {
+    fn flush(&mut self, lighting: &FastLighting, colors: &mut [Vec3], vertices: &mut [FrameVertex]) {
         if self.len == 0 {
             return;
         }
@@ -675,8 +686,16 @@ impl LightingBatch {
             self.positions[lane] = self.positions[0];
             self.normals[lane] = self.normals[0];
         }
-        let lit = lighting.light_lanes(&self.positions, &self.normals);
-        for (&slot, &color) in self.slots[..self.len].iter().zip(&lit) {
+        let slots = &self.slots[..self.len];
+        let mut normals = Vec3s::from_array(&self.normals);
+        if let Some(matrix) = self.normal_matrix {
+            normals = normals.transformed_by(matrix).normalize_or_zero();
+            for (&slot, normal) in slots.iter().zip(normals.to_array()) {
+                vertices[slot].normal = normal;
+            }
+        }
+        let lit = lighting.light_lanes_of(Vec3s::from_array(&self.positions), normals);
+        for (&slot, &color) in slots.iter().zip(&lit) {
             colors[slot] = color;
         }
         self.len = 0;

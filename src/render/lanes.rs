@@ -12,7 +12,7 @@
 
 use std::ops::{Add, Div, Mul, Neg, Not, Sub};
 
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 
 /// How many points are processed together. Eight fills an AVX register, or two SSE registers on
 /// the baseline x86-64 target.
@@ -410,6 +410,14 @@ impl Vec3s {
         }
     }
 
+    /// `matrix * v` (glam's `Mat3::mul_vec3`: the columns scaled by `x`, `y`, `z`, summed in
+    /// that order).
+    #[inline(always)]
+    pub fn transformed_by(self, matrix: Mat3) -> Self {
+        let column = |axis: Vec3, factor: Floats| Vec3s::splat(axis).scale(factor);
+        column(matrix.x_axis, self.x) + column(matrix.y_axis, self.y) + column(matrix.z_axis, self.z)
+    }
+
     /// `Vec3::normalize_or_zero`: times `1 / length` where that is finite and positive.
     #[inline(always)]
     pub fn normalize_or_zero(self) -> Self {
@@ -503,6 +511,8 @@ mod tests {
         let divided = la.divide(lb.length()).to_array();
         let combined = (la + lb * la - lb).to_array();
         let negated = (-la).to_array();
+        let matrix = Mat3::from_cols(a[0], a[7], b[3]);
+        let transformed = lb.transformed_by(matrix).to_array();
         for i in 0..LANES {
             assert_eq!(dots.0[i].to_bits(), a[i].dot(b[i]).to_bits(), "dot, lane {i}");
             assert_eq!(
@@ -520,6 +530,7 @@ mod tests {
                 "arithmetic, lane {i}"
             );
             assert!(same_bits(negated[i], -a[i]), "negation, lane {i}");
+            assert!(same_bits(transformed[i], matrix * b[i]), "transform, lane {i}");
         }
     }
 

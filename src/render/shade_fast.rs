@@ -102,8 +102,12 @@ impl<'f> FastLighting<'f> {
     /// with the same bits per point as the one-point call; many times faster per point.
     #[inline]
     pub fn light_lanes(&self, positions: &[Vec3; LANES], normals: &[Vec3; LANES]) -> [Vec3; LANES] {
-        let position = Vec3s::from_array(positions);
-        let normal = Vec3s::from_array(normals);
+        self.light_lanes_of(Vec3s::from_array(positions), Vec3s::from_array(normals))
+    }
+
+    /// [`FastLighting::light_lanes`] of points already in lanes.
+    #[inline]
+    pub fn light_lanes_of(&self, position: Vec3s, normal: Vec3s) -> [Vec3; LANES] {
         let to_viewer = match self.frame.viewer {
             Viewer::Local => (-position).normalize_or_zero(),
             Viewer::Infinite { to_viewer } => Vec3s::splat(to_viewer),
