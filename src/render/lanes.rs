@@ -146,7 +146,7 @@ use portable as backend;
 /// it).
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 mod portable {
-    use super::{Floats, LANES, Mask};
+    use super::{Floats, Mask};
 
     #[inline(always)]
     fn zip(a: Floats, b: Floats, f: impl Fn(f32, f32) -> f32) -> Floats {
@@ -226,8 +226,6 @@ mod portable {
             f32::from_bits((if_true.0[i].to_bits() & mask.0[i]) | (if_false.0[i].to_bits() & !mask.0[i]))
         }))
     }
-
-    const _: () = assert!(LANES > 0);
 }
 
 /// The lane operations as SSE instructions on the two four-lane halves of the arrays. SSE and

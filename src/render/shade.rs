@@ -277,8 +277,7 @@ pub fn shade_tile<'f>(
         }
         let px = rect.x0 + slot as u32 % rect.width();
         let py = rect.y0 + slot as u32 / rect.width();
-        let centre_x = i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
-        let centre_y = i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
+        let (centre_x, centre_y) = (pixel_centre(px), pixel_centre(py));
         let mut sum = Vec3::ZERO;
         let mut covered_samples = 0;
         shaded += seen.len();
@@ -406,10 +405,9 @@ fn shade_single_sample<'f>(
         // Gouraud pixels are interpolated in the last pass, in pixel order: walking each small
         // triangle's bounds here would take a branch per pixel on which triangle it shows.
         if let (TriangleShader::Gouraud(colors), Corners::Identity | Corners::Swapped) = (&shader, corners) {
-            let centre = |p: u32| i64::from(p) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
             sources[local] = PixelSource::Gouraud(gouraud.len() as u16);
             gouraud.push(GouraudPlane {
-                origin: edge_values(raster, centre(rect.x0), centre(rect.y0)),
+                origin: edge_values(raster, pixel_centre(rect.x0), pixel_centre(rect.y0)),
                 step_x: edge_steps_x(raster),
                 step_y: edge_steps_y(raster),
                 inv_area: raster.inv_area,
@@ -498,20 +496,25 @@ impl ShownPixels<'_> {
             (self.area.x1 - rect.x0) as usize,
         );
         let step = edge_steps_x(self.raster);
-        let centre = |p: u32| i64::from(p) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2;
         for py in self.area.y0..self.area.y1 {
             let row = (py - rect.y0) as usize;
             let ids = &self.visibility.triangle[row * tile_width..][first..last];
-            let y = centre(py);
-            let mut edges = edge_values(self.raster, centre(self.area.x0), y);
+            let y = pixel_centre(py);
+            let mut edges = edge_values(self.raster, pixel_centre(self.area.x0), y);
             for (px, &id) in (self.area.x0..).zip(ids) {
                 if id == self.local {
-                    visit(row * self.stride + px as usize, (centre(px), y), edges);
+                    visit(row * self.stride + px as usize, (pixel_centre(px), y), edges);
                 }
                 edges = [edges[0] + step[0], edges[1] + step[1], edges[2] + step[2]];
             }
         }
     }
+}
+
+/// The centre of pixel row or column `p`, in 1/256 pixel.
+#[inline]
+fn pixel_centre(p: u32) -> i64 {
+    i64::from(p) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2
 }
 
 /// How the pixels of one triangle are shaded, decided once per triangle and tile. Each case computes exactly what [`shade_sample`] would, in the same order.
@@ -995,10 +998,7 @@ mod tests {
                         } else {
                             seen += 1;
                             let id = visibility.raster_id(id);
-                            let at = (
-                                i64::from(px) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
-                                i64::from(py) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2,
-                            );
+                            let at = (pixel_centre(px), pixel_centre(py));
                             let corners = frame.corner_weights(id);
                             shade_sample(&frame, frame.raster_triangle(id), &corners, at, &mut caches)
                         };
