@@ -187,6 +187,19 @@ impl Corners {
             Corners::Clipped([a, b, c]) => *a * w.x + *b * w.y + *c * w.z,
         }
     }
+
+    /// The values at the triangle's corners of a quantity given at the source triangle's
+    /// vertices (`values`): the identity keeps them, its swap swaps the last two, and a clipped
+    /// piece's corner `k` gets `v₀·cₖ.x + v₁·cₖ.y + v₂·cₖ.z`.
+    #[inline]
+    pub fn corner_values(&self, values: [Vec3; 3]) -> [Vec3; 3] {
+        let [a, b, c] = values;
+        match self {
+            Corners::Identity => values,
+            Corners::Swapped => [a, c, b],
+            Corners::Clipped(weights) => weights.map(|w| a * w.x + b * w.y + c * w.z),
+        }
+    }
 }
 
 /// A triangle of the frame: its vertices (indices into `Frame::vertices`, counter-clockwise from

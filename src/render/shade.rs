@@ -6,14 +6,15 @@
 //! weights to the source triangle's three vertices. Then, by the object's shading mode:
 //! - `Flat`: the triangle's colour, lit once at its centroid with its face normal, when a pixel
 //!   first shows it (hidden triangles are never lit);
-//! - `Gouraud`: the vertex colours, interpolated;
+//! - `Gouraud`: the vertex colours, interpolated with the same perspective correction in one
+//!   division per pixel (`GouraudColors`);
 //! - `Phong`: position and normal interpolated, the normal renormalised, lit here.
 //!
 //! Back faces are lit from behind with the normal flipped. Gouraud back colours are lit lazily
 //! here, for the few back faces that are actually visible, instead of for every vertex. Colours
 //! lit per triangle are kept in a small per-tile cache, so each is lit about once per tile.
 
-use glam::{Vec3, Vec4};
+use glam::{Vec3, Vec3A, Vec4};
 
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
@@ -123,32 +124,69 @@ enum PixelSource {
 
 /// A Gouraud triangle of a tile, for the interpolation of its colours in pixel order: its edge
 /// functions as planes over the tile's pixel centres (exact integers: the values
-/// `edge_values` gives) and what [`weights_from_edges`] reads of it, in one record.
+/// `edge_values` gives) and its colours, in one record.
 struct GouraudPlane {
     /// The edge functions at the tile's first pixel centre, and their steps one pixel right
     /// and one pixel down.
     origin: [i64; 3],
     step_x: [i64; 3],
     step_y: [i64; 3],
-    inv_area: f32,
-    inv_w: [f32; 3],
-    /// The triangle's corner weights (never `Corners::Clipped`: those shade triangle by
-    /// triangle).
-    corners: Corners,
-    colors: [Vec3; 3],
+    colors: GouraudColors,
 }
 
 impl GouraudPlane {
-    /// The colour at the pixel `(column, row)` of the tile: what the per-triangle loop writes,
+    /// The colour at the pixel `(column, row)` of the tile: what [`shade_sample`] gives there,
     /// bit for bit.
     #[inline]
     fn color_at(&self, column: i64, row: i64) -> Vec3 {
         let edges = std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row);
-        let weights = self
-            .corners
-            .apply(perspective_weights(self.inv_area, self.inv_w, edges));
-        let [a, b, c] = self.colors;
-        a * weights.x + b * weights.y + c * weights.z
+        self.colors.at(edges)
+    }
+}
+
+/// A Gouraud triangle's colours, ready to interpolate perspective-correctly: each corner's
+/// colour over its `w`, and the corners' `1/w`.
+///
+/// With `eₖ` the edge functions at a point (`eₖ/A` its screen-space barycentrics), the
+/// perspective-correct colour `Σ cₖ·bₖ` with `bₖ = (eₖ/wₖ) / Σ eⱼ/wⱼ` is
+/// `Σ (cₖ/wₖ)·eₖ / Σ eⱼ/wⱼ`: the area cancels and the weights need not be formed, so a pixel
+/// costs one division (of the colour's three channels at once) instead of three. Every path
+/// that interpolates Gouraud colours goes through [`GouraudColors::at`], so a pixel has the same
+/// bits whichever path shaded it.
+#[derive(Clone, Copy)]
+struct GouraudColors {
+    over_w: [Vec3A; 3],
+    inv_w: [f32; 3],
+}
+
+impl GouraudColors {
+    /// `colors` are the source triangle's vertex colours; `corners` map them to the raster
+    /// triangle's corners.
+    #[inline]
+    fn new(raster: &RasterTriangle, corners: &Corners, colors: [Vec3; 3]) -> Self {
+        let corner_colors = corners.corner_values(colors);
+        GouraudColors {
+            over_w: std::array::from_fn(|k| Vec3A::from(corner_colors[k]) * raster.inv_w[k]),
+            inv_w: raster.inv_w,
+        }
+    }
+
+    /// The colour where the raster triangle's edge functions take the values `edges`.
+    /// Inside the triangle (`eₖ ≥ 0`, `1/wₖ > 0`) the denominator is positive; where it is not
+    /// (only on degenerate input) the colour is the corners' mean weighted by `1/w`, a colour
+    /// of the triangle all the same.
+    #[inline]
+    fn at(&self, edges: [i64; 3]) -> Vec3 {
+        let [e0, e1, e2] = edges.map(|e| e as f32);
+        let [w0, w1, w2] = self.inv_w;
+        let [c0, c1, c2] = self.over_w;
+        let denominator = e0 * w0 + e1 * w1 + e2 * w2;
+        let color = if denominator > 0.0 {
+            (c0 * e0 + c1 * e1 + c2 * e2) / denominator
+        } else {
+            (c0 + c1 + c2) / (w0 + w1 + w2)
+        };
+        Vec3::from(color)
     }
 }
 
@@ -404,16 +442,13 @@ fn shade_single_sample<'f>(
         };
         // Gouraud pixels are interpolated in the last pass, in pixel order: walking each small
         // triangle's bounds here would take a branch per pixel on which triangle it shows.
-        if let (TriangleShader::Gouraud(colors), Corners::Identity | Corners::Swapped) = (&shader, corners) {
+        if let TriangleShader::Gouraud(colors) = shader {
             sources[local] = PixelSource::Gouraud(gouraud.len() as u16);
             gouraud.push(GouraudPlane {
                 origin: edge_values(raster, pixel_centre(rect.x0), pixel_centre(rect.y0)),
                 step_x: edge_steps_x(raster),
                 step_y: edge_steps_y(raster),
-                inv_area: raster.inv_area,
-                inv_w: raster.inv_w,
-                corners,
-                colors: *colors,
+                colors: GouraudColors::new(raster, &corners, colors),
             });
             continue;
         }
@@ -428,10 +463,6 @@ fn shade_single_sample<'f>(
             stride,
         };
         match shader {
-            TriangleShader::Gouraud([a, b, c]) => pixels.for_each(|offset, _, edges| {
-                let weights = weights_from_edges(raster, &corners, edges);
-                target.color[offset] = a * weights.x + b * weights.y + c * weights.z;
-            }),
             TriangleShader::Phong(fast) => pixels.for_each(|offset, _, edges| {
                 let weights = weights_from_edges(raster, &corners, edges);
                 phong.push(&fast, weights, offset, target.color);
@@ -439,7 +470,7 @@ fn shade_single_sample<'f>(
             TriangleShader::General => pixels.for_each(|offset, at, _| {
                 target.color[offset] = shade_sample(frame, raster, &corners, at, caches);
             }),
-            TriangleShader::Solid(_) | TriangleShader::FlatWaiting(_) => {}
+            TriangleShader::Solid(_) | TriangleShader::FlatWaiting(_) | TriangleShader::Gouraud(_) => {}
         }
     }
     phong.flush(target.color);
@@ -729,9 +760,12 @@ fn shade_sample(
                     (colors.color_textured, colors.color)
                 })
             };
-            let rest = interpolate(colors[0].1, colors[1].1, colors[2].1);
+            let edges = edge_values(raster, at.0, at.1);
+            let interpolate_colors =
+                |colors: [Vec3; 3]| GouraudColors::new(raster, corners, colors).at(edges);
+            let rest = interpolate_colors(colors.map(|(_, rest)| rest));
             if color_texture.is_some() || material.textures.ambient.is_some() {
-                rest + interpolate(colors[0].0, colors[1].0, colors[2].0) * modulation()
+                rest + interpolate_colors(colors.map(|(textured_part, _)| textured_part)) * modulation()
             } else {
                 rest
             }
@@ -900,10 +934,8 @@ mod tests {
                                 flat.colors[usize::from(index)]
                             }
                             TriangleShader::Solid(color) => color,
-                            TriangleShader::Gouraud([a, b, c]) => {
-                                let w = source_weights(raster, &corners, at);
-                                a * w.x + b * w.y + c * w.z
-                            }
+                            TriangleShader::Gouraud(colors) => GouraudColors::new(raster, &corners, colors)
+                                .at(edge_values(raster, at.0, at.1)),
                             TriangleShader::Phong(fast) => fast.shade(source_weights(raster, &corners, at)),
                             TriangleShader::General => continue,
                         };
