@@ -391,7 +391,7 @@ impl SpareBuffers {
     /// Keeps `frame`'s arrays for the next frame.
     pub fn keep(&mut self, frame: Frame) {
         self.vertices = frame.vertices;
-        self.vertex_colors = emptied(frame.vertex_colors, 0);
+        self.vertex_colors = frame.vertex_colors;
         self.raster = frame.raster;
     }
 }
@@ -449,10 +449,12 @@ fn build(
     });
     let mut frame = Frame {
         vertices: overwritable(std::mem::take(&mut spare.vertices), vertex_count),
-        vertex_colors: emptied(
-            std::mem::take(&mut spare.vertex_colors),
-            if needs_colors { vertex_count } else { 0 },
-        ),
+        vertex_colors: if needs_colors {
+            // `light_gouraud_vertices` writes every element.
+            overwritable(std::mem::take(&mut spare.vertex_colors), vertex_count)
+        } else {
+            emptied(std::mem::take(&mut spare.vertex_colors), 0)
+        },
         vertex_colors_textured: Vec::new(),
         vertex_attributes: Vec::with_capacity(if needs_attributes { vertex_count } else { 0 }),
         raster: Vec::new(),
@@ -522,7 +524,7 @@ fn build(
 }
 
 /// Lights the vertices of Gouraud objects that `seen` marks, each once, with the material of
-/// the first triangle that uses it; the other vertices keep a zero colour nothing reads. One
+/// the first triangle that uses it; the other vertices get a zero colour nothing reads. One
 /// parallel pass over the whole vertex array, so many small objects still fill every core.
 fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObject], seen: &[AtomicBool]) {
     // Per object whose triangles carry the mesh's materials: each vertex's material.
@@ -568,6 +570,8 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
             let mut batch = LightingBatch::default();
             for offset in 0..colors.len() {
                 if !seen[offset].load(Ordering::Relaxed) {
+                    // Never read; written so that no value of an earlier frame is left.
+                    colors[offset] = Vec3::ZERO;
                     continue;
                 }
                 let vertex_index = first + offset;
@@ -955,12 +959,15 @@ fn add_object_vertices(
         .enumerate()
         .for_each(|(chunk, (vertices, projected))| {
             let first = chunk * VERTEX_CHUNK;
-            let sources = mesh.positions[first..].iter().zip(&mesh.normals[first..]);
-            for ((vertex, projected), (&p, &n)) in vertices.iter_mut().zip(projected).zip(sources) {
+            // The normals are read only when needed: on dense meshes this pass is bound by memory.
+            let positions = &mesh.positions[first..];
+            for (offset, ((vertex, projected), &p)) in
+                vertices.iter_mut().zip(projected).zip(positions).enumerate()
+            {
                 *vertex = FrameVertex {
                     position: transforms.world_from_model.transform_point3(p),
                     normal: if needs_normals {
-                        (transforms.normal_matrix * n).normalize_or_zero()
+                        (transforms.normal_matrix * mesh.normals[first + offset]).normalize_or_zero()
                     } else {
                         Vec3::ZERO
                     },
