@@ -27,7 +27,7 @@ use crate::render::lanes::{LANES, Vec3s};
 pub use crate::render::raster::FrameTriangle;
 use crate::render::raster::{
     Corners, GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, SourceTriangle,
-    setup_snapped, setup_triangle,
+    sample_bounds, setup_triangle, setup_within,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong};
 use crate::render::shadow::ShadowMap;
@@ -475,6 +475,7 @@ fn build(
         width,
         height,
         pattern,
+        sample_reach: pattern.reach(),
         guard_x: GUARD_BAND_PIXELS / width as f32,
         guard_y: GUARD_BAND_PIXELS / height as f32,
     };
@@ -710,6 +711,8 @@ struct Viewport {
     width: u32,
     height: u32,
     pattern: SamplePattern,
+    /// `pattern.reach()`, asked once per triangle.
+    sample_reach: i64,
     guard_x: f32,
     guard_y: f32,
 }
@@ -1124,7 +1127,10 @@ fn add_triangles(
                 let run_end = (object_starts[object + 1] - first).min(chunk_len);
                 let mesh = &scene.objects[object].mesh;
                 let place = &placed[object];
-                let marks_vertices = frame_ref.lit && frame_ref.objects[object].shading == Shading::Gouraud;
+                let style = &frame_ref.objects[object];
+                let marks_vertices = frame_ref.lit && style.shading == Shading::Gouraud;
+                let cull_back_faces =
+                    frame_ref.lit && (style.back_faces == BackFaces::Cull || place.skip_back_faces);
                 let first_t = first + run_start - object_starts[object];
                 for t in first_t..first_t + (run_end - run_start) {
                     let corners = mesh.triangles[t];
@@ -1146,9 +1152,8 @@ fn add_triangles(
                     let before = raster.triangles.len();
                     let source = (object_starts[object] + t) as u32;
                     add_raster_triangles(
-                        frame_ref,
                         &triangle,
-                        place.skip_back_faces,
+                        cull_back_faces,
                         source,
                         projected,
                         viewport,
@@ -1177,42 +1182,40 @@ struct RasterOutput {
 }
 
 /// Appends the raster triangles of one frame triangle: none if it is culled or invisible, one
-/// if it needs no clipping, a fan if it does.
+/// if it needs no clipping, a fan if it does. `cull_back_faces`: whether a back-facing
+/// triangle of its object is dropped (decided once per object, not per triangle).
 fn add_raster_triangles(
-    frame: &Frame,
     triangle: &FrameTriangle,
-    skip_back_faces: bool,
+    cull_back_faces: bool,
     source: u32,
     projected: &[ProjectedVertex],
     viewport: &Viewport,
     raster: &mut RasterOutput,
 ) {
     let corners = triangle.vertices.map(|v| &projected[v as usize]);
+    let (width, height) = (viewport.width, viewport.height);
     let clip = corners.map(|v| v.clip);
     let facing = homogeneous_facing(clip);
     let back_facing = facing < 0.0;
-    let style = &frame.objects[triangle.object as usize];
-    let culled = frame.lit && back_facing && (style.back_faces == BackFaces::Cull || skip_back_faces);
-    if facing == 0.0 || facing.is_nan() || culled {
+    if facing == 0.0 || facing.is_nan() || (back_facing && cull_back_faces) {
         return; // edge-on, degenerate, non-finite, or culled
     }
-    let (width, height) = (viewport.width, viewport.height);
     let source = SourceTriangle {
         index: source,
         triangle: *triangle,
         back_facing,
     };
-    let pattern = viewport.pattern;
     if corners.iter().all(|v| v.inside) {
-        let corners = corners.map(|v| v.screen);
-        let weights = &mut raster.clipped_weights;
-        let setup = setup_snapped(corners, None, width, height, pattern, source, weights);
+        let screen = corners.map(|v| v.screen);
+        let setup = sample_bounds(&screen, width, height, viewport.sample_reach)
+            .and_then(|bounds| setup_within(screen, None, bounds, source, &mut raster.clipped_weights));
         raster.triangles.extend(setup);
         return;
     }
     let weights = &mut raster.clipped_weights;
-    let mut setup =
-        |corners: [ScreenVertex; 3]| setup_triangle(corners, width, height, pattern, source, weights);
+    let mut setup = |corners: [ScreenVertex; 3]| {
+        setup_triangle(corners, width, height, viewport.pattern, source, weights)
+    };
     let triangles = &mut raster.triangles;
     match clip_triangle(clip, viewport.guard_x, viewport.guard_y) {
         Clipped::Outside => {}
