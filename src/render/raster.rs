@@ -289,8 +289,7 @@ pub fn setup_snapped(
 /// The pixels of a `width` × `height` image that have a sample within the bounding box of the
 /// snapped `corners`, with samples up to `reach` from their pixel's centre
 /// ([`SamplePattern::reach`]); `None` when there are none, and then the triangle covers no
-/// sample. A few integer comparisons: the geometry stage asks this first, since most
-/// triangles of a dense mesh cover no pixel centre.
+/// sample (most triangles of a dense mesh cover no pixel centre).
 #[inline]
 pub fn sample_bounds(corners: &[SnappedVertex; 3], width: u32, height: u32, reach: i64) -> Option<PixelRect> {
     pixel_bounds(corners.map(|c| c.x), corners.map(|c| c.y), width, height, reach)
