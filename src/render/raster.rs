@@ -232,15 +232,9 @@ pub fn setup_triangle(
 ) -> Option<RasterTriangle> {
     let corners = corners.map(|c| SnappedVertex::snap(&c));
     let weights = [corners[0].1, corners[1].1, corners[2].1];
-    setup_snapped(
-        corners.map(|c| c.0),
-        Some(weights),
-        width,
-        height,
-        pattern,
-        source,
-        weights_table,
-    )
+    let snapped = corners.map(|c| c.0);
+    let bounds = sample_bounds(&snapped, width, height, pattern.reach())?;
+    setup_within(snapped, Some(weights), bounds, source, weights_table)
 }
 
 /// A projected vertex snapped to fixed point: what setup needs of it besides its weights.
@@ -270,22 +264,6 @@ impl SnappedVertex {
     }
 }
 
-/// [`setup_triangle`] for corners already snapped (the geometry stage snaps each vertex once,
-/// not once per triangle that uses it).
-/// `weights` are the corners' weights, `None` for the identity (an unclipped triangle).
-pub fn setup_snapped(
-    corners: [SnappedVertex; 3],
-    weights: Option<[Vec3; 3]>,
-    width: u32,
-    height: u32,
-    pattern: SamplePattern,
-    source: SourceTriangle,
-    weights_table: &mut Vec<[Vec3; 3]>,
-) -> Option<RasterTriangle> {
-    let bounds = sample_bounds(&corners, width, height, pattern.reach())?;
-    setup_within(corners, weights, bounds, source, weights_table)
-}
-
 /// The pixels of a `width` × `height` image that have a sample within the bounding box of the
 /// snapped `corners`, with samples up to `reach` from their pixel's centre
 /// ([`SamplePattern::reach`]); `None` when there are none, and then the triangle covers no
@@ -295,8 +273,11 @@ pub fn sample_bounds(corners: &[SnappedVertex; 3], width: u32, height: u32, reac
     pixel_bounds(corners.map(|c| c.x), corners.map(|c| c.y), width, height, reach)
 }
 
-/// [`setup_snapped`] with the corners' [`sample_bounds`] known to be `bounds` (which the order
-/// of the corners does not change).
+/// Orders snapped corners and sets the triangle up, its [`sample_bounds`] known to be `bounds`
+/// (which the order of the corners does not change); `None` when it has zero area. The
+/// geometry stage snaps each vertex once, not once per triangle that uses it, and comes here
+/// directly. `weights` are the corners' weights, `None` for the identity (an unclipped
+/// triangle).
 #[inline]
 pub fn setup_within(
     corners: [SnappedVertex; 3],
