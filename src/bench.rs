@@ -169,7 +169,7 @@ pub fn run(args: &BenchArgs) -> i32 {
     if let Some(folder) = &args.save
         && let Err(error) = std::fs::create_dir_all(folder)
     {
-        eprintln!("error: cannot create {}: {error}", folder.display());
+        errln!("error: cannot create {}: {error}", folder.display());
         return EXIT_OUTPUT_FAILED;
     }
     let mut exit = EXIT_OK;
@@ -187,7 +187,7 @@ pub fn run(args: &BenchArgs) -> i32 {
             .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
         let base = &loaded.scene;
         if !args.json {
-            println!(
+            outln!(
                 "{} ({}×{} px, {} triangles), median of {} frames after {} warm-up",
                 path.display(),
                 base.image.width,
@@ -196,7 +196,7 @@ pub fn run(args: &BenchArgs) -> i32 {
                 args.frames,
                 args.warmup,
             );
-            println!(
+            outln!(
                 "  {:<8} {:>3} {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>7} {:>8} {:>8} {:>5}{}",
                 "mode",
                 "thr",
@@ -241,7 +241,7 @@ pub fn run(args: &BenchArgs) -> i32 {
                 if let Some(folder) = &args.save {
                     let file = folder.join(format!("{scene_name}__{}.png", mode.name()));
                     if let Err(error) = output::write_png(&file, &image, PngCompression::Fast) {
-                        eprintln!("error: {error}");
+                        errln!("error: {error}");
                         exit = exit.max(EXIT_OUTPUT_FAILED);
                     }
                 }
@@ -346,7 +346,7 @@ fn report(
             line["llvmpipe_max_abs"] = json!(anchor.max);
             line["llvmpipe_share_over_2"] = json!(anchor.share_over_2);
         }
-        println!("{line}");
+        outln!("{line}");
     } else {
         let mut row = format!(
             "  {:<8} {:>3} {:>6.2} ms {:>6.2} ms | {:>8.2} {:>8.2} {:>8.2} {:>8.2} | {:>7.1} {:>8.1} {:>8} {:>5}",
@@ -374,7 +374,7 @@ fn report(
                 anchor.share_over_2 * 100.0
             );
         }
-        println!("{row}");
+        outln!("{row}");
     }
 }
 
@@ -415,7 +415,7 @@ fn anchor_difference(
     let theirs = match image::open(&path) {
         Ok(image) => image.to_rgb8(),
         Err(error) => {
-            eprintln!("warning: cannot read {}: {error}", path.display());
+            errln!("warning: cannot read {}: {error}", path.display());
             return None;
         }
     };
@@ -426,7 +426,7 @@ fn anchor_difference(
     let comparison = match compare_pixels(&theirs, ours, &tolerance) {
         Ok(comparison) => comparison,
         Err(mismatch) => {
-            eprintln!("warning: {}: {mismatch}", path.display());
+            errln!("warning: {}: {mismatch}", path.display());
             return None;
         }
     };

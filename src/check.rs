@@ -117,7 +117,7 @@ pub struct CheckArgs {
 pub fn run(args: &CheckArgs) -> i32 {
     let started = Instant::now();
     if args.flip && !FLIP_AVAILABLE {
-        eprintln!(
+        errln!(
             "error: --flip needs FLIP, and this lampshade was built without it \
              (rebuild with the `flip` feature, which needs a C++ compiler)"
         );
@@ -125,7 +125,7 @@ pub fn run(args: &CheckArgs) -> i32 {
     }
     let paths = if args.paths.is_empty() {
         if !Path::new(DEFAULT_SUITE).is_dir() {
-            eprintln!("error: no PATH given, and there is no `{DEFAULT_SUITE}/` folder here to check");
+            errln!("error: no PATH given, and there is no `{DEFAULT_SUITE}/` folder here to check");
             return EXIT_BAD_INPUT;
         }
         vec![PathBuf::from(DEFAULT_SUITE)]
@@ -136,18 +136,18 @@ pub fn run(args: &CheckArgs) -> i32 {
     let all_scenes = match discover(&paths) {
         Ok(scenes) => scenes,
         Err(problems) => {
-            eprint!(
+            errout!(
                 "{}",
                 render_diagnostics(&problems.diagnostics, &problems.sources, use_color())
             );
-            eprintln!("error: the suite could not be read; no scene was checked");
+            errln!("error: the suite could not be read; no scene was checked");
             return EXIT_BAD_INPUT;
         }
     };
     let discovery_time = started.elapsed();
     let shown_paths: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     if all_scenes.is_empty() {
-        eprintln!("error: no scene files (*.ron) in {}", shown_paths.join(", "));
+        errln!("error: no scene files (*.ron) in {}", shown_paths.join(", "));
         return EXIT_BAD_INPUT;
     }
     let filter = NameFilter::new(&args.filter);
@@ -157,7 +157,7 @@ pub fn run(args: &CheckArgs) -> i32 {
         .cloned()
         .collect();
     if filtered.is_empty() {
-        eprintln!(
+        errln!(
             "error: no scene matches --filter {} (of {} scenes found)",
             args.filter.join(", "),
             all_scenes.len()
@@ -179,7 +179,7 @@ pub fn run(args: &CheckArgs) -> i32 {
     if let Some(folder) = &pictures
         && let Err(error) = std::fs::create_dir_all(folder)
     {
-        eprintln!(
+        errln!(
             "error: cannot create the report folder `{}`: {error}",
             folder.display()
         );
@@ -193,7 +193,7 @@ pub fn run(args: &CheckArgs) -> i32 {
         load_options: match args.limits.load_options() {
             Ok(options) => options,
             Err(message) => {
-                eprintln!("error: {message}");
+                errln!("error: {message}");
                 return EXIT_BAD_INPUT;
             }
         },
@@ -204,7 +204,7 @@ pub fn run(args: &CheckArgs) -> i32 {
     {
         Ok(pool) => pool,
         Err(error) => {
-            eprintln!("error: cannot start worker threads: {error}");
+            errln!("error: cannot start worker threads: {error}");
             return EXIT_BAD_INPUT;
         }
     };
@@ -225,16 +225,16 @@ pub fn run(args: &CheckArgs) -> i32 {
         };
         let xml = junit::junit_xml(&scenes, &results, &title, elapsed);
         if let Err(error) = write_text(file, &xml) {
-            eprintln!("error: {error}");
+            errln!("error: {error}");
             exit_code = exit_code.max(EXIT_BAD_INPUT);
         }
     }
     if let Some(folder) = &args.report {
         let html = report::report_html(&scenes, &results, &summary);
         match report::write_report(folder, &html) {
-            Ok(()) => println!("report: {}", folder.join("index.html").display()),
+            Ok(()) => outln!("report: {}", folder.join("index.html").display()),
             Err(error) => {
-                eprintln!("error: {error}");
+                errln!("error: {error}");
                 exit_code = exit_code.max(EXIT_BAD_INPUT);
             }
         }
@@ -243,7 +243,7 @@ pub fn run(args: &CheckArgs) -> i32 {
         exit_code = exit_code.max(EXIT_BAD_INPUT);
     }
     if args.timings {
-        print!(
+        out!(
             "{}",
             timings_table(&scenes, &results, discovery_time, elapsed, workers)
         );
@@ -254,9 +254,9 @@ pub fn run(args: &CheckArgs) -> i32 {
         } else {
             ""
         };
-        println!("hint: {report_hint}if the new images are right, make them the references with --bless");
+        outln!("hint: {report_hint}if the new images are right, make them the references with --bless");
     }
-    println!("{summary}");
+    outln!("{summary}");
     exit_code
 }
 

@@ -221,13 +221,13 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
 /// (`watch` has its own handler, which finishes the current render.)
 fn exit_on_ctrl_c() {
     if let Err(error) = ctrlc::set_handler(|| output::exit_when_no_write_is_in_progress(130)) {
-        eprintln!("warning: cannot catch Ctrl-C ({error}); an interrupted write may leave a temporary file");
+        errln!("warning: cannot catch Ctrl-C ({error}); an interrupted write may leave a temporary file");
     }
 }
 
 /// Prints the diagnostics of a scene that failed to load, on stderr.
 pub fn print_load_error(error: &LoadError) {
-    eprint!(
+    errout!(
         "{}",
         render_diagnostics(&error.diagnostics, &error.sources, use_color())
     );
@@ -240,7 +240,7 @@ pub fn use_color() -> bool {
 
 fn run_render(args: &RenderArgs) -> i32 {
     if args.output.is_some() && args.scenes.len() > 1 {
-        eprintln!(
+        errln!(
             "error: --output names one image, but {} scenes were given",
             args.scenes.len()
         );
@@ -249,7 +249,7 @@ fn run_render(args: &RenderArgs) -> i32 {
     let access = match args.limits.file_access() {
         Ok(access) => access,
         Err(message) => {
-            eprintln!("error: {message}");
+            errln!("error: {message}");
             return EXIT_BAD_INPUT;
         }
     };
@@ -285,7 +285,7 @@ fn run_render(args: &RenderArgs) -> i32 {
         (None, Some(output)) => match OutputFormat::from_path(output) {
             Some(format) => format,
             None => {
-                eprintln!(
+                errln!(
                     "error: cannot tell the format of `{}` from its extension; use .png, .exr or .hdr, or --format",
                     output.display()
                 );
@@ -326,7 +326,7 @@ fn run_render(args: &RenderArgs) -> i32 {
     }
     if args.scenes.len() > 1 && !bad_inputs.is_empty() {
         let names: Vec<String> = bad_inputs.iter().map(|p| p.display().to_string()).collect();
-        eprintln!(
+        errln!(
             "error: {} of {} scenes could not be rendered: {}",
             names.len(),
             args.scenes.len(),
@@ -388,7 +388,7 @@ fn render_one(
         }
     };
     if !rendered.warnings.is_empty() && !quiet {
-        eprint!(
+        errout!(
             "{}",
             render_diagnostics(&rendered.warnings, &rendered.sources, use_color())
         );
@@ -409,12 +409,12 @@ fn render_one(
         PngCompression::Fast,
     );
     if let Err(error) = written {
-        eprintln!("error: {error}");
+        errln!("error: {error}");
         return Err(RenderFailure::Output);
     }
     let encode_time = started.elapsed();
     if !quiet {
-        println!(
+        outln!(
             "{} → {}: {} triangles, {}×{} px | load {}, geometry {}, raster+shade {}, encode {} ({} threads)",
             scene_path.display(),
             output_path.display(),

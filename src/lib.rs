@@ -16,6 +16,10 @@
 //! modes and tessellations for the speed/error report.
 #![deny(unsafe_code)]
 
+// First, so that its printing macros are in scope in every module below.
+#[macro_use]
+pub mod console;
+
 pub mod bench;
 pub mod check;
 pub mod cli;

@@ -6,6 +6,7 @@
 use std::panic;
 
 use lampshade::cli::{self, EXIT_INTERNAL_ERROR};
+use lampshade::errln;
 
 /// A frame allocates some hundred megabytes in many large blocks (per-chunk raster triangles,
 /// vertex arrays, the frame buffer) and frees them at its end. glibc's allocator maps and unmaps
@@ -18,7 +19,7 @@ fn main() {
     let default_hook = panic::take_hook();
     panic::set_hook(Box::new(move |info| {
         default_hook(info);
-        eprintln!(
+        errln!(
             "error: internal error in lampshade {} (a bug, not a problem with your files).\n\
              Please report it with the scene that triggered it and the message above.",
             env!("CARGO_PKG_VERSION")

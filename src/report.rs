@@ -534,13 +534,13 @@ fn run_accuracy(args: &AccuracyArgs) -> i32 {
             return EXIT_BAD_INPUT;
         }
     };
-    println!(
+    outln!(
         "| {} {}×{} | mean abs | max abs | PSNR dB | pixels off by > 2 | pixels off by > 8 |",
         args.scene.display(),
         args.width,
         args.height
     );
-    println!("|---|---:|---:|---:|---:|---:|");
+    outln!("|---|---:|---:|---:|---:|---:|");
     for (name, shading, model) in ACCURACY_ROWS {
         let mut scene = loaded.scene.clone();
         for object in &mut scene.objects {
@@ -552,13 +552,13 @@ fn run_accuracy(args: &AccuracyArgs) -> i32 {
         let reference = match render_reference_with(&scene, None, LightingPrecision::F64) {
             Ok(reference) => reference,
             Err(problems) => {
-                eprintln!("error: {}: {}", args.scene.display(), problems[0].message);
+                errln!("error: {}: {}", args.scene.display(), problems[0].message);
                 return EXIT_BAD_INPUT;
             }
         };
         let (image, _) = render(&scene, &RenderOptions::default());
         let e = compare_over(&reference, &image, Compared::BothCovered).expect("same size");
-        println!(
+        outln!(
             "| {name} | {:.4} | {} | {:.1} | {:.3}% | {:.3}% |",
             e.mean_abs_all(),
             e.max_abs_all(),
@@ -586,7 +586,7 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
     let threads = args.threads.map(usize::from);
     let started = Instant::now();
     let points = sweep(&loaded.scene, &plan, threads, |p| {
-        eprintln!(
+        errln!(
             "  shininess {:>3}, {:>2} spp, {:<24} {:>4}: {:>8.1} ms, mean abs {:.3}",
             p.shininess,
             p.samples,
@@ -603,7 +603,7 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
     let points = match points {
         Ok(points) => points,
         Err(message) => {
-            eprintln!("error: {}: {message}", args.scene.display());
+            errln!("error: {}: {message}", args.scene.display());
             return EXIT_BAD_INPUT;
         }
     };
@@ -631,22 +631,22 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
             );
             match plot_svg(&group, &title) {
                 Ok(svg) => files.push((format!("speed-error-s{shininess}-x{samples}.svg"), svg)),
-                Err(message) => eprintln!("warning: {message}"),
+                Err(message) => errln!("warning: {message}"),
             }
         }
     }
     if let Err(error) = std::fs::create_dir_all(&args.out) {
-        eprintln!("error: cannot create {}: {error}", args.out.display());
+        errln!("error: cannot create {}: {error}", args.out.display());
         return EXIT_OUTPUT_FAILED;
     }
     for (name, text) in &files {
         let path = args.out.join(name);
         if let Err(error) = std::fs::write(&path, text) {
-            eprintln!("error: cannot write {}: {error}", path.display());
+            errln!("error: cannot write {}: {error}", path.display());
             return EXIT_OUTPUT_FAILED;
         }
     }
-    println!(
+    outln!(
         "speed-error: {} points in {:.1} s → {}",
         points.len(),
         started.elapsed().as_secs_f64(),

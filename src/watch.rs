@@ -108,7 +108,7 @@ pub fn run(args: &WatchArgs) -> i32 {
         .clone()
         .unwrap_or_else(|| args.scene.with_extension("png"));
     if files::same_location(&args.scene, &output) {
-        eprintln!(
+        errln!(
             "error: the output `{}` would replace the scene; give another with `-o`",
             output.display()
         );
@@ -129,12 +129,12 @@ pub fn run(args: &WatchArgs) -> i32 {
     let watches = match watches {
         Ok(watches) => watches,
         Err(error) => {
-            eprintln!("error: cannot watch files: {error}");
+            errln!("error: cannot watch files: {error}");
             return EXIT_OUTPUT_FAILED;
         }
     };
     if let Err(error) = stop_on_ctrl_c(signal_sender) {
-        eprintln!("warning: cannot catch Ctrl-C ({error}); it will stop the watch abruptly");
+        errln!("warning: cannot catch Ctrl-C ({error}); it will stop the watch abruptly");
     }
 
     let preview = if args.serve {
@@ -147,13 +147,13 @@ pub fn run(args: &WatchArgs) -> i32 {
         match PreviewServer::start(args.port, &scene_name, earlier_image) {
             Ok(started) => {
                 if let Some(note) = started.port_note {
-                    eprintln!("note: {note}");
+                    errln!("note: {note}");
                 }
-                println!("preview at {}", started.server.url());
+                outln!("preview at {}", started.server.url());
                 Some(started.server)
             }
             Err(error) => {
-                eprintln!("error: cannot serve the preview on 127.0.0.1: {error}");
+                errln!("error: cannot serve the preview on 127.0.0.1: {error}");
                 return EXIT_OUTPUT_FAILED;
             }
         }
@@ -168,7 +168,7 @@ pub fn run(args: &WatchArgs) -> i32 {
             ..limited
         },
         Err(message) => {
-            eprintln!("error: {message}");
+            errln!("error: {message}");
             return EXIT_BAD_INPUT;
         }
     };
@@ -179,11 +179,11 @@ pub fn run(args: &WatchArgs) -> i32 {
     let mut session = WatchSession::new(&args.scene, &output, load_options, render_options, watches);
     session.preview = preview;
     session.build(&Trigger::Start(started));
-    let mut report_watch_error = |error: notify::Error| eprintln!("warning: watching files: {error}");
+    let mut report_watch_error = |error: notify::Error| errln!("warning: watching files: {error}");
     while let Some(changes) = wait_for_changes(&signals, &session.files, DEBOUNCE, &mut report_watch_error) {
         session.build(&Trigger::Changes(changes));
     }
-    println!("stopped");
+    outln!("stopped");
     EXIT_OK
 }
 
@@ -197,7 +197,7 @@ fn stop_on_ctrl_c(signals: Sender<Signal>) -> Result<(), ctrlc::Error> {
             crate::output::exit_when_no_write_is_in_progress(130);
         }
         asked_already = true;
-        eprintln!("stopping after the current render (Ctrl-C again to stop now)");
+        errln!("stopping after the current render (Ctrl-C again to stop now)");
         let _ = signals.send(Signal::Stop);
     })
 }
@@ -329,7 +329,7 @@ impl WatchSession {
             }
             Ok(BuildOutcome::BadInput { error, load_time }) => {
                 let report = render_diagnostics(&error.diagnostics, &error.sources, self.color);
-                eprint!("{report}");
+                errout!("{report}");
                 let errors = error.diagnostics.iter().filter(|d| d.is_error()).count();
                 let problem = format!("{errors} error{}", if errors == 1 { "" } else { "s" });
                 self.report_failure(trigger, &problem, Some(load_time), || {
@@ -338,7 +338,7 @@ impl WatchSession {
                 self.follow(error.files_read);
             }
             Ok(BuildOutcome::OutputFailed { error, files_read }) => {
-                eprintln!("error: {error}");
+                errln!("error: {error}");
                 self.report_failure(trigger, "the image could not be written", None, || {
                     error.to_string()
                 });
@@ -347,7 +347,7 @@ impl WatchSession {
             Err(payload) => {
                 // The panic hook has printed the message; say what happens next.
                 let message = panic_message(payload.as_ref());
-                eprintln!("error: the render failed with an internal error; still watching");
+                errln!("error: the render failed with an internal error; still watching");
                 self.cache = BuildCache::default();
                 self.report_failure(trigger, "internal error", None, || {
                     format!("internal error (a bug in lampshade, not in your files): {message}")
@@ -367,14 +367,14 @@ impl WatchSession {
             ..
         } = &written.rendered;
         if !warnings.is_empty() {
-            eprint!("{}", render_diagnostics(warnings, sources, self.color));
+            errout!("{}", render_diagnostics(warnings, sources, self.color));
         }
         let latency = written.written_at.saturating_duration_since(trigger.since());
         let since = match trigger {
             Trigger::Start(_) => "start",
             Trigger::Changes(_) => "change",
         };
-        println!(
+        outln!(
             "#{} {} → {}: {} triangles, {}×{} px | load {}, geometry {}, raster+shade {}, encode {} | {since} to image {}",
             self.builds,
             trigger.describe(),
@@ -403,7 +403,7 @@ impl WatchSession {
                     );
                     preview.publish_image(png, summary);
                 }
-                Err(error) => eprintln!(
+                Err(error) => errln!(
                     "warning: preview: cannot read back `{}`: {error}",
                     self.output.display()
                 ),
@@ -425,7 +425,7 @@ impl WatchSession {
             String::from("no image yet")
         };
         let timing = load_time.map_or_else(String::new, |load| format!(" | load {}", milliseconds(load)));
-        println!(
+        outln!(
             "#{} {}: {problem} (see above); {kept}{timing} | waiting for the next save",
             self.builds,
             trigger.describe()
@@ -442,14 +442,14 @@ impl WatchSession {
         followed.push(self.scene.clone());
         self.files.follow(followed.iter().map(PathBuf::as_path));
         for problem in self.watches.sync(self.files.folders()) {
-            eprintln!("warning: {problem}");
+            errln!("warning: {problem}");
         }
         if self.builds == 0 {
             return; // before the first build there is nothing to announce yet
         }
         let files: Vec<PathBuf> = self.files.files().into_iter().map(Path::to_path_buf).collect();
         if files != self.announced_files {
-            println!("watching {} (Ctrl-C to stop)", list_paths(&files));
+            outln!("watching {} (Ctrl-C to stop)", list_paths(&files));
             self.announced_files = files;
         }
         let missing: Vec<PathBuf> = self.files.missing().into_iter().map(Path::to_path_buf).collect();
@@ -458,7 +458,7 @@ impl WatchSession {
             .filter(|m| !self.announced_missing.contains(m))
             .collect();
         if !newly_missing.is_empty() {
-            println!(
+            outln!(
                 "waiting for {} to be created",
                 list_paths(newly_missing.iter().copied())
             );

@@ -59,16 +59,16 @@ impl Console {
     /// Prints a line on stdout, above the bar when there is one.
     pub fn line(&self, text: &str) {
         match &self.bar {
-            Some(bar) => bar.suspend(|| println!("{text}")),
-            None => println!("{text}"),
+            Some(bar) => bar.suspend(|| outln!("{text}")),
+            None => outln!("{text}"),
         }
     }
 
     /// Prints text (diagnostics) on stderr, above the bar when there is one.
     fn error_text(&self, text: &str) {
         match &self.bar {
-            Some(bar) => bar.suspend(|| eprint!("{text}")),
-            None => eprint!("{text}"),
+            Some(bar) => bar.suspend(|| errout!("{text}")),
+            None => errout!("{text}"),
         }
     }
 

@@ -271,7 +271,7 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
                 .name("preview events".into())
                 .spawn(move || stream_events(request, &hub));
             if let Err(error) = spawned {
-                eprintln!("warning: preview: cannot start an event stream: {error}");
+                errln!("warning: preview: cannot start an event stream: {error}");
             }
         }
         _ => respond(request, text(404, "not found")),
