@@ -10,13 +10,15 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::sync::Mutex;
+use std::time::{Duration, Instant, SystemTime};
 
 use clap::{Parser, Subcommand, ValueEnum};
 
 use crate::diag::render_diagnostics;
-use crate::output::{self, Encoding, OutputFormat, PngCompression};
+use crate::output::{self, Destination, Encoding, OutputFormat, PngCompression};
 use crate::pipeline::{BuildCache, RenderedScene, render_scene_file};
+use crate::progress::{BarClearer, RenderBar};
 use crate::render::{DebugView, RenderOptions};
 use crate::scene::access::FileAccess;
 use crate::scene::limits::parse_memory_size;
@@ -41,29 +43,68 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Render scene files to PNG images.
+    /// Render scene files to images (PNG, OpenEXR or Radiance HDR).
+    #[command(after_help = RENDER_EXAMPLES)]
     Render(RenderArgs),
     /// Render a suite of scenes and compare each with its reference image.
+    #[command(after_help = CHECK_EXAMPLES)]
     Check(crate::check::CheckArgs),
     /// Re-render a scene whenever it, or any file it uses, changes.
+    #[command(after_help = WATCH_EXAMPLES)]
     Watch(crate::watch::WatchArgs),
     /// Time frames of scenes per shading mode (loaded once, rendered many times).
+    #[command(after_help = BENCH_EXAMPLES)]
     Bench(crate::bench::BenchArgs),
-    /// Measurements of the renderer: `report speed-error` (time against error).
+    /// Measurements of the renderer: `report speed-error` (time against error), `report accuracy`.
+    #[command(after_help = REPORT_EXAMPLES)]
     Report(crate::report::ReportArgs),
 }
+
+const RENDER_EXAMPLES: &str = "\
+Examples:
+  lampshade render scenes/matlab-shiny.ron                 writes scenes/matlab-shiny.png
+  lampshade render scene.ron -o out.exr                    linear, unclamped OpenEXR
+  lampshade render scene.ron --width 3840 --height 2160 --samples 4
+  lampshade render scene.ron --shading gouraud --model blinn-phong -o gouraud.png
+  lampshade render scene.ron --debug normals -o normals.png
+  lampshade render scene.ron -o - | display               PNG on standard output
+  lampshade render scenes/*.ron                            each beside its scene";
+
+const CHECK_EXAMPLES: &str = "\
+Examples:
+  lampshade check scenes/                                  every scene against scenes/refs/
+  lampshade check scenes/ --report report --junit junit.xml
+  lampshade check scenes/ --bless                          accept the new images as references";
+
+const WATCH_EXAMPLES: &str = "\
+Examples:
+  lampshade watch scene.ron                                re-renders scene.png on every save
+  lampshade watch scene.ron --serve                        and shows it on http://127.0.0.1:7800
+  lampshade watch scene.ron -o /tmp/preview.png --width 640 --height 360";
+
+const BENCH_EXAMPLES: &str = "\
+Examples:
+  lampshade bench scenes/bench/two-spheres.ron
+  lampshade bench scenes/bench/two-spheres.ron --modes phong --threads 1 --frames 20";
+
+const REPORT_EXAMPLES: &str = "\
+Examples:
+  lampshade report speed-error --out docs/speed-error
+  lampshade report speed-error --out /tmp/se --scene scene.ron --quick
+  lampshade report accuracy --scene scenes/matlab-shiny.ron";
 
 #[derive(Debug, clap::Args)]
 pub struct RenderArgs {
     /// Scene files (.ron). Each is rendered in turn; a bad one is reported and the rest still render.
     #[arg(required = true, value_name = "SCENE")]
     pub scenes: Vec<PathBuf>,
-    /// Output image (only with a single scene). Default: the scene's path with the format's
-    /// extension (`.png` unless --format says otherwise).
+    /// Output image (only with a single scene): `.png`, `.exr` or `.hdr`, the format following
+    /// the extension; `-` writes to standard output. Default: the scene's path with the
+    /// format's extension.
     #[arg(short, long, value_name = "OUT.png")]
     pub output: Option<PathBuf>,
-    /// Output format: png (8-bit), exr or hdr (linear float, not clamped). Default: from the
-    /// output's extension, else png.
+    /// Output format: png (8-bit), exr or hdr (linear float, not clamped). Must agree with the
+    /// output's extension; needed only without -o, or with `-o -`. Default: png.
     #[arg(long, value_enum)]
     pub format: Option<FormatArg>,
     /// How 8-bit PNG stores light: linear (as OpenGL writes a framebuffer) or srgb.
@@ -76,7 +117,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub height: Option<u32>,
     /// Samples per pixel (anti-aliasing: 1, 2, 4, 8 or 16), overriding the scene's.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_samples)]
     pub samples: Option<u32>,
     /// Worker threads (default: one per core). The image is identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
@@ -134,11 +175,29 @@ impl InputLimits {
     }
 }
 
+/// `--samples`: the counts the rasterizer's sample patterns exist for.
+fn parse_samples(text: &str) -> Result<u32, String> {
+    match text.parse::<u32>() {
+        Ok(samples) if crate::render::raster::SamplePattern::new(samples).is_some() => Ok(samples),
+        _ => Err(format!("must be 1, 2, 4, 8 or 16, not `{text}`")),
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum FormatArg {
     Png,
     Exr,
     Hdr,
+}
+
+impl FormatArg {
+    pub fn format(self) -> OutputFormat {
+        match self {
+            FormatArg::Png => OutputFormat::Png,
+            FormatArg::Exr => OutputFormat::Exr,
+            FormatArg::Hdr => OutputFormat::Hdr,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -149,9 +208,25 @@ pub enum EncodingArg {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ShadingArg {
+    /// One colour per object, lit at the centre of its bounds.
+    Constant,
+    /// One colour per triangle, lit with its face normal.
     Flat,
+    /// Lit at the vertices, colours interpolated.
     Gouraud,
+    /// Normals interpolated, lit at every pixel.
     Phong,
+}
+
+impl ShadingArg {
+    pub fn shading(self) -> Shading {
+        match self {
+            ShadingArg::Constant => Shading::Constant,
+            ShadingArg::Flat => Shading::Flat,
+            ShadingArg::Gouraud => Shading::Gouraud,
+            ShadingArg::Phong => Shading::Phong,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -162,6 +237,12 @@ pub enum ModelArg {
     BlinnPhong,
     /// Ambient and diffuse only.
     Lambert,
+    /// The microfacet model (Beckmann or GGX). Cook-Torrance materials keep their roughness,
+    /// Fresnel and distribution; others get the format's defaults (roughness 0.3, F0 0.04,
+    /// Beckmann).
+    CookTorrance,
+    /// No lighting: the diffuse colour plus emission.
+    Unlit,
 }
 
 impl ModelArg {
@@ -170,6 +251,10 @@ impl ModelArg {
             ModelArg::Phong => LightingModel::Phong,
             ModelArg::BlinnPhong => LightingModel::BlinnPhong,
             ModelArg::Lambert => LightingModel::Lambert,
+            ModelArg::CookTorrance => {
+                LightingModel::CookTorrance(crate::scene::presets::default_microfacet())
+            }
+            ModelArg::Unlit => LightingModel::Unlit,
         }
     }
 }
@@ -203,7 +288,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
     };
     match cli.command {
         Command::Render(args) => {
-            exit_on_ctrl_c();
+            exit_on_ctrl_c_after_render_line();
             run_render(&args)
         }
         Command::Check(args) => {
@@ -221,6 +306,23 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
 /// (`watch` has its own handler, which finishes the current render.)
 fn exit_on_ctrl_c() {
     if let Err(error) = ctrlc::set_handler(|| output::exit_when_no_write_is_in_progress(130)) {
+        errln!("warning: cannot catch Ctrl-C ({error}); an interrupted write may leave a temporary file");
+    }
+}
+
+/// `render`'s Ctrl-C: as [`exit_on_ctrl_c`], then one line saying which images were written and
+/// which was left as it was.
+fn exit_on_ctrl_c_after_render_line() {
+    let handler = || {
+        output::exit_after_writes(130, || {
+            let record = render_record();
+            if let Some(bar) = &record.bar {
+                bar.clear();
+            }
+            errln!("\n{}", interrupted_render_line(&record));
+        })
+    };
+    if let Err(error) = ctrlc::set_handler(handler) {
         errln!("warning: cannot catch Ctrl-C ({error}); an interrupted write may leave a temporary file");
     }
 }
@@ -246,6 +348,22 @@ fn run_render(args: &RenderArgs) -> i32 {
         );
         return EXIT_BAD_INPUT;
     }
+    let (destination, format) =
+        match output::choose_format(args.output.as_deref(), args.format.map(FormatArg::format)) {
+            Ok(chosen) => chosen,
+            Err(message) => {
+                errln!("error: {message}");
+                return EXIT_BAD_INPUT;
+            }
+        };
+    if destination == Destination::Stdout && std::io::stdout().is_terminal() {
+        errln!(
+            "error: `-o -` writes the image to standard output, which is a terminal\n  \
+             = help: redirect it (`> out.{}`) or pipe it into another program",
+            format.extension()
+        );
+        return EXIT_BAD_INPUT;
+    }
     let access = match args.limits.file_access() {
         Ok(access) => access,
         Err(message) => {
@@ -259,11 +377,7 @@ fn run_render(args: &RenderArgs) -> i32 {
         width: args.width,
         height: args.height,
         samples: args.samples,
-        shading: args.shading.map(|s| match s {
-            ShadingArg::Flat => Shading::Flat,
-            ShadingArg::Gouraud => Shading::Gouraud,
-            ShadingArg::Phong => Shading::Phong,
-        }),
+        shading: args.shading.map(ShadingArg::shading),
         model: args.model.map(ModelArg::model),
     };
     let render_options = RenderOptions {
@@ -275,24 +389,6 @@ fn run_render(args: &RenderArgs) -> i32 {
             DebugArg::Normals => DebugView::Normals,
             DebugArg::Depth => DebugView::Depth,
         }),
-    };
-    let format = match (args.format, args.output.as_deref()) {
-        (Some(format), _) => match format {
-            FormatArg::Png => OutputFormat::Png,
-            FormatArg::Exr => OutputFormat::Exr,
-            FormatArg::Hdr => OutputFormat::Hdr,
-        },
-        (None, Some(output)) => match OutputFormat::from_path(output) {
-            Some(format) => format,
-            None => {
-                errln!(
-                    "error: cannot tell the format of `{}` from its extension; use .png, .exr or .hdr, or --format",
-                    output.display()
-                );
-                return EXIT_BAD_INPUT;
-            }
-        },
-        (None, None) => OutputFormat::Png,
     };
     let output_settings = OutputSettings {
         format,
@@ -312,13 +408,15 @@ fn run_render(args: &RenderArgs) -> i32 {
         output_settings,
         quiet: args.quiet,
         reference: args.reference,
+        progress_bar: !args.quiet && crate::progress::progress_allowed(),
     };
     for scene_path in &args.scenes {
-        let output = args
-            .output
-            .clone()
-            .unwrap_or_else(|| scene_path.with_extension(format.extension()));
-        match render_one(scene_path, &output, &run, &mut cache) {
+        let target = match &destination {
+            Destination::Stdout => Target::Stdout,
+            Destination::File(Some(path)) => Target::File(path.clone()),
+            Destination::File(None) => Target::File(scene_path.with_extension(format.extension())),
+        };
+        match render_one(scene_path, &target, &run, &mut cache) {
             Ok(()) => {}
             Err(RenderFailure::BadInput) => bad_inputs.push(scene_path),
             Err(RenderFailure::Output) => failed_outputs += 1,
@@ -347,6 +445,22 @@ enum RenderFailure {
     Output,
 }
 
+/// Where one scene's image goes.
+#[derive(Debug, Clone)]
+enum Target {
+    File(PathBuf),
+    Stdout,
+}
+
+impl Target {
+    fn name(&self) -> String {
+        match self {
+            Target::File(path) => path.display().to_string(),
+            Target::Stdout => "standard output".to_string(),
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy)]
 struct OutputSettings {
     format: OutputFormat,
@@ -360,11 +474,56 @@ struct RenderRun<'a> {
     output_settings: OutputSettings,
     quiet: bool,
     reference: bool,
+    progress_bar: bool,
+}
+
+/// What `render` has written so far, for the one line Ctrl-C prints.
+#[derive(Default)]
+struct RenderRecord {
+    written: Vec<String>,
+    /// The image being made, and when its scene started (a file modified since was written
+    /// whole: Ctrl-C waits for a write under way to be renamed into place).
+    current: Option<(PathBuf, SystemTime)>,
+    bar: Option<BarClearer>,
+}
+
+static RENDER_RECORD: Mutex<RenderRecord> = Mutex::new(RenderRecord {
+    written: Vec::new(),
+    current: None,
+    bar: None,
+});
+
+fn render_record() -> std::sync::MutexGuard<'static, RenderRecord> {
+    RENDER_RECORD
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// The line Ctrl-C prints during `render`: what was written and what was left as it was.
+fn interrupted_render_line(record: &RenderRecord) -> String {
+    let mut written = record.written.clone();
+    let mut unfinished = None;
+    if let Some((path, started)) = &record.current {
+        let modified = std::fs::metadata(path).and_then(|m| m.modified());
+        match modified {
+            Ok(modified) if modified >= *started => written.push(path.display().to_string()),
+            _ => unfinished = Some(path.display().to_string()),
+        }
+    }
+    let written = match written.len() {
+        0 => "nothing was written".to_string(),
+        1 => format!("`{}` was written", written[0]),
+        n => format!("{n} images were written ({})", written.join(", ")),
+    };
+    match unfinished {
+        Some(path) => format!("interrupted: {written}; `{path}` was not written and is left as it was"),
+        None => format!("interrupted: {written}"),
+    }
 }
 
 fn render_one(
     scene_path: &Path,
-    output_path: &Path,
+    target: &Target,
     run: &RenderRun,
     cache: &mut BuildCache,
 ) -> Result<(), RenderFailure> {
@@ -374,19 +533,46 @@ fn render_one(
         output_settings,
         quiet,
         reference,
+        progress_bar,
     } = *run;
+    // The scene itself is refused before it is read; the files it reads, once they are known.
+    if let Target::File(output_path) = target
+        && output::overwritten_input(output_path, [scene_path]).is_some()
+    {
+        report_overwritten_input(output_path, scene_path, scene_path);
+        return Err(RenderFailure::BadInput);
+    }
+    if let Target::File(output_path) = target {
+        render_record().current = Some((output_path.clone(), SystemTime::now()));
+    }
+    let bar = RenderBar::start(
+        scene_path.display().to_string(),
+        cache.renderer.progress(),
+        progress_bar,
+    );
+    render_record().bar = Some(bar.clearer());
     let rendered = if reference {
         crate::reference::render_reference_file(scene_path, load_options, render_options.threads)
     } else {
         render_scene_file(scene_path, load_options, render_options, cache)
     };
+    bar.finish();
     let rendered = match rendered {
         Ok(rendered) => rendered,
         Err(error) => {
+            render_record().current = None;
             print_load_error(&error);
             return Err(RenderFailure::BadInput);
         }
     };
+    if let Target::File(output_path) = target
+        && let Some(input) =
+            output::overwritten_input(output_path, rendered.files_read.iter().map(PathBuf::as_path))
+    {
+        render_record().current = None;
+        report_overwritten_input(output_path, input, scene_path);
+        return Err(RenderFailure::BadInput);
+    }
     if !rendered.warnings.is_empty() && !quiet {
         errout!(
             "{}",
@@ -401,23 +587,34 @@ fn render_one(
     } = rendered;
 
     let started = Instant::now();
-    let written = output::write_image(
-        output_path,
-        &framebuffer,
-        output_settings.format,
-        output_settings.encoding,
-        PngCompression::Fast,
-    );
-    if let Err(error) = written {
-        errln!("error: {error}");
-        return Err(RenderFailure::Output);
+    let (format, encoding) = (output_settings.format, output_settings.encoding);
+    let written = match target {
+        Target::File(path) => output::write_image(path, &framebuffer, format, encoding, PngCompression::Fast),
+        Target::Stdout => output::write_image_to_stdout(&framebuffer, format, encoding, PngCompression::Fast),
+    };
+    {
+        let mut record = render_record();
+        record.current = None;
+        if written.is_ok() {
+            record.written.push(target.name());
+        }
+    }
+    match written {
+        Ok(()) => {}
+        // A reader that went away (`render -o - | head -c 100`) wants no more: not an error.
+        Err(output::OutputError::Io { source, .. })
+            if matches!(target, Target::Stdout) && source.kind() == std::io::ErrorKind::BrokenPipe => {}
+        Err(error) => {
+            errln!("error: {error}");
+            return Err(RenderFailure::Output);
+        }
     }
     let encode_time = started.elapsed();
     if !quiet {
-        outln!(
+        let summary = format!(
             "{} → {}: {} triangles, {}×{} px | load {}, geometry {}, raster+shade {}, encode {} ({} threads)",
             scene_path.display(),
-            output_path.display(),
+            target.name(),
             thousands(stats.triangles),
             framebuffer.width,
             framebuffer.height,
@@ -427,8 +624,38 @@ fn render_one(
             milliseconds(encode_time),
             stats.threads,
         );
+        // Standard output carries the image itself with `-o -`.
+        match target {
+            Target::File(_) => outln!("{summary}"),
+            Target::Stdout => errln!("{summary}"),
+        }
     }
     Ok(())
+}
+
+/// Says that `output` is `input`, a file the scene reads, and that nothing was written.
+fn report_overwritten_input(output: &Path, input: &Path, scene: &Path) {
+    let what = if output::overwritten_input(input, [scene]).is_some() {
+        "the scene file itself".to_string()
+    } else {
+        format!(
+            "`{}`, a file the scene `{}` reads",
+            input.display(),
+            scene.display()
+        )
+    };
+    errln!(
+        "error: the output `{}` is {what}; writing the image there would destroy it, so nothing was written\n  \
+         = help: choose another output with -o (e.g. `-o {}`)",
+        output.display(),
+        suggested_output(scene).display(),
+    );
+}
+
+/// An output name beside `scene` that is not an input: `NAME.render.png`.
+fn suggested_output(scene: &Path) -> PathBuf {
+    let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
+    scene.with_file_name(format!("{stem}.render.png"))
 }
 
 fn milliseconds(duration: Duration) -> String {

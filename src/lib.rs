@@ -29,6 +29,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod output;
 pub mod pipeline;
+pub mod progress;
 pub mod reference;
 pub mod render;
 pub mod report;

@@ -125,6 +125,15 @@ impl OutputFormat {
         }
     }
 
+    /// The format's name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            OutputFormat::Png => "PNG",
+            OutputFormat::Exr => "OpenEXR",
+            OutputFormat::Hdr => "Radiance HDR",
+        }
+    }
+
     pub fn extension(self) -> &'static str {
         match self {
             OutputFormat::Png => "png",
@@ -132,6 +141,191 @@ impl OutputFormat {
             OutputFormat::Hdr => "hdr",
         }
     }
+}
+
+/// Where a command's image goes, and in which format: the one rule `render` and `watch` share.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Destination {
+    /// A file; `None` lets the command choose it (beside the scene, with the format's extension).
+    File(Option<PathBuf>),
+    /// Standard output (`-o -`), as Unix tools do.
+    Stdout,
+}
+
+/// The file name `-o -` uses for standard output.
+pub const STDOUT_NAME: &str = "-";
+
+/// Decides the format of `output` (`-o`) given `--format`: the format follows the extension; a
+/// `--format` that contradicts it is an error; an unsupported or missing extension is an error
+/// unless `--format` names the format. `-` is standard output, in `--format` or PNG.
+pub fn choose_format(
+    output: Option<&Path>,
+    requested: Option<OutputFormat>,
+) -> Result<(Destination, OutputFormat), String> {
+    let Some(output) = output else {
+        return Ok((Destination::File(None), requested.unwrap_or(OutputFormat::Png)));
+    };
+    if output.as_os_str() == STDOUT_NAME {
+        return Ok((Destination::Stdout, requested.unwrap_or(OutputFormat::Png)));
+    }
+    let named = OutputFormat::from_path(output);
+    let format = match (named, requested, output.extension()) {
+        (Some(named), Some(requested), _) if named != requested => {
+            return Err(format!(
+                "`{}` names a {} file but --format asks for {}; rename it to `{}` or drop --format",
+                output.display(),
+                named.name(),
+                requested.name(),
+                output.with_extension(requested.extension()).display(),
+            ));
+        }
+        (Some(named), _, _) => named,
+        (None, Some(requested), None) => requested,
+        (None, _, Some(extension)) => {
+            return Err(format!(
+                "cannot write `{}`: lampshade writes .png, .exr and .hdr images, not .{}",
+                output.display(),
+                extension.to_string_lossy(),
+            ));
+        }
+        (None, None, None) => {
+            return Err(format!(
+                "cannot tell the format of `{}`: give it an extension (.png, .exr or .hdr) or use --format",
+                output.display(),
+            ));
+        }
+    };
+    Ok((Destination::File(Some(output.to_path_buf())), format))
+}
+
+/// The first of `inputs` that `output` would overwrite: the same file after symlinks, `..` and
+/// hard links. Every command that writes refuses such an output before writing anything.
+pub fn overwritten_input<'a>(output: &Path, inputs: impl IntoIterator<Item = &'a Path>) -> Option<&'a Path> {
+    let output_identity = FileIdentity::of(output);
+    inputs
+        .into_iter()
+        .find(|input| FileIdentity::of(input) == output_identity)
+}
+
+/// What makes two paths the same file: the inode where the file exists (hard links, bind
+/// mounts), else the resolved path (symlinks and `..` resolved in the folders that exist).
+#[derive(Debug, PartialEq, Eq)]
+enum FileIdentity {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    Path(PathBuf),
+}
+
+impl FileIdentity {
+    fn of(path: &Path) -> FileIdentity {
+        #[cfg(unix)]
+        if let Ok(metadata) = std::fs::metadata(path) {
+            use std::os::unix::fs::MetadataExt;
+            return FileIdentity::Inode(metadata.dev(), metadata.ino());
+        }
+        FileIdentity::Path(resolve_existing_prefix(path))
+    }
+}
+
+/// `path` made absolute, its longest existing prefix canonicalized and the rest applied lexically.
+fn resolve_existing_prefix(path: &Path) -> PathBuf {
+    if let Ok(resolved) = std::fs::canonicalize(path) {
+        return resolved;
+    }
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut rest = Vec::new();
+    let mut prefix = absolute.as_path();
+    loop {
+        if let Ok(mut resolved) = std::fs::canonicalize(prefix) {
+            for component in rest.iter().rev() {
+                match component {
+                    std::path::Component::ParentDir => {
+                        resolved.pop();
+                    }
+                    std::path::Component::CurDir => {}
+                    other => resolved.push(other.as_os_str()),
+                }
+            }
+            return resolved;
+        }
+        let mut components = prefix.components();
+        match components.next_back() {
+            Some(last) => {
+                rest.push(last);
+                prefix = components.as_path();
+            }
+            None => return absolute,
+        }
+    }
+}
+
+/// Encodes `framebuffer` in `format` and writes it to standard output in one piece.
+pub fn write_image_to_stdout(
+    framebuffer: &FrameBuffer,
+    format: OutputFormat,
+    encoding: Encoding,
+    compression: PngCompression,
+) -> Result<(), OutputError> {
+    let path = Path::new("standard output");
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    encode_image(&mut bytes, path, framebuffer, format, encoding, compression)?;
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(bytes.get_ref())
+        .and_then(|()| stdout.flush())
+        .map_err(|source| OutputError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+}
+
+/// Encodes `framebuffer` in `format` into `writer`; `path` names the destination in errors.
+fn encode_image<W: Write + std::io::Seek>(
+    writer: &mut W,
+    path: &Path,
+    framebuffer: &FrameBuffer,
+    format: OutputFormat,
+    encoding: Encoding,
+    compression: PngCompression,
+) -> Result<(), OutputError> {
+    let encode_error = |source| OutputError::Encode {
+        path: path.to_path_buf(),
+        source,
+    };
+    match format {
+        OutputFormat::Png => {
+            let image = to_rgb8_encoded(framebuffer, encoding);
+            png_encoder(writer, compression)
+                .write_image(
+                    image.as_raw(),
+                    image.width(),
+                    image.height(),
+                    image::ExtendedColorType::Rgb8,
+                )
+                .map_err(encode_error)
+        }
+        OutputFormat::Exr | OutputFormat::Hdr => {
+            let floats: Vec<f32> = framebuffer.color.iter().flat_map(|c| c.to_array()).collect();
+            let image = image::Rgb32FImage::from_raw(framebuffer.width, framebuffer.height, floats)
+                .expect("a frame buffer holds width × height pixels");
+            let image_format = if format == OutputFormat::Exr {
+                image::ImageFormat::OpenExr
+            } else {
+                image::ImageFormat::Hdr
+            };
+            image::DynamicImage::ImageRgb32F(image)
+                .write_to(writer, image_format)
+                .map_err(encode_error)
+        }
+    }
+}
+
+fn png_encoder<W: Write>(writer: W, compression: PngCompression) -> PngEncoder<W> {
+    let compression = match compression {
+        PngCompression::Fast => CompressionType::Fast,
+        PngCompression::Best => CompressionType::Best,
+    };
+    PngEncoder::new_with_quality(writer, compression, FilterType::Adaptive)
 }
 
 /// Writes `framebuffer` to `path` in `format`, atomically. PNG uses `encoding`; the float
@@ -143,27 +337,9 @@ pub fn write_image(
     encoding: Encoding,
     compression: PngCompression,
 ) -> Result<(), OutputError> {
-    match format {
-        OutputFormat::Png => write_png(path, &to_rgb8_encoded(framebuffer, encoding), compression),
-        OutputFormat::Exr | OutputFormat::Hdr => {
-            let floats: Vec<f32> = framebuffer.color.iter().flat_map(|c| c.to_array()).collect();
-            let image = image::Rgb32FImage::from_raw(framebuffer.width, framebuffer.height, floats)
-                .expect("a frame buffer holds width × height pixels");
-            let image_format = if format == OutputFormat::Exr {
-                image::ImageFormat::OpenExr
-            } else {
-                image::ImageFormat::Hdr
-            };
-            write_atomically(path, |writer| {
-                image::DynamicImage::ImageRgb32F(image)
-                    .write_to(writer, image_format)
-                    .map_err(|source| OutputError::Encode {
-                        path: path.to_path_buf(),
-                        source,
-                    })
-            })
-        }
-    }
+    write_atomically(path, |writer| {
+        encode_image(writer, path, framebuffer, format, encoding, compression)
+    })
 }
 
 /// PNG compression effort: `Fast` favours the edit-to-image loop, `Best` smaller files.
@@ -176,12 +352,8 @@ pub enum PngCompression {
 
 /// Encodes `image` as PNG and puts it at `path` atomically.
 pub fn write_png(path: &Path, image: &RgbImage, compression: PngCompression) -> Result<(), OutputError> {
-    let compression = match compression {
-        PngCompression::Fast => CompressionType::Fast,
-        PngCompression::Best => CompressionType::Best,
-    };
     write_atomically(path, |writer| {
-        PngEncoder::new_with_quality(writer, compression, FilterType::Adaptive)
+        png_encoder(writer, compression)
             .write_image(
                 image.as_raw(),
                 image.width(),
@@ -201,8 +373,15 @@ static WRITES: RwLock<()> = RwLock::new(());
 /// Ends the process with `code` once no output is half-written: waits for the writes in
 /// progress to be renamed into place, and lets no new one start. For Ctrl-C handlers.
 pub fn exit_when_no_write_is_in_progress(code: i32) -> ! {
+    exit_after_writes(code, || {})
+}
+
+/// [`exit_when_no_write_is_in_progress`], running `last_words` once the writes under way are in
+/// place (so it can say truthfully what was written).
+pub fn exit_after_writes(code: i32, last_words: impl FnOnce()) -> ! {
     // A writer that panicked poisons the lock; its temporary file is gone already.
     let _no_writes = WRITES.write().unwrap_or_else(|poisoned| poisoned.into_inner());
+    last_words();
     std::process::exit(code)
 }
 

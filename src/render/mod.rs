@@ -27,6 +27,8 @@ pub mod shade;
 pub mod shade_fast;
 pub mod shadow;
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
@@ -113,6 +115,38 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderSta
 pub struct Renderer {
     spare: geometry::SpareBuffers,
     framebuffer: FrameBuffer,
+    progress: Arc<RenderProgress>,
+}
+
+/// How far the frame under way has got, readable from another thread while it renders (the
+/// command line's progress bar). Counting costs one relaxed atomic add per 64×64 tile.
+#[derive(Debug, Default)]
+pub struct RenderProgress {
+    tiles_total: AtomicUsize,
+    tiles_done: AtomicUsize,
+}
+
+impl RenderProgress {
+    /// `(done, total)` tiles of the frame under way; the total is 0 while its geometry is built.
+    pub fn tiles(&self) -> (usize, usize) {
+        (
+            self.tiles_done.load(Ordering::Relaxed),
+            self.tiles_total.load(Ordering::Relaxed),
+        )
+    }
+
+    fn start_geometry(&self) {
+        self.tiles_total.store(0, Ordering::Relaxed);
+        self.tiles_done.store(0, Ordering::Relaxed);
+    }
+
+    fn start_tiles(&self, total: usize) {
+        self.tiles_total.store(total, Ordering::Relaxed);
+    }
+
+    fn tile_done(&self) {
+        self.tiles_done.fetch_add(1, Ordering::Relaxed);
+    }
 }
 
 impl Renderer {
@@ -124,6 +158,11 @@ impl Renderer {
             return pool.install(|| self.render_in_current_pool(scene, options));
         }
         self.render_in_current_pool(scene, options)
+    }
+
+    /// The progress of the frame under way, to watch from another thread.
+    pub fn progress(&self) -> Arc<RenderProgress> {
+        Arc::clone(&self.progress)
     }
 
     /// The last frame rendered (empty before the first).
@@ -142,7 +181,13 @@ impl Renderer {
     }
 
     fn render_in_current_pool(&mut self, scene: &Scene, options: &RenderOptions) -> RenderStats {
-        let (stats, frame) = render_frame(scene, options, &mut self.spare, &mut self.framebuffer);
+        let (stats, frame) = render_frame(
+            scene,
+            options,
+            &mut self.spare,
+            &mut self.framebuffer,
+            &self.progress,
+        );
         self.spare.keep(frame);
         stats
     }
@@ -153,8 +198,10 @@ fn render_frame(
     options: &RenderOptions,
     spare: &mut geometry::SpareBuffers,
     framebuffer: &mut FrameBuffer,
+    progress: &RenderProgress,
 ) -> (RenderStats, geometry::Frame) {
     let started = Instant::now();
+    progress.start_geometry();
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
     let shadows = shadow::render_shadow_maps(scene, scene.camera.eye);
     let frame = geometry::build_frame_in(scene, pattern, options.debug_view, shadows, spare);
@@ -177,6 +224,7 @@ fn render_frame(
         };
     }
     let band = TILE_SIZE as usize * width as usize;
+    progress.start_tiles(tiles.columns as usize * tiles.rows as usize);
     // Debug builds only: a seam that makes the worker threads panic, for the end-to-end test of
     // how a bug is reported (exit code 101, nothing written; tests/suite/robustness.rs).
     #[cfg(debug_assertions)]
@@ -213,6 +261,7 @@ fn render_frame(
                 );
                 raster_time += shade_started - raster_started;
                 shade_time += shade_started.elapsed();
+                progress.tile_done();
             }
             (raster_time, shade_time, shaded)
         })

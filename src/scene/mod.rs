@@ -40,26 +40,25 @@ impl Scene {
 
     /// Gives every material of every object the lighting model `model` (the command line's
     /// `--model`): the object's own material, the mesh's materials, or the default material.
-    /// A mesh shared with a cache is copied before its materials change.
+    /// Cook-Torrance materials asked for Cook-Torrance keep their own parameters (see
+    /// [`LightingModel::overridden_by`]). A mesh shared with a cache is copied before its
+    /// materials change.
     pub fn override_lighting_model(&mut self, model: LightingModel) {
         for object in &mut self.objects {
             match &mut object.material {
-                Some(material) => material.model = model,
+                Some(material) => material.model = material.model.overridden_by(model),
                 None if object.mesh.materials.is_empty() => {
+                    let material = presets::default_material();
                     object.material = Some(Material {
-                        model,
-                        ..presets::default_material()
+                        model: material.model.overridden_by(model),
+                        ..material
                     });
                 }
                 None => {
-                    if object
-                        .mesh
-                        .materials
-                        .iter()
-                        .any(|material| material.model != model)
-                    {
+                    let changes = |material: &Material| material.model.overridden_by(model) != material.model;
+                    if object.mesh.materials.iter().any(changes) {
                         for material in &mut Arc::make_mut(&mut object.mesh).materials {
-                            material.model = model;
+                            material.model = material.model.overridden_by(model);
                         }
                     }
                 }
@@ -260,6 +259,18 @@ pub enum LightingModel {
     /// The microfacet model of seed 002: specular `F·D·G / (4(N·V)(N·L))`, diffuse weighted by
     /// `1 − F` (the seed's `k_s + k_d = 1`). See [`crate::lighting`] for the exact terms.
     CookTorrance(Microfacet),
+}
+
+impl LightingModel {
+    /// The model a material lit by `self` gets when `--model` asks for `requested`: the requested
+    /// one, except that a Cook-Torrance material asked for Cook-Torrance keeps its own roughness,
+    /// Fresnel and distribution (the request carries only defaults for materials that had none).
+    pub fn overridden_by(self, requested: LightingModel) -> LightingModel {
+        match (self, requested) {
+            (LightingModel::CookTorrance(_), LightingModel::CookTorrance(_)) => self,
+            _ => requested,
+        }
+    }
 }
 
 /// The parameters of a Cook-Torrance surface.

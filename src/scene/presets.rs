@@ -118,6 +118,16 @@ pub const DEFAULT_RECIPE: MaterialRecipe = MaterialRecipe {
     },
 };
 
+/// The Cook-Torrance parameters of a material that names none (`--model cook-torrance` on a
+/// Phong material): the format's defaults, roughness 0.3, a dielectric's `F0` and Beckmann's `D`.
+pub fn default_microfacet() -> Microfacet {
+    Microfacet {
+        roughness: DEFAULT_RECIPE.roughness,
+        fresnel: Vec3::splat(DIELECTRIC_FRESNEL),
+        distribution: DEFAULT_RECIPE.distribution,
+    }
+}
+
 pub fn default_material() -> Material {
     DEFAULT_RECIPE.resolve()
 }

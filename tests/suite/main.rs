@@ -2,6 +2,8 @@
 //! - `render`: the rasterizer's contract on scenes built in code;
 //! - `check`: `lampshade check` on small suites (verdicts, exit codes, bless, shards, reports);
 //! - `cli`: the command line on good and bad scene files (`tests/bad-scenes/`);
+//! - `outputs`: where commands write (never over an input), formats, standard output, closed
+//!   streams, Ctrl-C, and the command-line overrides;
 //! - `hard_cases`: numerical hard cases on the scenes of `scenes/hard/` (watertightness,
 //!   degenerate triangles, the eye plane, large coordinates and images, depth precision, broken
 //!   normals, extreme lighting), against the exact reference where one exists;
@@ -16,6 +18,7 @@ mod cli;
 mod golden;
 mod hard_cases;
 mod loading;
+mod outputs;
 mod render;
 mod robustness;
 mod watch;
