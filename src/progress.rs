@@ -95,7 +95,7 @@ fn follow(label: &str, progress: &RenderProgress, done: &AtomicBool, shown: &Mut
         let bar = shown.get_or_insert_with(|| new_bar(label));
         let (tiles_done, tiles_total) = progress.tiles();
         if tiles_total == 0 {
-            bar.set_message(format!("{label}: geometry"));
+            bar.set_message(format!("{label}: loading and preparing"));
         } else {
             bar.set_length(tiles_total as u64);
             bar.set_position(tiles_done as u64);
