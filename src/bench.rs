@@ -240,7 +240,16 @@ pub fn run(args: &BenchArgs) -> i32 {
                 );
                 if let Some(folder) = &args.save {
                     let file = folder.join(format!("{scene_name}__{}.png", mode.name()));
-                    if let Err(error) = output::write_png(&file, &image, PngCompression::Fast) {
+                    if let Some(input) =
+                        output::overwritten_input(&file, args.scenes.iter().map(PathBuf::as_path))
+                    {
+                        errln!(
+                            "error: `{}` would replace the scene `{}`; not saved\n  = help: choose another --save folder",
+                            file.display(),
+                            input.display()
+                        );
+                        exit = exit.max(crate::cli::EXIT_BAD_INPUT);
+                    } else if let Err(error) = output::write_png(&file, &image, PngCompression::Fast) {
                         errln!("error: {error}");
                         exit = exit.max(EXIT_OUTPUT_FAILED);
                     }

@@ -22,6 +22,7 @@
 //! accurate) drawn as a line.
 
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -639,10 +640,30 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
         errln!("error: cannot create {}: {error}", args.out.display());
         return EXIT_OUTPUT_FAILED;
     }
+    // Nothing is written if any file would replace the scene; each file is written whole or
+    // not at all.
+    if let Some((name, _)) = files.iter().find(|(name, _)| {
+        crate::output::overwritten_input(&args.out.join(name), [args.scene.as_path()]).is_some()
+    }) {
+        errln!(
+            "error: `{}` would replace the scene `{}`; nothing was written\n  = help: choose another --out folder",
+            args.out.join(name).display(),
+            args.scene.display()
+        );
+        return EXIT_BAD_INPUT;
+    }
     for (name, text) in &files {
         let path = args.out.join(name);
-        if let Err(error) = std::fs::write(&path, text) {
-            errln!("error: cannot write {}: {error}", path.display());
+        let written = crate::output::write_atomically(&path, |writer| {
+            writer
+                .write_all(text.as_bytes())
+                .map_err(|source| crate::output::OutputError::Io {
+                    path: path.clone(),
+                    source,
+                })
+        });
+        if let Err(error) = written {
+            errln!("error: {error}");
             return EXIT_OUTPUT_FAILED;
         }
     }
