@@ -499,6 +499,47 @@ fn ctrl_c_stops_the_watch_cleanly() {
 }
 
 #[test]
+fn a_closed_standard_output_ends_the_watch_quietly_at_the_next_build() {
+    // `lampshade watch scene.ron | head -1`: the reader leaves after the first line.
+    let folder = SceneFolder::new();
+    struct KillOnDrop(Child);
+    impl Drop for KillOnDrop {
+        fn drop(&mut self) {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
+    }
+    let mut guard = KillOnDrop(
+        Command::new(env!("CARGO_BIN_EXE_lampshade"))
+            .args(["watch", "scene.ron", "-o", "out.png"])
+            .current_dir(&folder.path)
+            .env("NO_COLOR", "1")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("the lampshade binary starts"),
+    );
+    let child = &mut guard.0;
+    let stderr = collect(child.stderr.take().expect("piped stderr"));
+    let mut stdout = BufReader::new(child.stdout.take().expect("piped stdout"));
+    let mut first_line = String::new();
+    stdout.read_line(&mut first_line).unwrap();
+    assert!(first_line.starts_with("#1 "), "{first_line}");
+    drop(stdout);
+
+    folder.write("scene.ron", &scene_text((0.6, 0.6, 1.0)));
+    let status = wait_for(
+        "the watch to end after its output was closed",
+        || stderr.lock().unwrap().clone(),
+        || child.try_wait().expect("the watcher can be waited for"),
+    );
+    let stderr = stderr.lock().unwrap().clone();
+    assert_eq!(status.code(), Some(0), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
 fn an_output_that_would_replace_the_scene_is_refused() {
     let folder = SceneFolder::new();
     let output = Command::new(env!("CARGO_BIN_EXE_lampshade"))
