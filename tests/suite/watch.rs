@@ -483,6 +483,92 @@ fn a_mesh_in_a_folder_that_does_not_exist_yet_is_picked_up() {
     expect_new_image(&watch, &folder, &[]);
 }
 
+/// Lines of stdout from line `from` on, once one satisfies `condition`; returns its index.
+fn wait_for_line_from(
+    watch: &WatchProcess,
+    from: usize,
+    what: &str,
+    condition: impl Fn(&str) -> bool,
+) -> usize {
+    wait_for(
+        what,
+        || watch.output(),
+        || {
+            let stdout = watch.stdout();
+            let found = stdout
+                .lines()
+                .enumerate()
+                .skip(from)
+                .find(|(_, line)| condition(line));
+            found.map(|(index, _)| index)
+        },
+    )
+}
+
+#[test]
+fn every_kind_of_file_a_build_reads_stays_followed_while_it_is_missing() {
+    // One scene using every kind of dependency: an include, an OBJ mesh with its MTL library and
+    // the library's texture, a texture of the scene's own, and a glTF with an external buffer
+    // and image. Each is deleted in turn: the build fails (or warns), the watch says it waits
+    // for the file, and restoring that file alone must bring the image back.
+    let folder = SceneFolder::new();
+    let gltf = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/gltf/BoxTextured/glTF");
+    for name in ["BoxTextured.gltf", "BoxTextured0.bin", "CesiumLogoFlat.png"] {
+        std::fs::copy(gltf.join(name), folder.file(name)).unwrap();
+    }
+    std::fs::copy(gltf.join("CesiumLogoFlat.png"), folder.file("logo.png")).unwrap();
+    std::fs::copy(gltf.join("CesiumLogoFlat.png"), folder.file("wood.png")).unwrap();
+    folder.write(
+        "quad.obj",
+        "mtllib quad.mtl\nv -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\n\
+         vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl logo\nf 1/1 2/2 3/3 4/4\n",
+    );
+    folder.write("quad.mtl", "newmtl logo\nKd 1 0.8 0.6\nmap_Kd logo.png\n");
+    folder.write(
+        "mats.ron",
+        "Materials(materials: { \"wood\": (color: (1, 1, 1), texture: \"wood.png\") })\n",
+    );
+    folder.write(
+        "scene.ron",
+        r#"Scene(
+    image: (width: 48, height: 32),
+    camera: Perspective(eye: (0, 0, 4), target: (0, 0, 0), fov: 45),
+    include: ["mats.ron"],
+    objects: [
+        (mesh: Obj("quad.obj"), translate: (-1.1, 0, 0)),
+        (mesh: Obj("quad.obj"), translate: (0, 0, 0), material: "wood"),
+        (mesh: Gltf("BoxTextured.gltf"), translate: (1.1, 0, 0), rotate: (30, 30, 0), scale: 0.6),
+    ],
+)
+"#,
+    );
+    let (watch, first) = start_watch(&folder);
+    for name in [
+        "mats.ron",
+        "quad.obj",
+        "quad.mtl",
+        "logo.png",
+        "wood.png",
+        "BoxTextured.gltf",
+        "BoxTextured0.bin",
+        "CesiumLogoFlat.png",
+        "scene.ron",
+    ] {
+        let bytes = std::fs::read(folder.file(name)).unwrap();
+        let from = watch.stdout().lines().count();
+        std::fs::remove_file(folder.file(name)).unwrap();
+        let waiting = wait_for_line_from(&watch, from, &format!("waiting for {name}"), |line| {
+            line.starts_with("waiting for ") && line.contains(name)
+        });
+        std::fs::write(folder.file(name), &bytes).unwrap();
+        let rebuilt = format!("{name} changed → out.png");
+        wait_for_line_from(&watch, waiting, &format!("`{rebuilt}`"), |line| {
+            line.starts_with('#') && line.contains(&rebuilt)
+        });
+        assert_eq!(folder.image().unwrap(), first, "after restoring {name}");
+    }
+}
+
 #[cfg(unix)]
 #[test]
 fn ctrl_c_stops_the_watch_cleanly() {
