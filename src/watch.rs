@@ -436,8 +436,7 @@ impl WatchSession {
             trigger.describe()
         );
         if let Some(preview) = &self.preview {
-            let summary = format!("#{}: {problem}; showing the last good image", self.builds);
-            preview.publish_error(report(), summary);
+            preview.publish_error(report(), &format!("#{}: {problem}", self.builds));
         }
     }
 

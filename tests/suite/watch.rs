@@ -478,9 +478,15 @@ fn a_mesh_in_a_folder_that_does_not_exist_yet_is_picked_up() {
     );
     let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "out.png"]);
     watch.wait_for_stdout("waiting for meshes/tri.obj to be created");
+    // The folder alone: a build, labelled with what changed (the folder), not with the file,
+    // which still does not exist.
     std::fs::create_dir(folder.file("meshes")).unwrap();
+    let line = watch.wait_for_status_line(2);
+    assert!(line.starts_with("#2 meshes/ changed: 1 error"), "{line}");
     folder.write("meshes/tri.obj", TRIANGLE_OBJ);
     expect_new_image(&watch, &folder, &[]);
+    let line = watch.wait_for_status_line(3);
+    assert!(line.starts_with("#3 meshes/tri.obj changed → out.png"), "{line}");
 }
 
 /// Lines of stdout from line `from` on, once one satisfies `condition`; returns its index.
@@ -623,6 +629,25 @@ fn a_closed_standard_output_ends_the_watch_quietly_at_the_next_build() {
     let stderr = stderr.lock().unwrap().clone();
     assert_eq!(status.code(), Some(0), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn an_image_that_cannot_be_written_is_reported_by_its_own_name() {
+    let folder = SceneFolder::new();
+    let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "no-such-folder/out.png"]);
+    let line = watch.wait_for_status_line(1);
+    assert!(line.contains("the image could not be written"), "{line}");
+    let stderr = wait_for(
+        "the error",
+        || watch.output(),
+        || Some(watch.stderr()).filter(|e| e.contains("cannot write")),
+    );
+    assert!(
+        stderr.contains("cannot write `no-such-folder/out.png`"),
+        "{stderr}"
+    );
+    // The temporary file it is written through is ours, not a name the user knows.
+    assert!(!stderr.contains(".lampshade-"), "{stderr}");
 }
 
 #[test]
@@ -780,6 +805,44 @@ fn the_preview_serves_the_page_the_image_and_live_state_on_localhost_only() {
     );
     assert_eq!(failed["image"], rendered["image"], "the last good image stays");
     assert_eq!(http_get(port, "/image.png", &host).1, second);
+}
+
+#[test]
+fn the_preview_status_says_which_image_is_under_the_errors() {
+    let folder = SceneFolder::new();
+    let broken = "Scene(objects: [(mesh: Sphere(]";
+    let good = scene_text((1.0, 1.0, 1.0));
+    folder.write("scene.ron", broken);
+    let args = ["scene.ron", "-o", "out.png", "--serve", "--port", "0"];
+    let summary = |watch: &WatchProcess, build: u64| -> String {
+        let mut events = EventStream::open(preview_port(watch));
+        let state = events.next_where(|m| m["build"] == build);
+        assert!(!state["error"].is_null(), "{state}");
+        state["summary"].as_str().unwrap().to_owned()
+    };
+
+    // Started on a broken scene with no image on disk: there is nothing under the errors.
+    let mut watch = WatchProcess::start(&folder.path, &args);
+    let status = summary(&watch, 1);
+    assert!(status.ends_with("; no image yet"), "{status}");
+
+    // A good save, then a broken one: the last good image is under the errors.
+    folder.write("scene.ron", &good);
+    let image = expect_new_image(&watch, &folder, &[]);
+    folder.write("scene.ron", broken);
+    watch.wait_for_status_line(3);
+    let status = summary(&watch, 3);
+    assert!(status.ends_with("; showing the last good image"), "{status}");
+    drop(watch);
+
+    // Restarted on the broken scene: the image on disk is from before this watch.
+    watch = WatchProcess::start(&folder.path, &args);
+    let status = summary(&watch, 1);
+    assert!(
+        status.ends_with("; showing the image from before this watch started"),
+        "{status}"
+    );
+    assert_eq!(folder.image().unwrap(), image);
 }
 
 #[test]
