@@ -330,6 +330,56 @@ fn a_burst_of_writes_ends_in_the_image_of_the_last_one() {
 }
 
 #[test]
+fn saves_made_during_a_long_render_are_rendered_together() {
+    // A render far longer than the debounce's maximum delay (0.5 s): 2 million triangles,
+    // 8 samples, one thread. Four saves made while it runs must give one more render, not one per
+    // file-system event they queued.
+    let folder = SceneFolder::new();
+    let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "out.png", "--threads", "1"]);
+    let slow = |light: f32| {
+        scene_text((light, 1.0, 1.0))
+            .replace("width: 32, height: 24", "width: 1600, height: 1200, samples: 8")
+            .replace("Sphere(segments: 8)", "Sphere(segments: 1000)")
+    };
+    let before = watch.status_lines().len();
+    folder.write("scene.ron", &slow(1.0));
+    // The slow build starts 15–50 ms after that save; give it time to be under way (if it is
+    // not, the saves below only join it, and the count below still holds).
+    std::thread::sleep(Duration::from_millis(300));
+    for light in [0.9, 0.8, 0.7, 0.6] {
+        folder.write("scene.ron", &slow(light));
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // A save of another file after them: its event is queued behind theirs, so once its build
+    // is reported, every build their events caused has been reported before it.
+    folder.write("mats.ron", &materials_text((0.2, 0.8, 0.2)));
+    let caused_by = |line: &String, name: &str| {
+        line.split_once(" changed")
+            .is_some_and(|(cause, _)| cause.contains(name))
+    };
+    let lines = wait_for(
+        "the build of mats.ron",
+        || watch.output(),
+        || {
+            let lines = watch.status_lines();
+            lines
+                .iter()
+                .any(|line| caused_by(line, "mats.ron"))
+                .then_some(lines)
+        },
+    );
+    let scene_builds = lines[before..]
+        .iter()
+        .filter(|line| caused_by(line, "scene.ron"))
+        .count();
+    assert!(
+        (1..=2).contains(&scene_builds),
+        "{scene_builds} builds for the slow save and the four made during its render\n{}",
+        watch.output()
+    );
+}
+
+#[test]
 fn editing_an_included_material_file_gives_a_new_image() {
     let folder = SceneFolder::new();
     let (watch, first) = start_watch(&folder);
