@@ -27,7 +27,8 @@
 //!   stage, and the time from the first change seen to the image written. Diagnostics go to
 //!   stderr, like `render`'s.
 //! - Ctrl-C (or SIGTERM) stops the loop after the current build and exits with 0; a second
-//!   Ctrl-C exits at once.
+//!   Ctrl-C exits at once. A closed standard output (`watch s.ron | head -1`) ends it quietly
+//!   after the build whose status line found it closed, with 0 too.
 //! - `--serve` adds the browser preview (`watch::server`).
 //!
 //! Rejected: re-running the whole `render` command per change (re-reads every mesh); a loop that
