@@ -393,7 +393,7 @@ pub fn write_atomically(
     let _writing = WRITES.read().unwrap_or_else(|poisoned| poisoned.into_inner());
     let io_error = |source| OutputError::Io {
         path: path.to_path_buf(),
-        source,
+        source: without_temporary_path(source),
     };
     let folder = match path.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent,
@@ -414,6 +414,16 @@ pub fn write_atomically(
     temporary.as_file().sync_data().map_err(io_error)?;
     temporary.persist(path).map_err(|e| io_error(e.error))?;
     Ok(())
+}
+
+/// `error` without the ` at path "DIR/.lampshade-Ab12Cd.tmp"` that `tempfile` appends to the
+/// errors of the temporary file: the user named the destination, which the message names.
+fn without_temporary_path(error: std::io::Error) -> std::io::Error {
+    let text = error.to_string();
+    match text.rfind(" at path \"") {
+        Some(end) if text.ends_with(".tmp\"") => std::io::Error::new(error.kind(), &text[..end]),
+        _ => error,
+    }
 }
 
 #[cfg(test)]

@@ -27,7 +27,8 @@
 //!   stage, and the time from the first change seen to the image written. Diagnostics go to
 //!   stderr, like `render`'s.
 //! - Ctrl-C (or SIGTERM) stops the loop after the current build and exits with 0; a second
-//!   Ctrl-C exits at once.
+//!   Ctrl-C exits at once. A closed standard output (`watch s.ron | head -1`) ends it quietly
+//!   after the build whose status line found it closed, with 0 too.
 //! - `--serve` adds the browser preview (`watch::server`).
 //!
 //! Rejected: re-running the whole `render` command per change (re-reads every mesh); a loop that
@@ -98,7 +99,8 @@ pub struct WatchArgs {
 
 /// Runs `lampshade watch` until Ctrl-C; returns the exit code.
 ///
-/// Exit codes: `0` after Ctrl-C; `2` for arguments that cannot work (the output would replace
+/// Exit codes: `0` after Ctrl-C, or once standard output is closed (checked after each build's
+/// status line); `2` for arguments that cannot work (the output would replace
 /// the scene); `1` when watching or serving cannot start at all. Errors in the scene never end
 /// the watch.
 pub fn run(args: &WatchArgs) -> i32 {
@@ -180,7 +182,11 @@ pub fn run(args: &WatchArgs) -> i32 {
     session.preview = preview;
     session.build(&Trigger::Start(started));
     let mut report_watch_error = |error: notify::Error| errln!("warning: watching files: {error}");
-    while let Some(changes) = wait_for_changes(&signals, &session.files, DEBOUNCE, &mut report_watch_error) {
+    // Nobody reads the status lines any more (`watch s.ron | head -1`): end quietly, as a
+    // Ctrl-C would, rather than render for no one.
+    while !crate::console::stdout_closed()
+        && let Some(changes) = wait_for_changes(&signals, &session.files, DEBOUNCE, &mut report_watch_error)
+    {
         session.build(&Trigger::Changes(changes));
     }
     outln!("stopped");
@@ -431,8 +437,7 @@ impl WatchSession {
             trigger.describe()
         );
         if let Some(preview) = &self.preview {
-            let summary = format!("#{}: {problem}; showing the last good image", self.builds);
-            preview.publish_error(report(), summary);
+            preview.publish_error(report(), &format!("#{}: {problem}", self.builds));
         }
     }
 

@@ -23,17 +23,51 @@
 use std::fmt;
 use std::io::Read;
 use std::path::{Component, Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Larger input files are refused unread: no scene, mesh or texture this renderer can draw
 /// within its memory limits comes near it, and it stops `/proc`-like endless files.
 pub const MAX_FILE_BYTES: u64 = 4 << 30;
 
 /// How files named by a scene may be read. The default reads anything the process can.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default)]
 pub struct FileAccess {
     /// The sandbox folder, resolved (absolute, no symlinks); `None` without `--sandbox`.
     sandbox: Option<Arc<PathBuf>>,
+    /// Where every path asked for is noted, in a copy made by [`FileAccess::recording`].
+    attempts: Option<AttemptedReads>,
+}
+
+/// Two accesses are equal when they allow the same reads; recording changes nothing read.
+impl PartialEq for FileAccess {
+    fn eq(&self, other: &Self) -> bool {
+        self.sandbox == other.sandbox
+    }
+}
+
+impl Eq for FileAccess {}
+
+/// The paths a recording [`FileAccess`] was asked to read or inspect, in order, without repeats:
+/// found or not, allowed or not.
+#[derive(Debug, Clone, Default)]
+pub struct AttemptedReads(Arc<Mutex<Vec<PathBuf>>>);
+
+impl AttemptedReads {
+    fn note(&self, path: &Path) {
+        // A panic while holding the lock cannot leave the list half-updated (one push).
+        let mut paths = self.0.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if !paths.iter().any(|p| p == path) {
+            paths.push(path.to_path_buf());
+        }
+    }
+
+    /// The paths noted so far.
+    pub fn paths(&self) -> Vec<PathBuf> {
+        self.0
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
+            .clone()
+    }
 }
 
 /// Why a file was not read.
@@ -90,6 +124,18 @@ impl FileAccess {
         FileAccess::default()
     }
 
+    /// This access, noting every path it is asked for in the returned list: for a reader whose
+    /// failure must still say which files it tried (a mesh whose `.bin` is missing: a watcher
+    /// follows it to notice when it comes back).
+    pub fn recording(&self) -> (FileAccess, AttemptedReads) {
+        let attempts = AttemptedReads::default();
+        let access = FileAccess {
+            sandbox: self.sandbox.clone(),
+            attempts: Some(attempts.clone()),
+        };
+        (access, attempts)
+    }
+
     /// Reads only files inside `folder` (after resolving symlinks and `..`).
     pub fn sandboxed(folder: &Path) -> Result<Self, String> {
         let resolved = std::fs::canonicalize(folder)
@@ -99,6 +145,7 @@ impl FileAccess {
         }
         Ok(FileAccess {
             sandbox: Some(Arc::new(resolved)),
+            attempts: None,
         })
     }
 
@@ -125,6 +172,9 @@ impl FileAccess {
 
     /// Whether `path` is a regular file that may be read (for "does the mesh exist" checks).
     pub fn metadata(&self, path: &Path) -> Result<std::fs::Metadata, ReadError> {
+        if let Some(attempts) = &self.attempts {
+            attempts.note(path);
+        }
         self.check(path)?;
         let metadata = std::fs::metadata(path).map_err(|error| io_error(&error))?;
         if metadata.is_dir() {
@@ -222,6 +272,28 @@ mod tests {
         std::fs::write(inside.join("ok.txt"), "ok").unwrap();
         let access = FileAccess::sandboxed(&inside).unwrap();
         (root, inside, access)
+    }
+
+    #[test]
+    fn a_recording_access_notes_every_path_asked_for_found_or_not() {
+        let folder = tempfile::tempdir().unwrap();
+        let present = folder.path().join("mesh.gltf");
+        std::fs::write(&present, "{}").unwrap();
+        let missing = folder.path().join("mesh.bin");
+        let plain = FileAccess::unrestricted();
+        let (recording, attempts) = plain.recording();
+        assert_eq!(recording, plain, "recording changes nothing read");
+        recording.read(&present).unwrap();
+        assert_eq!(recording.read(&missing), Err(ReadError::NotFound));
+        recording.clone().metadata(&present).unwrap();
+        assert_eq!(attempts.paths(), [present.clone(), missing]);
+        // Only the recording copy notes anything.
+        plain.read(&present).unwrap();
+        assert_eq!(attempts.paths().len(), 2);
+
+        let (sandboxed, refused) = FileAccess::sandboxed(folder.path()).unwrap().recording();
+        assert!(sandboxed.read(Path::new("/etc/hostname")).is_err());
+        assert_eq!(refused.paths(), [PathBuf::from("/etc/hostname")]);
     }
 
     #[test]

@@ -1278,9 +1278,13 @@ impl Loader<'_> {
                 cached.warnings.clone(),
             ),
             None => {
+                // A failed load names the file it failed on, not every file it read or looked for
+                // before failing (its MTL, `.bin`, images): the recording access keeps them, so
+                // that a watcher follows them and sees a missing one come back.
+                let (access, attempted) = self.access.recording();
                 let options = MeshOptions {
                     crease_angle_degrees: crease_angle,
-                    access: self.access.clone(),
+                    access,
                 };
                 let loaded = if is_obj {
                     load_obj(path, &options)
@@ -1315,6 +1319,7 @@ impl Loader<'_> {
                     }
                     Err(error) => {
                         self.files_read.push(path.to_path_buf());
+                        self.files_read.extend(attempted.paths());
                         self.mesh_error(error, at);
                         return None;
                     }

@@ -10,13 +10,17 @@
 //! write closed, a file renamed into place: how nearly every save ends) only
 //! [`Debounce::after_save`] is waited, enough for the rest of a multi-file save or a metadata
 //! touch; after any other event (a file truncated, half written, removed) the full
-//! [`Debounce::quiet`]. A flat 50 ms would be simpler, but it is half of the 100 ms a change may
+//! [`Debounce::quiet`]. A metadata-only event (vim's `setxattr` after its write, a `chmod`)
+//! changes no contents: it never shortens the wait, and after a complete save it waits no longer
+//! than the save did. A flat 50 ms would be simpler, but it is half of the 100 ms a change may
 //! take to show, and the render of a 130,000-triangle scene needs most of the rest.
 //!
 //! Events are stamped when notify delivers them, and the quiet period is measured between those
 //! stamps, not from when the loop gets round to reading them. So a save made while a render was
 //! running is usually already quiet when the render ends, and the next render starts at once,
-//! covering every change made meanwhile in one batch (never a queue of renders to work through).
+//! covering every change made meanwhile in one batch (never a queue of renders to work through):
+//! everything already queued is read before deciding, even when the first of it is older than the
+//! maximum delay.
 //! [`Debounce::max_delay`] caps the wait for a file that is written continuously.
 //!
 //! Rejected: `notify-debouncer-full`. It holds each event for a fixed timeout from *that* event
@@ -29,6 +33,8 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError};
 use std::time::{Duration, Instant};
+
+use notify::event::{EventKind, ModifyKind};
 
 use super::files::WatchedFiles;
 
@@ -64,8 +70,87 @@ pub struct Changes {
     pub first_seen: Instant,
 }
 
+/// How an event leaves the file it concerns, which decides how long to wait after it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Settling {
+    /// Complete: a write was closed, or a file renamed into place.
+    Complete,
+    /// Only its metadata changed (permissions, extended attributes, times): the contents are as
+    /// the last event left them.
+    MetadataOnly,
+    /// Possibly half written: truncated, written, created, removed.
+    Partial,
+}
+
+impl Settling {
+    /// How `event` leaves the followed files it concerns.
+    fn of(event: &notify::Event, files: &WatchedFiles) -> Self {
+        if files.completes_a_save(event) {
+            Settling::Complete
+        } else if matches!(event.kind, EventKind::Modify(ModifyKind::Metadata(_))) {
+            Settling::MetadataOnly
+        } else {
+            Settling::Partial
+        }
+    }
+}
+
+/// The batch being collected, and when it may be rendered: the debounce's decisions, apart from
+/// the channel and the clock (so they can be tested with made-up times).
+#[derive(Debug)]
+struct Batch {
+    changes: Changes,
+    /// When the batch may be rendered if nothing else comes (last event + its quiet period).
+    settled_at: Instant,
+}
+
+impl Batch {
+    fn start(changed: BTreeSet<PathBuf>, settling: Settling, at: Instant, timing: Debounce) -> Self {
+        let mut batch = Batch {
+            changes: Changes {
+                files: changed,
+                first_seen: at,
+            },
+            settled_at: at,
+        };
+        batch.settle(settling, at, timing);
+        batch
+    }
+
+    fn add(&mut self, changed: BTreeSet<PathBuf>, settling: Settling, at: Instant, timing: Debounce) {
+        self.changes.files.extend(changed);
+        self.settle(settling, at, timing);
+    }
+
+    /// Events arrive in order, so `at` is the latest event's time.
+    fn settle(&mut self, settling: Settling, at: Instant, timing: Debounce) {
+        self.settled_at = match settling {
+            Settling::Complete => at + timing.after_save,
+            Settling::Partial => at + timing.quiet,
+            // The touch-up that follows a save (vim's `setxattr`, a `chmod`): it changes no
+            // contents, so it never shortens the wait for a file still being written, and after a
+            // complete one it waits only as long as the save itself would have.
+            Settling::MetadataOnly => self.settled_at.max(at + timing.after_save),
+        };
+    }
+
+    /// The latest the batch is held: a file written without pause still gets rendered.
+    fn cut_off(&self, timing: Debounce) -> Instant {
+        self.changes.first_seen + timing.max_delay
+    }
+
+    /// When the batch is to be rendered if no other event comes.
+    fn ready_at(&self, timing: Debounce) -> Instant {
+        self.settled_at.min(self.cut_off(timing))
+    }
+}
+
 /// Waits for the next batch of changes to `files`. Returns `None` when asked to stop (the
 /// changes still waiting, if any, are dropped: the user is leaving).
+///
+/// Every event already queued when it is called (saves made during the last render) joins the
+/// batch before anything is decided, however old: deciding on the first of them, already past
+/// the maximum delay, would render once per queued event.
 ///
 /// Watcher errors (e.g. the OS limit on watches) are reported through `on_error` and do not end
 /// the watch.
@@ -75,36 +160,28 @@ pub fn wait_for_changes(
     timing: Debounce,
     on_error: &mut dyn FnMut(notify::Error),
 ) -> Option<Changes> {
-    let mut pending: Option<Changes> = None;
-    // When the batch may be rendered if nothing else comes (last event + its quiet period).
-    let mut settled_at = Instant::now();
+    // Events stamped before this were queued while the loop was busy (rendering).
+    let reading_since = Instant::now();
+    let mut pending: Option<Batch> = None;
     loop {
         let signal = match &pending {
             None => signals.recv().ok()?,
-            Some(changes) => {
-                let cut_off = changes.first_seen + timing.max_delay;
-                if Instant::now() >= cut_off {
-                    return pending;
-                }
-                // Everything already queued (e.g. during a render) belongs to this batch and
-                // may extend the quiet period: read it before deciding.
-                match signals.try_recv() {
-                    Ok(signal) => signal,
-                    Err(TryRecvError::Disconnected) => return None,
-                    Err(TryRecvError::Empty) => {
-                        let deadline = settled_at.min(cut_off);
-                        let now = Instant::now();
-                        if now >= deadline {
-                            return pending;
-                        }
-                        match signals.recv_timeout(deadline - now) {
-                            Ok(signal) => signal,
-                            Err(RecvTimeoutError::Timeout) => return pending,
-                            Err(RecvTimeoutError::Disconnected) => return None,
-                        }
+            Some(batch) => match signals.try_recv() {
+                Ok(signal) => signal,
+                Err(TryRecvError::Disconnected) => return None,
+                Err(TryRecvError::Empty) => {
+                    let deadline = batch.ready_at(timing);
+                    let now = Instant::now();
+                    if now >= deadline {
+                        return pending.map(|batch| batch.changes);
+                    }
+                    match signals.recv_timeout(deadline - now) {
+                        Ok(signal) => signal,
+                        Err(RecvTimeoutError::Timeout) => return pending.map(|batch| batch.changes),
+                        Err(RecvTimeoutError::Disconnected) => return None,
                     }
                 }
-            }
+            },
         };
         match signal {
             Signal::Stop => return None,
@@ -116,21 +193,19 @@ pub fn wait_for_changes(
                 if changed.is_empty() {
                     continue;
                 }
-                let quiet = if files.completes_a_save(&event) {
-                    timing.after_save
-                } else {
-                    timing.quiet
-                };
-                // Events arrive in order, so this is the latest event's settling time.
-                settled_at = at + quiet;
+                let settling = Settling::of(&event, files);
                 match &mut pending {
-                    Some(changes) => changes.files.extend(changed),
-                    None => {
-                        pending = Some(Changes {
-                            files: changed,
-                            first_seen: at,
-                        });
-                    }
+                    Some(batch) => batch.add(changed, settling, at, timing),
+                    None => pending = Some(Batch::start(changed, settling, at, timing)),
+                }
+                // A file written without pause would keep the queue from ever being empty: past
+                // the maximum delay, an event that arrived while waiting (not one queued during
+                // the render) ends the batch, itself included.
+                if let Some(batch) = &pending
+                    && at >= reading_since
+                    && Instant::now() >= batch.cut_off(timing)
+                {
+                    return pending.map(|batch| batch.changes);
                 }
             }
         }
@@ -196,6 +271,84 @@ mod tests {
             changes.files,
             [dir.join("mats.ron"), dir.join("scene.ron")].into()
         );
+    }
+
+    #[test]
+    fn saves_queued_during_a_render_longer_than_the_maximum_delay_are_one_batch() {
+        let (_temporary, dir, files, sender, receiver) = setup();
+        // Four saves to two files during a render of 1.5 × the maximum delay, all queued when
+        // the render ends: the first is already past the maximum delay.
+        let render_started = Instant::now() - TIMING.max_delay * 3 / 2;
+        for (index, name) in ["scene.ron", "mats.ron", "scene.ron", "mats.ron"]
+            .iter()
+            .enumerate()
+        {
+            let at = render_started + TIMING.max_delay * (index as u32 + 1) / 4;
+            sender.send(modified(&dir.join(name), at)).unwrap();
+            let closed = notify::Event::new(EventKind::Access(AccessKind::Close(AccessMode::Write)))
+                .add_path(dir.join(name));
+            sender
+                .send(Signal::FileSystem {
+                    event: Ok(closed),
+                    at,
+                })
+                .unwrap();
+        }
+        let changes = wait_for_changes(&receiver, &files, TIMING, &mut no_errors).unwrap();
+        assert_eq!(
+            changes.files,
+            [dir.join("mats.ron"), dir.join("scene.ron")].into()
+        );
+        assert_eq!(changes.first_seen, render_started + TIMING.max_delay / 4);
+        // Nothing of those saves is left for a second render.
+        assert!(matches!(receiver.try_recv(), Err(TryRecvError::Empty)));
+    }
+
+    /// A batch started by `first` at `t0`, then `rest` as (settling, milliseconds after `t0`);
+    /// returns when it would be rendered, in milliseconds after `t0`.
+    fn ready_after(first: Settling, rest: &[(Settling, u64)]) -> Duration {
+        let t0 = Instant::now();
+        let scene: BTreeSet<PathBuf> = [PathBuf::from("scene.ron")].into();
+        let mut batch = Batch::start(scene.clone(), first, t0, TIMING);
+        for &(settling, after) in rest {
+            batch.add(scene.clone(), settling, t0 + Duration::from_millis(after), TIMING);
+        }
+        batch.ready_at(TIMING) - t0
+    }
+
+    #[test]
+    fn a_metadata_touch_after_a_closed_write_waits_only_as_long_as_a_save() {
+        use Settling::*;
+        let ms = Duration::from_millis;
+        // vim: write, close, then `setxattr` (or a `chmod`) a moment later.
+        assert_eq!(
+            ready_after(Partial, &[(Complete, 1), (MetadataOnly, 2)]),
+            ms(2) + TIMING.after_save
+        );
+        // A metadata event alone (`chmod`): nothing is half written either.
+        assert_eq!(ready_after(MetadataOnly, &[]), TIMING.after_save);
+        // The touch came within the short wait already running: it does not matter.
+        assert_eq!(
+            ready_after(Partial, &[(Complete, 1), (MetadataOnly, 1)]),
+            ms(1) + TIMING.after_save
+        );
+    }
+
+    #[test]
+    fn a_metadata_touch_never_shortens_the_wait_for_a_file_being_written() {
+        use Settling::*;
+        let ms = Duration::from_millis;
+        assert_eq!(ready_after(Partial, &[(MetadataOnly, 1)]), TIMING.quiet);
+        // A write after the touch starts the full quiet period again.
+        assert_eq!(
+            ready_after(Partial, &[(MetadataOnly, 1), (Partial, 2)]),
+            ms(2) + TIMING.quiet
+        );
+        // Nothing passes the maximum delay.
+        let busy: Vec<(Settling, u64)> = (1..=TIMING.max_delay.as_millis() as u64 / 10)
+            .map(|i| (Partial, i * 10))
+            .collect();
+        assert_eq!(ready_after(Partial, &busy), TIMING.max_delay);
     }
 
     #[test]

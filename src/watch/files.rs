@@ -170,7 +170,9 @@ impl WatchedFiles {
         &self.folders
     }
 
-    /// The followed files (as the loader named them) that `event` may have changed.
+    /// What `event` may have changed, as the user would name it: followed files as the loader
+    /// named them, or a folder on the way to one (`meshes/`, created or removed: the file itself
+    /// may still not exist, so it is not named as changed).
     pub fn changed_by(&self, event: &notify::Event) -> BTreeSet<PathBuf> {
         if event.need_rescan() {
             // The OS dropped events: anything may have changed.
@@ -185,10 +187,13 @@ impl WatchedFiles {
                 continue;
             }
             for (key, named) in &self.files {
-                // `path` is the file itself, or a folder on the way to it (created, removed or
-                // renamed: the file appears or disappears with it).
-                if key.starts_with(path) {
+                if key == path {
                     changed.insert(named.clone());
+                } else if key.starts_with(path) {
+                    // A folder on the way to the file (created, removed or renamed: the file
+                    // appears or disappears with it).
+                    let below = key.components().count() - path.components().count();
+                    changed.insert(folder_named(named, below).unwrap_or_else(|| with_separator(path)));
                 }
             }
         }
@@ -220,6 +225,35 @@ impl WatchedFiles {
         });
         is_temporary && output.key.parent() == path.parent()
     }
+}
+
+/// The folder `levels` above the file `named`, spelled as `named` spells it, with a trailing
+/// separator to say it is a folder (`meshes/` for `meshes/low/../tri.obj` and 1); `None` when
+/// `named` does not reach that high (a symlink's target, the scene's own folder).
+fn folder_named(named: &Path, levels: usize) -> Option<PathBuf> {
+    let mut folder = PathBuf::new();
+    for component in named.components() {
+        match component {
+            Component::CurDir => {}
+            Component::ParentDir if matches!(folder.components().next_back(), Some(Component::Normal(_))) => {
+                folder.pop();
+            }
+            other => folder.push(other.as_os_str()),
+        }
+    }
+    for _ in 0..levels {
+        if !matches!(folder.components().next_back(), Some(Component::Normal(_))) {
+            return None;
+        }
+        folder.pop();
+    }
+    let reaches_a_folder = matches!(folder.components().next_back(), Some(Component::Normal(_)));
+    reaches_a_folder.then(|| with_separator(&folder))
+}
+
+/// `folder/`: a path shown as a folder.
+fn with_separator(folder: &Path) -> PathBuf {
+    folder.join("")
 }
 
 /// Whether an event of this kind can mean that a file's contents changed.
@@ -466,8 +500,9 @@ mod tests {
         files.follow([wanted.as_path()]);
         assert_eq!(files.folders().iter().collect::<Vec<_>>(), [&dir]);
         // Creating `meshes/` is on the way to the file.
+        // It is the folder that changed, named as the scene names it; the file is still missing.
         let created = event(EventKind::Create(CreateKind::Folder), &[&dir.join("meshes")]);
-        assert_eq!(files.changed_by(&created), [wanted.clone()].into());
+        assert_eq!(files.changed_by(&created), [dir.join("meshes/")].into());
         let elsewhere = event(EventKind::Create(CreateKind::Folder), &[&dir.join("textures")]);
         assert!(files.changed_by(&elsewhere).is_empty());
 
@@ -477,6 +512,29 @@ mod tests {
         assert_eq!(files.folders().iter().collect::<Vec<_>>(), [&dir.join("meshes")]);
         let written = event(modified(), &[&dir.join("meshes/tri.obj")]);
         assert_eq!(files.changed_by(&written), [wanted].into());
+    }
+
+    #[test]
+    fn a_folder_on_the_way_to_a_file_is_named_as_the_scene_spells_it() {
+        assert_eq!(
+            folder_named(Path::new("meshes/tri.obj"), 1),
+            Some("meshes/".into())
+        );
+        assert_eq!(folder_named(Path::new("a/b/../c/d.obj"), 2), Some("a/".into()));
+        assert_eq!(folder_named(Path::new("./a/b/d.obj"), 1), Some("a/b/".into()));
+        assert_eq!(folder_named(Path::new("../x/d.obj"), 1), Some("../x/".into()));
+        // Above what the name spells: the caller falls back to the event's own path.
+        assert_eq!(folder_named(Path::new("tri.obj"), 1), None);
+        assert_eq!(folder_named(Path::new("../tri.obj"), 1), None);
+        assert_eq!(folder_named(Path::new("/tri.obj"), 1), None);
+
+        // The folder holding the scene itself removed: named by its path.
+        let (_temporary, dir) = folder();
+        let mut files = WatchedFiles::new(&dir.join("out.png"));
+        files.follow([Path::new("scene.ron")]);
+        let here = std::env::current_dir().unwrap().canonicalize().unwrap();
+        let removed = event(EventKind::Remove(RemoveKind::Folder), &[&here]);
+        assert_eq!(files.changed_by(&removed), [here.join("")].into());
     }
 
     #[test]

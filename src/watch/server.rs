@@ -189,10 +189,16 @@ impl PreviewServer {
         });
     }
 
-    /// A build failed: show `report` over the last good image.
-    pub fn publish_error(&self, report: String, summary: String) {
+    /// A build failed: show `report` over the last good image, if there is one. `problem`
+    /// begins the status line, which goes on to say what image is shown under the report.
+    pub fn publish_error(&self, report: String, problem: &str) {
         self.hub.update(|inner| {
-            inner.state.summary = summary;
+            let shown = match (&inner.image_bytes, inner.generation) {
+                (None, _) => "no image yet",
+                (Some(_), 0) => "showing the image from before this watch started",
+                (Some(_), _) => "showing the last good image",
+            };
+            inner.state.summary = format!("{problem}; {shown}");
             inner.state.error = Some(report);
         });
     }

@@ -330,6 +330,56 @@ fn a_burst_of_writes_ends_in_the_image_of_the_last_one() {
 }
 
 #[test]
+fn saves_made_during_a_long_render_are_rendered_together() {
+    // A render far longer than the debounce's maximum delay (0.5 s): 2 million triangles,
+    // 8 samples, one thread. Four saves made while it runs must give one more render, not one per
+    // file-system event they queued.
+    let folder = SceneFolder::new();
+    let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "out.png", "--threads", "1"]);
+    let slow = |light: f32| {
+        scene_text((light, 1.0, 1.0))
+            .replace("width: 32, height: 24", "width: 1600, height: 1200, samples: 8")
+            .replace("Sphere(segments: 8)", "Sphere(segments: 1000)")
+    };
+    let before = watch.status_lines().len();
+    folder.write("scene.ron", &slow(1.0));
+    // The slow build starts 15–50 ms after that save; give it time to be under way (if it is
+    // not, the saves below only join it, and the count below still holds).
+    std::thread::sleep(Duration::from_millis(300));
+    for light in [0.9, 0.8, 0.7, 0.6] {
+        folder.write("scene.ron", &slow(light));
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    // A save of another file after them: its event is queued behind theirs, so once its build
+    // is reported, every build their events caused has been reported before it.
+    folder.write("mats.ron", &materials_text((0.2, 0.8, 0.2)));
+    let caused_by = |line: &String, name: &str| {
+        line.split_once(" changed")
+            .is_some_and(|(cause, _)| cause.contains(name))
+    };
+    let lines = wait_for(
+        "the build of mats.ron",
+        || watch.output(),
+        || {
+            let lines = watch.status_lines();
+            lines
+                .iter()
+                .any(|line| caused_by(line, "mats.ron"))
+                .then_some(lines)
+        },
+    );
+    let scene_builds = lines[before..]
+        .iter()
+        .filter(|line| caused_by(line, "scene.ron"))
+        .count();
+    assert!(
+        (1..=2).contains(&scene_builds),
+        "{scene_builds} builds for the slow save and the four made during its render\n{}",
+        watch.output()
+    );
+}
+
+#[test]
 fn editing_an_included_material_file_gives_a_new_image() {
     let folder = SceneFolder::new();
     let (watch, first) = start_watch(&folder);
@@ -478,9 +528,101 @@ fn a_mesh_in_a_folder_that_does_not_exist_yet_is_picked_up() {
     );
     let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "out.png"]);
     watch.wait_for_stdout("waiting for meshes/tri.obj to be created");
+    // The folder alone: a build, labelled with what changed (the folder), not with the file,
+    // which still does not exist.
     std::fs::create_dir(folder.file("meshes")).unwrap();
+    let line = watch.wait_for_status_line(2);
+    assert!(line.starts_with("#2 meshes/ changed: 1 error"), "{line}");
     folder.write("meshes/tri.obj", TRIANGLE_OBJ);
     expect_new_image(&watch, &folder, &[]);
+    let line = watch.wait_for_status_line(3);
+    assert!(line.starts_with("#3 meshes/tri.obj changed → out.png"), "{line}");
+}
+
+/// Lines of stdout from line `from` on, once one satisfies `condition`; returns its index.
+fn wait_for_line_from(
+    watch: &WatchProcess,
+    from: usize,
+    what: &str,
+    condition: impl Fn(&str) -> bool,
+) -> usize {
+    wait_for(
+        what,
+        || watch.output(),
+        || {
+            let stdout = watch.stdout();
+            let found = stdout
+                .lines()
+                .enumerate()
+                .skip(from)
+                .find(|(_, line)| condition(line));
+            found.map(|(index, _)| index)
+        },
+    )
+}
+
+#[test]
+fn every_kind_of_file_a_build_reads_stays_followed_while_it_is_missing() {
+    // One scene using every kind of dependency: an include, an OBJ mesh with its MTL library and
+    // the library's texture, a texture of the scene's own, and a glTF with an external buffer
+    // and image. Each is deleted in turn: the build fails (or warns), the watch says it waits
+    // for the file, and restoring that file alone must bring the image back.
+    let folder = SceneFolder::new();
+    let gltf = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/gltf/BoxTextured/glTF");
+    for name in ["BoxTextured.gltf", "BoxTextured0.bin", "CesiumLogoFlat.png"] {
+        std::fs::copy(gltf.join(name), folder.file(name)).unwrap();
+    }
+    std::fs::copy(gltf.join("CesiumLogoFlat.png"), folder.file("logo.png")).unwrap();
+    std::fs::copy(gltf.join("CesiumLogoFlat.png"), folder.file("wood.png")).unwrap();
+    folder.write(
+        "quad.obj",
+        "mtllib quad.mtl\nv -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\n\
+         vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl logo\nf 1/1 2/2 3/3 4/4\n",
+    );
+    folder.write("quad.mtl", "newmtl logo\nKd 1 0.8 0.6\nmap_Kd logo.png\n");
+    folder.write(
+        "mats.ron",
+        "Materials(materials: { \"wood\": (color: (1, 1, 1), texture: \"wood.png\") })\n",
+    );
+    folder.write(
+        "scene.ron",
+        r#"Scene(
+    image: (width: 48, height: 32),
+    camera: Perspective(eye: (0, 0, 4), target: (0, 0, 0), fov: 45),
+    include: ["mats.ron"],
+    objects: [
+        (mesh: Obj("quad.obj"), translate: (-1.1, 0, 0)),
+        (mesh: Obj("quad.obj"), translate: (0, 0, 0), material: "wood"),
+        (mesh: Gltf("BoxTextured.gltf"), translate: (1.1, 0, 0), rotate: (30, 30, 0), scale: 0.6),
+    ],
+)
+"#,
+    );
+    let (watch, first) = start_watch(&folder);
+    for name in [
+        "mats.ron",
+        "quad.obj",
+        "quad.mtl",
+        "logo.png",
+        "wood.png",
+        "BoxTextured.gltf",
+        "BoxTextured0.bin",
+        "CesiumLogoFlat.png",
+        "scene.ron",
+    ] {
+        let bytes = std::fs::read(folder.file(name)).unwrap();
+        let from = watch.stdout().lines().count();
+        std::fs::remove_file(folder.file(name)).unwrap();
+        let waiting = wait_for_line_from(&watch, from, &format!("waiting for {name}"), |line| {
+            line.starts_with("waiting for ") && line.contains(name)
+        });
+        std::fs::write(folder.file(name), &bytes).unwrap();
+        let rebuilt = format!("{name} changed → out.png");
+        wait_for_line_from(&watch, waiting, &format!("`{rebuilt}`"), |line| {
+            line.starts_with('#') && line.contains(&rebuilt)
+        });
+        assert_eq!(folder.image().unwrap(), first, "after restoring {name}");
+    }
 }
 
 #[cfg(unix)]
@@ -496,6 +638,66 @@ fn ctrl_c_stops_the_watch_cleanly() {
     assert_eq!(watch.wait_for_exit(), Some(0), "{}", watch.output());
     // The output pipe may still be being read after the exit.
     watch.wait_for_stdout("stopped");
+}
+
+#[test]
+fn a_closed_standard_output_ends_the_watch_quietly_at_the_next_build() {
+    // `lampshade watch scene.ron | head -1`: the reader leaves after the first line.
+    let folder = SceneFolder::new();
+    struct KillOnDrop(Child);
+    impl Drop for KillOnDrop {
+        fn drop(&mut self) {
+            let _ = self.0.kill();
+            let _ = self.0.wait();
+        }
+    }
+    let mut guard = KillOnDrop(
+        Command::new(env!("CARGO_BIN_EXE_lampshade"))
+            .args(["watch", "scene.ron", "-o", "out.png"])
+            .current_dir(&folder.path)
+            .env("NO_COLOR", "1")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("the lampshade binary starts"),
+    );
+    let child = &mut guard.0;
+    let stderr = collect(child.stderr.take().expect("piped stderr"));
+    let mut stdout = BufReader::new(child.stdout.take().expect("piped stdout"));
+    let mut first_line = String::new();
+    stdout.read_line(&mut first_line).unwrap();
+    assert!(first_line.starts_with("#1 "), "{first_line}");
+    drop(stdout);
+
+    folder.write("scene.ron", &scene_text((0.6, 0.6, 1.0)));
+    let status = wait_for(
+        "the watch to end after its output was closed",
+        || stderr.lock().unwrap().clone(),
+        || child.try_wait().expect("the watcher can be waited for"),
+    );
+    let stderr = stderr.lock().unwrap().clone();
+    assert_eq!(status.code(), Some(0), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn an_image_that_cannot_be_written_is_reported_by_its_own_name() {
+    let folder = SceneFolder::new();
+    let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "no-such-folder/out.png"]);
+    let line = watch.wait_for_status_line(1);
+    assert!(line.contains("the image could not be written"), "{line}");
+    let stderr = wait_for(
+        "the error",
+        || watch.output(),
+        || Some(watch.stderr()).filter(|e| e.contains("cannot write")),
+    );
+    assert!(
+        stderr.contains("cannot write `no-such-folder/out.png`"),
+        "{stderr}"
+    );
+    // The temporary file it is written through is ours, not a name the user knows.
+    assert!(!stderr.contains(".lampshade-"), "{stderr}");
 }
 
 #[test]
@@ -653,6 +855,44 @@ fn the_preview_serves_the_page_the_image_and_live_state_on_localhost_only() {
     );
     assert_eq!(failed["image"], rendered["image"], "the last good image stays");
     assert_eq!(http_get(port, "/image.png", &host).1, second);
+}
+
+#[test]
+fn the_preview_status_says_which_image_is_under_the_errors() {
+    let folder = SceneFolder::new();
+    let broken = "Scene(objects: [(mesh: Sphere(]";
+    let good = scene_text((1.0, 1.0, 1.0));
+    folder.write("scene.ron", broken);
+    let args = ["scene.ron", "-o", "out.png", "--serve", "--port", "0"];
+    let summary = |watch: &WatchProcess, build: u64| -> String {
+        let mut events = EventStream::open(preview_port(watch));
+        let state = events.next_where(|m| m["build"] == build);
+        assert!(!state["error"].is_null(), "{state}");
+        state["summary"].as_str().unwrap().to_owned()
+    };
+
+    // Started on a broken scene with no image on disk: there is nothing under the errors.
+    let mut watch = WatchProcess::start(&folder.path, &args);
+    let status = summary(&watch, 1);
+    assert!(status.ends_with("; no image yet"), "{status}");
+
+    // A good save, then a broken one: the last good image is under the errors.
+    folder.write("scene.ron", &good);
+    let image = expect_new_image(&watch, &folder, &[]);
+    folder.write("scene.ron", broken);
+    watch.wait_for_status_line(3);
+    let status = summary(&watch, 3);
+    assert!(status.ends_with("; showing the last good image"), "{status}");
+    drop(watch);
+
+    // Restarted on the broken scene: the image on disk is from before this watch.
+    watch = WatchProcess::start(&folder.path, &args);
+    let status = summary(&watch, 1);
+    assert!(
+        status.ends_with("; showing the image from before this watch started"),
+        "{status}"
+    );
+    assert_eq!(folder.image().unwrap(), image);
 }
 
 #[test]

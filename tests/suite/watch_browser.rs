@@ -1,7 +1,7 @@
 //! The preview of `lampshade watch --serve` in a real browser, end to end: headless Chromium
 //! opens the page, the test edits the scene file, and the page must show the new image (checked
 //! pixel by pixel against the PNG on disk), then, after a broken save, the diagnostics overlay
-//! above the last good image.
+//! above the last good image, with a snippet wider than the page scrolled, never wrapped.
 //!
 //! Chromium is driven through the DevTools protocol (a WebSocket on 127.0.0.1, `Runtime.evaluate`
 //! to read the page's state). Without Chromium the test prints why it skipped and passes:
@@ -321,4 +321,63 @@ fn the_preview_page_follows_edits_and_shows_errors_over_the_last_good_image() {
         "the last good image stays under the overlay"
     );
     assert!(shows_colour(&last_state, after), "page state: {last_state}");
+
+    // A mistake at the end of a line far wider than the page: the snippet must not wrap, or the
+    // `^` lands under another column (or at column 0). It scrolls instead.
+    let long_line = format!(
+        "(objects: [{}(mesh: Sphere(segments: 8), translate: (0, 0, oops))])\n",
+        "(mesh: Sphere(segments: 8)), ".repeat(12)
+    );
+    folder.write("scene.ron", &long_line);
+    let caret = browser.wait_for_page(CARET_PROBE, "the caret under the long line", &watch, |state| {
+        state["column"].as_u64().is_some_and(|column| column > 300)
+    });
+    browser.save_screenshot("watch-preview-long-line.png");
+    assert_eq!(caret["sourceRows"], 1, "the snippet line wrapped: {caret}");
+    let (marked, under) = (
+        caret["markedLeft"].as_f64().unwrap(),
+        caret["caretLeft"].as_f64().unwrap(),
+    );
+    assert!(
+        (marked - under).abs() < 1.0,
+        "the caret is not under its column: {caret}"
+    );
+    assert!(
+        caret["caretTop"].as_f64() > caret["markedTop"].as_f64(),
+        "{caret}"
+    );
+    assert_eq!(caret["scrolls"], true, "{caret}");
 }
+
+/// Where the overlay draws the first `^` of its snippet and the character of the line above it
+/// in the same column: the snippet's line and the caret's line are each one text line, the caret
+/// directly below the marked character (`column` is the caret's index within its line).
+const CARET_PROBE: &str = r#"(() => {
+  const overlay = document.getElementById("overlay");
+  if (overlay === null || overlay.hidden || overlay.firstChild === null) return {};
+  const lines = overlay.textContent.split("\n");
+  const caretLine = lines.findIndex(line => /│\s*\^/.test(line));
+  if (caretLine < 1) return {};
+  let sourceStart = 0;
+  for (let i = 0; i < caretLine - 1; i++) sourceStart += lines[i].length + 1;
+  const sourceLength = lines[caretLine - 1].length;
+  const caretStart = sourceStart + sourceLength + 1;
+  const column = lines[caretLine].indexOf("^");
+  const range = (start, end) => {
+    const r = document.createRange();
+    r.setStart(overlay.firstChild, start);
+    r.setEnd(overlay.firstChild, end);
+    return r;
+  };
+  const marked = range(sourceStart + column, sourceStart + column + 1).getBoundingClientRect();
+  const caret = range(caretStart + column, caretStart + column + 1).getBoundingClientRect();
+  return {
+    column,
+    sourceRows: range(sourceStart, sourceStart + sourceLength).getClientRects().length,
+    markedLeft: marked.left,
+    caretLeft: caret.left,
+    markedTop: marked.top,
+    caretTop: caret.top,
+    scrolls: overlay.scrollWidth > overlay.clientWidth,
+  };
+})()"#;
