@@ -37,6 +37,12 @@ pub enum OutputError {
         #[source]
         source: std::io::Error,
     },
+    #[error(
+        "not writing `{}`: it is `{}`, a file the scene reads (choose another output with -o)",
+        path.display(),
+        input.display()
+    )]
+    WouldReplaceInput { path: PathBuf, input: PathBuf },
     #[error("cannot encode `{}`: {source}", path.display())]
     Encode {
         path: PathBuf,

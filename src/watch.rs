@@ -49,7 +49,7 @@ use std::time::{Duration, Instant};
 
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, thousands, use_color};
 use crate::diag::render_diagnostics;
-use crate::output::{self, OutputError, PngCompression};
+use crate::output::{self, Destination, OutputError, OutputFormat, PngCompression};
 use crate::pipeline::{BuildCache, RenderedScene, render_scene_file};
 use crate::render::RenderOptions;
 use crate::scene::load::{LoadError, LoadOptions};
@@ -105,10 +105,13 @@ pub struct WatchArgs {
 /// the watch.
 pub fn run(args: &WatchArgs) -> i32 {
     let started = Instant::now();
-    let output = args
-        .output
-        .clone()
-        .unwrap_or_else(|| args.scene.with_extension("png"));
+    let output = match watch_output(args) {
+        Ok(output) => output,
+        Err(message) => {
+            errln!("error: {message}");
+            return EXIT_BAD_INPUT;
+        }
+    };
     if files::same_location(&args.scene, &output) {
         errln!(
             "error: the output `{}` would replace the scene; give another with `-o`",
@@ -472,6 +475,31 @@ impl WatchSession {
     }
 }
 
+/// The image `watch` writes: `-o` under the rule every command follows (the format follows the
+/// extension, see [`output::choose_format`]), and a PNG, which the preview shows; by default the
+/// scene's path with `.png`.
+fn watch_output(args: &WatchArgs) -> Result<PathBuf, String> {
+    let Some(requested) = &args.output else {
+        return Ok(args.scene.with_extension("png"));
+    };
+    match output::choose_format(Some(requested), None)? {
+        (Destination::File(Some(path)), OutputFormat::Png) => Ok(path),
+        (Destination::Stdout, _) => Err(
+            "watch writes an image on every save and needs a file: name one with -o (`-` is standard output)"
+                .to_string(),
+        ),
+        (_, format) => Err(format!(
+            "watch writes PNG images (the preview shows them), but `{}` names {} file; use a .png name",
+            requested.display(),
+            if format == OutputFormat::Exr {
+                "an OpenEXR"
+            } else {
+                "a Radiance HDR"
+            },
+        )),
+    }
+}
+
 /// Loads, renders and writes the image: the whole build, run under `catch_unwind`.
 fn build_once(
     scene: &Path,
@@ -490,6 +518,18 @@ fn build_once(
             };
         }
     };
+    // An edit can make the scene read the output (a texture of the same name): never write over it.
+    if let Some(input) =
+        output::overwritten_input(output_path, rendered.files_read.iter().map(PathBuf::as_path))
+    {
+        return BuildOutcome::OutputFailed {
+            error: OutputError::WouldReplaceInput {
+                path: output_path.to_path_buf(),
+                input: input.to_path_buf(),
+            },
+            files_read: rendered.files_read,
+        };
+    }
     let encode_started = Instant::now();
     let image = output::to_rgb8(&rendered.framebuffer);
     if let Err(error) = output::write_png(output_path, &image, PngCompression::Fast) {
