@@ -108,6 +108,7 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
 use super::normals::VertexAttributes;
+use super::{FileContent, USE_GLTF_HINT, first_bytes};
 use super::{
     ImportedCamera, ImportedLight, ImportedLightKind, ImportedProjection, LoadedMesh, Mesh, MeshError,
     MeshOptions, normals, tangents,
@@ -215,6 +216,10 @@ pub fn load_gltf_from_bytes(
 
 fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
     let fail = |message: String| MeshError::new(path, message);
+    check_content(bytes).map_err(|(message, other_kind)| match other_kind {
+        true => fail(message).with_hint(USE_GLTF_HINT),
+        false => fail(message),
+    })?;
     let (document, blob) = parse_document(bytes).map_err(fail)?;
     let mut files_read = vec![path.to_path_buf()];
     let directory = path.parent().unwrap_or(Path::new(""));
@@ -227,6 +232,7 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         mesh: Mesh::default(),
         skipped_primitives: Vec::new(),
         repaired_normals: 0,
+        computed_normals: false,
         missing_uv_sets: Vec::new(),
         warnings: Vec::new(),
     };
@@ -269,10 +275,12 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         mut warnings,
         skipped_primitives,
         repaired_normals,
+        computed_normals,
         default_material_index,
         missing_uv_sets,
         ..
     } = baker;
+    let crease_angle_used = computed_normals || repaired_normals > 0;
     if !skipped_primitives.is_empty() {
         warnings.push(format!(
             "skipped {} point or line primitives (mesh, primitive: {}): only triangles are drawn",
@@ -358,6 +366,7 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
         warnings,
         lights,
         cameras,
+        crease_angle_used,
     })
 }
 
@@ -455,6 +464,96 @@ fn imported_camera(camera: &gltf::Camera, node_name: Option<&str>, world: DMat4)
         up,
         projection,
     })
+}
+
+/// Bytes in a GLB header: magic, version, total length.
+const GLB_HEADER_BYTES: usize = 12;
+/// Bytes in a GLB chunk header: length, type.
+const GLB_CHUNK_HEADER_BYTES: usize = 8;
+
+/// Refuses what is not a glTF file, saying what it is (an OBJ, some binary file), and checks
+/// a GLB's container (version, total length, chunk lengths and types) with the sizes
+/// involved, which the `gltf` crate reports as "expected value at line 1 column 1" (a JSON
+/// message for a binary file) or "could not completely read the object". The error says
+/// whether the file may be of the other mesh kind (worth a hint at `Obj(...)`).
+fn check_content(bytes: &[u8]) -> Result<(), (String, bool)> {
+    let other_kind = |message: String| (message, true);
+    match FileContent::of(bytes) {
+        FileContent::BinaryGltf => check_glb_container(bytes).map_err(|message| (message, false)),
+        FileContent::Json => Ok(()),
+        content @ FileContent::ObjText => Err(other_kind(format!(
+            "this is {}, not a glTF file",
+            content.description()
+        ))),
+        FileContent::Binary | FileContent::OtherText if bytes.is_empty() => Err(other_kind(
+            "the file is empty: a glTF file is JSON and a GLB file starts with the bytes `glTF`".to_string(),
+        )),
+        content @ (FileContent::Binary | FileContent::OtherText) => Err(other_kind(format!(
+            "this is {} starting with {}, not glTF: a .gltf file is JSON (it starts with `{{`) and a .glb file starts with the bytes `glTF` (67 6C 54 46)",
+            content.description(),
+            first_bytes(bytes)
+        ))),
+    }
+}
+
+/// The GLB container of a file that starts with the magic `glTF` (glTF 2.0 specification,
+/// "GLB File Format Specification").
+fn check_glb_container(bytes: &[u8]) -> Result<(), String> {
+    let length = bytes.len();
+    let word = |at: usize| -> Option<u32> {
+        let word = bytes.get(at..at + 4)?;
+        Some(u32::from_le_bytes([word[0], word[1], word[2], word[3]]))
+    };
+    let (Some(version), Some(declared)) = (word(4), word(8)) else {
+        return Err(format!(
+            "broken binary glTF: the file has {length} bytes, less than the {GLB_HEADER_BYTES}-byte GLB header"
+        ));
+    };
+    if version != 2 {
+        return Err(format!(
+            "binary glTF version {version}: only version 2 (glTF 2.0) is supported"
+        ));
+    }
+    let declared = declared as usize;
+    if declared != length {
+        let what = if declared > length {
+            "it is truncated"
+        } else {
+            "it is damaged or has bytes appended"
+        };
+        return Err(format!(
+            "broken binary glTF: the header says {declared} bytes, the file has {length}: {what}"
+        ));
+    }
+    let mut offset = GLB_HEADER_BYTES;
+    let mut index = 0;
+    while offset < length {
+        let (Some(chunk_length), Some(kind)) = (word(offset), bytes.get(offset + 4..offset + 8)) else {
+            return Err(format!(
+                "broken binary glTF: chunk {index} at byte {offset} has {} bytes left for its {GLB_CHUNK_HEADER_BYTES}-byte header",
+                length - offset
+            ));
+        };
+        let kind_text = String::from_utf8_lossy(kind).replace('\0', "\\0");
+        let room = length - offset - GLB_CHUNK_HEADER_BYTES;
+        if chunk_length as usize > room {
+            return Err(format!(
+                "broken binary glTF: the `{kind_text}` chunk at byte {offset} says {chunk_length} bytes, but only {room} follow it"
+            ));
+        }
+        // Chunks after the first may have types a reader does not know (it skips them).
+        if index == 0 && kind != b"JSON" {
+            return Err(format!(
+                "broken binary glTF: the first chunk has the type `{kind_text}`, expected `JSON`"
+            ));
+        }
+        offset += GLB_CHUNK_HEADER_BYTES + chunk_length as usize;
+        index += 1;
+    }
+    if index == 0 {
+        return Err("broken binary glTF: the file has a header but no JSON chunk".to_string());
+    }
+    Ok(())
 }
 
 /// Parses and validates the document, returning it with the .glb binary chunk if any. An
@@ -608,6 +707,8 @@ struct Baker<'a> {
     /// (mesh, primitive) indices of point and line primitives.
     skipped_primitives: Vec<(usize, usize)>,
     repaired_normals: usize,
+    /// Some primitive had no normals, so they were computed with the crease angle.
+    computed_normals: bool,
     /// Primitives (named "mesh m primitive p") whose material reads a UV set they lack.
     missing_uv_sets: Vec<(String, u32)>,
     warnings: Vec<String>,
@@ -775,6 +876,7 @@ impl Baker<'_> {
                 repaired.mesh
             }
             None => {
+                self.computed_normals = true;
                 normals::compute_vertex_normals(&positions, attributes, &triangles, self.crease_angle_degrees)
             }
         };
@@ -1615,19 +1717,105 @@ mod tests {
     }
 
     #[test]
-    fn broken_binary_files_are_errors_not_panics() {
+    fn broken_binary_files_say_what_is_wrong_with_sizes() {
         let dir = scratch_dir();
-        let header_only = write(dir.path(), "header.glb", b"glTF\x02\x00\x00\x00\xff\xff\x00\x00");
-        check_error(&header_only, "malformed glTF");
         let glb = std::fs::read(asset("Box/glTF-Binary/Box.glb")).unwrap_or_default();
-        let truncated = write(dir.path(), "truncated.glb", &glb[..glb.len() / 2]);
-        check_error(&truncated, "malformed glTF");
-        let not_gltf = write(dir.path(), "text.gltf", b"solid cube\nendsolid\n");
-        check_error(&not_gltf, "malformed glTF");
+        let length = glb.len();
+        let with = |at: usize, bytes: &[u8]| {
+            let mut changed = glb.clone();
+            changed[at..at + bytes.len()].copy_from_slice(bytes);
+            changed
+        };
+        let json_length = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+        let cases: Vec<(Vec<u8>, String)> = vec![
+            (
+                b"glTF\x02\x00\x00\x00\xff\xff".to_vec(),
+                "the file has 10 bytes, less than the 12-byte GLB header".into(),
+            ),
+            (
+                glb[..length / 2].to_vec(),
+                format!(
+                    "the header says {length} bytes, the file has {}: it is truncated",
+                    length / 2
+                ),
+            ),
+            (
+                [glb.as_slice(), &[0; 8]].concat(),
+                format!(
+                    "the header says {length} bytes, the file has {}: it is damaged",
+                    length + 8
+                ),
+            ),
+            (with(4, &[1, 0, 0, 0]), "version 1: only version 2".into()),
+            (
+                with(12, &(length as u32).to_le_bytes()),
+                format!(
+                    "the `JSON` chunk at byte 12 says {length} bytes, but only {} follow it",
+                    length - 20
+                ),
+            ),
+            (
+                with(16, b"XML\0"),
+                "the first chunk has the type `XML\\0`, expected `JSON`".into(),
+            ),
+            (
+                with(20 + json_length, &[0xff, 0xff, 0, 0]),
+                format!("chunk at byte {} says 65535 bytes", 20 + json_length),
+            ),
+            (
+                b"glTF\x02\x00\x00\x00\x0c\x00\x00\x00".to_vec(),
+                "a header but no JSON chunk".into(),
+            ),
+            (
+                b"glTF\x02\x00\x00\x00\x10\x00\x00\x00JSON".to_vec(),
+                "chunk 0 at byte 12 has 4 bytes left for its 8-byte header".into(),
+            ),
+        ];
+        for (bytes, message) in cases {
+            let path = write(dir.path(), "broken.glb", &bytes);
+            let error = load(&path).err().unwrap_or_else(|| panic!("{message}: loaded"));
+            assert!(
+                error.message.contains(&message),
+                "{error:?} should contain {message:?}"
+            );
+            assert!(
+                error.message.starts_with("broken binary glTF") || error.message.starts_with("binary glTF")
+            );
+            assert_eq!(error.hint, None, "a damaged GLB is not an OBJ: {message}");
+        }
         check_error(
             &dir.path().join("missing.glb"),
             "cannot read mesh file: no such file",
         );
+    }
+
+    #[test]
+    fn files_that_are_not_gltf_say_what_they_are() {
+        let dir = scratch_dir();
+        let cases: [(&[u8], &str); 4] = [
+            (
+                b"# exported\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+                "this is an OBJ file (text with `v` and `f` lines), not a glTF file",
+            ),
+            (
+                b"gLTF\x02\x00\x00\x00\x10\x00\x00\x00\x00\x00\x00\x00",
+                "binary file starting with 67 4C 54 46 (\"gLTF\"), not glTF",
+            ),
+            (
+                b"solid cube\nendsolid\n",
+                "text file with neither OBJ statements nor JSON starting with 73 6F 6C 69",
+            ),
+            (b"", "the file is empty"),
+        ];
+        for (bytes, message) in cases {
+            let path = write(dir.path(), "mesh.glb", bytes);
+            let error = load(&path).err().unwrap_or_else(|| panic!("{message}: loaded"));
+            assert!(
+                error.message.contains(message),
+                "{error:?} should contain {message:?}"
+            );
+            assert!(error.hint.is_some_and(|hint| hint.contains("Obj(")), "{message}");
+        }
     }
 
     // Synthetic files: one mesh with the given primitives, accessor i holding data block i,

@@ -221,8 +221,12 @@ pub struct MeshError {
     pub path: PathBuf,
     /// 1-based line in the file, when the format has lines and the problem has one.
     pub line: Option<usize>,
+    /// 1-based column (in chars) on `line`, when the problem has one.
+    pub column: Option<usize>,
     /// What is wrong, as a sentence fragment without the path (the caller adds location).
     pub message: String,
+    /// What to do about it, when there is something to say ("name it as `Gltf(...)`").
+    pub hint: Option<String>,
 }
 
 impl MeshError {
@@ -231,7 +235,9 @@ impl MeshError {
         MeshError {
             path: path.to_path_buf(),
             line: None,
+            column: None,
             message: message.into(),
+            hint: None,
         }
     }
 
@@ -243,11 +249,109 @@ impl MeshError {
         }
     }
 
+    /// A problem at a 1-based line and column (in chars) of the file.
+    pub fn at(path: &Path, line: usize, column: usize, message: impl Into<String>) -> Self {
+        MeshError {
+            line: Some(line),
+            column: Some(column),
+            ..MeshError::new(path, message)
+        }
+    }
+
+    /// Adds what to do about it.
+    pub fn with_hint(mut self, hint: impl Into<String>) -> Self {
+        self.hint = Some(hint.into());
+        self
+    }
+
     /// The file could not be read at all: "cannot read mesh file: No such file or directory".
     pub fn cannot_read(path: &Path, error: &std::io::Error) -> Self {
         MeshError::new(path, format!("cannot read mesh file: {}", io_error_text(error)))
     }
 }
+
+/// What a mesh file's first bytes say it is. Read before parsing, so that a file named as
+/// the wrong kind (a GLB given to `Obj(...)`, an OBJ given to `Gltf(...)`) or a damaged one
+/// gets an error saying what it is, instead of the message of a parser that expected
+/// something else ("expected value at line 1 column 1" for a binary file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileContent {
+    /// Starts with the GLB magic `glTF`.
+    BinaryGltf,
+    /// Text starting with `{`: a `.gltf` file (or some other JSON).
+    Json,
+    /// Text with OBJ statements (`v`, `f`, `o`, `mtllib`, ...) near the top.
+    ObjText,
+    /// Other text.
+    OtherText,
+    /// Not text: a NUL byte near the top.
+    Binary,
+}
+
+/// How much of a file [`FileContent::of`] looks at.
+const SNIFF_BYTES: usize = 4096;
+
+impl FileContent {
+    /// Classifies `bytes` by their first few kilobytes.
+    pub fn of(bytes: &[u8]) -> FileContent {
+        if bytes.starts_with(b"glTF") {
+            return FileContent::BinaryGltf;
+        }
+        let head = &bytes[..bytes.len().min(SNIFF_BYTES)];
+        if head.contains(&0) {
+            return FileContent::Binary;
+        }
+        let text = String::from_utf8_lossy(head);
+        let text = text.trim_start_matches('\u{feff}').trim_start();
+        if text.starts_with('{') {
+            return FileContent::Json;
+        }
+        const OBJ_STATEMENTS: [&str; 10] = ["v", "vt", "vn", "f", "o", "g", "s", "l", "mtllib", "usemtl"];
+        let obj_like = text.lines().any(|line| {
+            line.split_whitespace()
+                .next()
+                .is_some_and(|word| OBJ_STATEMENTS.contains(&word))
+        });
+        if obj_like {
+            FileContent::ObjText
+        } else {
+            FileContent::OtherText
+        }
+    }
+
+    /// "a binary glTF (GLB) file", for "this is ..., not ..." messages.
+    pub fn description(self) -> &'static str {
+        match self {
+            FileContent::BinaryGltf => "a binary glTF (GLB) file",
+            FileContent::Json => "a JSON (glTF) file",
+            FileContent::ObjText => "an OBJ file (text with `v` and `f` lines)",
+            FileContent::OtherText => "a text file with neither OBJ statements nor JSON",
+            FileContent::Binary => "a binary file",
+        }
+    }
+}
+
+/// The first bytes of a file as a user can compare them with a format's magic number:
+/// `67 4C 54 46 ("gLTF")`.
+pub fn first_bytes(bytes: &[u8]) -> String {
+    let head = &bytes[..bytes.len().min(4)];
+    let hex: Vec<String> = head.iter().map(|b| format!("{b:02X}")).collect();
+    let ascii: String = head
+        .iter()
+        .map(|&b| {
+            if b.is_ascii_graphic() || b == b' ' {
+                b as char
+            } else {
+                '.'
+            }
+        })
+        .collect();
+    format!("{} (\"{ascii}\")", hex.join(" "))
+}
+
+/// The hint for a mesh file of the other kind.
+pub const USE_GLTF_HINT: &str =
+    "glTF and GLB files are named with `Gltf(\"...\")`, OBJ files with `Obj(\"...\")`";
 
 /// An I/O error as a user reads it: the operating system's text without the
 /// "(os error N)" suffix that Rust appends.
@@ -277,6 +381,10 @@ pub struct LoadedMesh {
     /// Cameras the file places (glTF nodes with a `camera`), in the mesh's model space, in the
     /// order the drawn scene's nodes are visited; empty for OBJ files and primitives.
     pub cameras: Vec<ImportedCamera>,
+    /// Whether [`MeshOptions::crease_angle_degrees`] shaped the mesh (some normals were
+    /// computed). When it did not, the mesh is the same for every crease angle, and a cache
+    /// can give it to objects that ask with another one.
+    pub crease_angle_used: bool,
 }
 
 /// A light a mesh file places (glTF `KHR_lights_punctual`), in the mesh's model space: the

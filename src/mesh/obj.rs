@@ -9,9 +9,12 @@
 //!    (OBJ indices are 1-based, negative ones count back from the last element defined so
 //!    far, and an index may only refer to an element defined above it); vertex lines
 //!    without three numbers or with a non-finite one, and `vt`/`vn` lines with a non-finite
-//!    number (issue 6: non-finite input is rejected, not repaired); `w = 0`. It also blanks polyline
-//!    (`l`) lines, which `tobj` would otherwise turn into triangles, and warns about them and
-//!    about faces with fewer than three vertices (dropped).
+//!    number (non-finite input is rejected, not repaired); `w = 0`; faces with fewer than
+//!    three vertices (what a file cut off in its last face line looks like). Errors carry the
+//!    line and the column of the offending word. It also blanks polyline (`l`) lines, which
+//!    `tobj` would otherwise turn into triangles, and warns about them.
+//!    Before the scan, a file that is not OBJ text (a GLB, a glTF's JSON, any binary file) is
+//!    refused with what it is ([`FileContent`]).
 //! 2. **Parse.** `tobj::load_obj_buf` with `triangulate` (fans, so convex polygons only),
 //!    `single_index` (one vertex per distinct position/texture/normal triple) and
 //!    `ignore_points`/`ignore_lines`. The call runs under `catch_unwind` as a last line of
@@ -75,7 +78,7 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 
 use super::normals::VertexAttributes;
-use super::{LoadedMesh, Mesh, MeshError, MeshOptions, normals};
+use super::{FileContent, LoadedMesh, Mesh, MeshError, MeshOptions, USE_GLTF_HINT, first_bytes, normals};
 use crate::scene::access::FileAccess;
 use crate::scene::limits::MAX_LIGHTING_VALUE;
 use crate::scene::{LightingModel, Material, TextureBinding};
@@ -121,8 +124,31 @@ pub fn load_obj_from_bytes(
 ) -> Result<LoadedMesh, MeshError> {
     // OBJ is ASCII in practice; a stray Latin-1 byte in a comment or name should not
     // reject the file.
+    // A glTF or binary file named as `Obj(...)` would otherwise give "contains no triangles"
+    // or a confusing line error: say what it is.
+    match FileContent::of(bytes) {
+        content @ (FileContent::BinaryGltf | FileContent::Json) => {
+            return Err(MeshError::new(
+                path,
+                format!("this is {}, not an OBJ file", content.description()),
+            )
+            .with_hint(USE_GLTF_HINT));
+        }
+        FileContent::Binary => {
+            return Err(MeshError::new(
+                path,
+                format!(
+                    "this is a binary file (it starts with {}), not an OBJ file, which is text",
+                    first_bytes(bytes)
+                ),
+            )
+            .with_hint(USE_GLTF_HINT));
+        }
+        FileContent::ObjText | FileContent::OtherText => {}
+    }
     let text = String::from_utf8_lossy(bytes);
-    let scan = scan_obj(&text).map_err(|(line, message)| MeshError::at_line(path, line, message))?;
+    let scan =
+        scan_obj(&text).map_err(|error| MeshError::at(path, error.line, error.column, error.message))?;
 
     let libraries = MaterialLibraries {
         access: &options.access,
@@ -191,6 +217,8 @@ pub fn load_obj_from_bytes(
         uvs: &geometry.uvs,
         ..VertexAttributes::default()
     };
+    // Computed normals depend on the crease angle; file normals do not.
+    let mut crease_angle_used = true;
     let mut mesh = match &geometry.normals {
         FileNormals::All(file_normals) => {
             let repaired = normals::repair_normals(
@@ -200,6 +228,7 @@ pub fn load_obj_from_bytes(
                 &geometry.triangles,
                 crease,
             );
+            crease_angle_used = repaired.replaced_count > 0;
             if repaired.replaced_count > 0 {
                 warnings.push(format!(
                     "{} vertex normals in the file were zero or not finite and were recomputed",
@@ -259,6 +288,7 @@ pub fn load_obj_from_bytes(
         warnings,
         lights: Vec::new(),
         cameras: Vec::new(),
+        crease_angle_used,
     })
 }
 
@@ -271,43 +301,66 @@ struct ObjScan<'a> {
     material_uses: Vec<(String, usize)>,
 }
 
-/// The pre-scan of the module documentation. Errors are a 1-based line and a message.
-fn scan_obj(text: &str) -> Result<ObjScan<'_>, (usize, String)> {
+/// A problem the pre-scan found: where (1-based line, and column in chars) and what.
+#[derive(Debug)]
+struct ScanError {
+    line: usize,
+    column: usize,
+    message: String,
+}
+
+/// The pre-scan of the module documentation.
+fn scan_obj(text: &str) -> Result<ObjScan<'_>, ScanError> {
     // Elements defined so far: positions, texture coordinates, normals.
     let mut defined = [0usize; 3];
     let mut polyline_lines = Vec::new();
-    let mut short_face_lines = Vec::new();
     let mut material_uses = Vec::new();
 
     for (index, line) in text.lines().enumerate() {
         let line_number = index + 1;
         let mut words = line.split_whitespace();
-        let fail = |message: String| (line_number, message);
-        match words.next() {
-            Some("v") => {
+        // `words` borrow from `line`, so a word's offset in it gives its column.
+        let column_of = |word: &str| {
+            let offset = (word.as_ptr() as usize).saturating_sub(line.as_ptr() as usize);
+            1 + line.get(..offset).map_or(0, |before| before.chars().count())
+        };
+        let Some(keyword) = words.next() else { continue };
+        let fail_at = |word: &str, message: String| ScanError {
+            line: line_number,
+            column: column_of(word),
+            message,
+        };
+        let fail = |message: String| fail_at(keyword, message);
+        match keyword {
+            "v" => {
                 check_vertex_line(&words.collect::<Vec<_>>()).map_err(fail)?;
                 defined[0] += 1;
             }
-            Some("vt") => {
+            "vt" => {
                 check_numbers(words, 2, "texture coordinate").map_err(fail)?;
                 defined[1] += 1;
             }
-            Some("vn") => {
+            "vn" => {
                 check_numbers(words, 3, "normal").map_err(fail)?;
                 defined[2] += 1;
             }
-            Some("f") => {
+            "f" => {
                 let mut corner_count = 0;
                 for word in words {
-                    check_face_vertex(word, defined).map_err(fail)?;
+                    check_face_vertex(word, defined).map_err(|message| fail_at(word, message))?;
                     corner_count += 1;
                 }
+                // A face needs three corners; fewer is what a file cut off in the middle of
+                // its last line looks like (`f 1 3 `), so it is an error, not a dropped face.
                 if corner_count < 3 {
-                    short_face_lines.push(line_number);
+                    return Err(fail(format!(
+                        "a face needs at least 3 vertices, this one has {corner_count}: `{}` (is the file truncated?)",
+                        line.trim()
+                    )));
                 }
             }
-            Some("l") => polyline_lines.push(index),
-            Some("usemtl") => {
+            "l" => polyline_lines.push(index),
+            "usemtl" => {
                 let name = line.trim_start()["usemtl".len()..].trim();
                 if name.is_empty() {
                     return Err(fail("usemtl needs a material name".to_string()));
@@ -319,12 +372,6 @@ fn scan_obj(text: &str) -> Result<ObjScan<'_>, (usize, String)> {
     }
 
     let mut warnings = Vec::new();
-    if let Some(&first) = short_face_lines.first() {
-        warnings.push(format!(
-            "ignored {} faces with fewer than 3 vertices (first at line {first})",
-            short_face_lines.len()
-        ));
-    }
     let text = match polyline_lines.first() {
         None => Cow::Borrowed(text),
         Some(&first) => {
@@ -963,7 +1010,7 @@ mod tests {
             .unwrap_or_else(|e| panic!("cannot create a temporary directory: {e}"))
     }
 
-    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    fn write(dir: &Path, name: &str, text: impl AsRef<[u8]>) -> PathBuf {
         let path = dir.join(name);
         std::fs::write(&path, text).unwrap_or_else(|e| panic!("cannot write {}: {e}", path.display()));
         path
@@ -1320,12 +1367,69 @@ mod tests {
     }
 
     #[test]
-    fn polylines_and_short_faces_are_dropped_with_warnings() {
-        let obj = format!("{TRIANGLE}l 1 2 3\nf 1 2\nf 1 2 3\n");
+    fn polylines_are_dropped_with_a_warning() {
+        let obj = format!("{TRIANGLE}l 1 2 3\nf 1 2 3\n");
         let loaded = load_text(&obj, &[]).unwrap_or_else(|e| panic!("{e:?}"));
         assert_eq!(loaded.mesh.triangle_count(), 1, "the polyline is not a triangle");
-        assert_eq!(loaded.warnings.len(), 2, "{:?}", loaded.warnings);
-        assert!(loaded.warnings[0].contains("line 5") && loaded.warnings[1].contains("line 4"));
+        assert_eq!(loaded.warnings.len(), 1, "{:?}", loaded.warnings);
+        assert!(loaded.warnings[0].contains("line 4"));
+    }
+
+    #[test]
+    fn faces_with_fewer_than_three_vertices_are_errors_with_line_and_column() {
+        // Cut after a space, cut after the keyword, a two-vertex face in the middle of a
+        // file, and one indented by a tab: each is the error, wherever it is.
+        for (face, column, count) in [("f 1 3 ", 1, 2), ("f", 1, 0), ("f 1", 1, 1), ("\t f 2 3", 3, 2)] {
+            for (text, line) in [
+                (format!("{TRIANGLE}f 1 2 3\n{face}"), 5),
+                (format!("{TRIANGLE}{face}\nf 1 2 3\n"), 4),
+            ] {
+                let error = load_text(&text, &[])
+                    .err()
+                    .unwrap_or_else(|| panic!("{text:?} loaded"));
+                assert_eq!(
+                    (error.line, error.column),
+                    (Some(line), Some(column)),
+                    "{text:?}: {error:?}"
+                );
+                assert!(
+                    error
+                        .message
+                        .contains(&format!("at least 3 vertices, this one has {count}")),
+                    "{error:?}"
+                );
+            }
+        }
+        // Columns count characters, and a bad vertex is pointed at itself.
+        let error = load_text(&format!("{TRIANGLE}f 1 2 0\n"), &[]).err();
+        assert_eq!(error.map(|e| (e.line, e.column)), Some((Some(4), Some(7))));
+        let error = load_text(&format!("{TRIANGLE}# é\nvn 0 0 1\n  vt é 0\n"), &[]).err();
+        assert_eq!(error.map(|e| (e.line, e.column)), Some((Some(6), Some(3))));
+    }
+
+    #[test]
+    fn files_of_another_kind_say_what_they_are() {
+        let dir = scratch_dir();
+        let glb =
+            std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/gltf/Box/glTF-Binary/Box.glb"))
+                .unwrap_or_default();
+        let cases: [(&[u8], &str); 3] = [
+            (&glb, "this is a binary glTF (GLB) file, not an OBJ file"),
+            (
+                b" {\"asset\": {\"version\": \"2.0\"}}",
+                "this is a JSON (glTF) file, not an OBJ file",
+            ),
+            (
+                b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR",
+                "binary file (it starts with 89 50 4E 47 (\".PNG\"))",
+            ),
+        ];
+        for (bytes, message) in cases {
+            let error = load(&write(dir.path(), "mesh.obj", bytes)).err();
+            let error = error.unwrap_or_else(|| panic!("{message}: loaded"));
+            assert!(error.message.contains(message), "{error:?}");
+            assert!(error.hint.is_some_and(|hint| hint.contains("Gltf(")), "{message}");
+        }
     }
 
     #[test]
@@ -1380,7 +1484,7 @@ mod tests {
         let path = write(
             dir.path(),
             "spot.obj",
-            &format!("mtllib spot.mtl\nusemtl spot\n{obj}"),
+            format!("mtllib spot.mtl\nusemtl spot\n{obj}"),
         );
         (dir, path)
     }

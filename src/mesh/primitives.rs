@@ -13,10 +13,31 @@
 //! The plane and the cube give every face its own four vertices, so the normals stay those
 //! of the faces and the edges stay hard. All triangles are counter-clockwise seen from
 //! outside (for the plane: from +Y).
+//!
+//! # Texture coordinates and tangents
+//!
+//! [`textured_sphere`], [`textured_plane`] and [`textured_cube`] are the same meshes, vertex
+//! for vertex, with [`Mesh::uvs`] and [`Mesh::tangents`] added (glTF's convention: (0, 0) is
+//! the top-left of the image, and the tangent follows growing u with `w = +1`, no mirroring):
+//! * sphere: longitude and latitude, `u = j/N` (θ from −π to π, so u = 0 and u = 1 on the
+//!   seam at −X) and `v = 1 − i/N` (the north pole, +Z, at the top of the image): an
+//!   equirectangular image wraps the sphere upright, as MATLAB's `surf(x, y, z, flipud(img),
+//!   'FaceColor', 'texturemap')` on `sphere(N)` shows it. The grid already keeps the seam's
+//!   and the poles' vertices apart, so u runs 0 → 1 across every triangle without wrapping,
+//!   and each pole vertex has the u of its column. The tangent is the unit `∂p/∂θ`,
+//!   `(−sin θ, cos θ, 0)`, which is defined at the poles too.
+//! * cube: every face the whole image, upright seen from outside: on the four side faces the
+//!   image's up is +Y; on the top (+Y) face it is −Z and on the bottom face +Z, so the top
+//!   and bottom continue the front (+Z) face's image across its edges.
+//! * plane: the whole image over the square, seen from above (+Y) with up = −Z, like the
+//!   cube's top face.
+//!
+//! The untextured meshes stay without them (objects without a texture never carry the
+//! arrays, and the renderer then skips the per-vertex attribute pass).
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 
 use super::Mesh;
 
@@ -113,6 +134,67 @@ pub fn cube() -> Mesh {
         push_square(&mut mesh, u.cross(v), u, v);
     }
     mesh
+}
+
+/// [`sphere`] with longitude/latitude texture coordinates and tangents (module
+/// documentation).
+pub fn textured_sphere(segments: u32) -> Mesh {
+    let mut mesh = sphere(segments);
+    let n = segments.clamp(MIN_SPHERE_SEGMENTS, MAX_SPHERE_SEGMENTS);
+    let row_length = n as usize + 1;
+    mesh.uvs = Vec::with_capacity(row_length * row_length);
+    mesh.tangents = Vec::with_capacity(row_length * row_length);
+    for i in 0..=n {
+        let v = 1.0 - f64::from(i) / f64::from(n);
+        for j in 0..=n {
+            let u = f64::from(j) / f64::from(n);
+            // θ and the forced zero on the seam exactly as `sphere` computes them.
+            let theta = (2.0 * f64::from(j) - f64::from(n)) / f64::from(n) * PI;
+            let sin_theta = if j == 0 || j == n { 0.0 } else { theta.sin() };
+            mesh.uvs.push(Vec2::new(u as f32, v as f32));
+            mesh.tangents
+                .push(Vec4::new(-sin_theta as f32, theta.cos() as f32, 0.0, 1.0));
+        }
+    }
+    mesh
+}
+
+/// [`plane`] with the whole image over the square and tangents (module documentation).
+pub fn textured_plane() -> Mesh {
+    let mut mesh = plane();
+    add_face_coordinates(&mut mesh);
+    mesh
+}
+
+/// [`cube`] with the whole image on every face and tangents (module documentation).
+pub fn textured_cube() -> Mesh {
+    let mut mesh = cube();
+    add_face_coordinates(&mut mesh);
+    mesh
+}
+
+/// Texture coordinates and tangents for the flat faces of the plane and the cube (positions
+/// in [−1, 1]³, each vertex with its face's axis-aligned normal): the image's up is +Y on a
+/// side face, −Z on a face looking up and +Z on one looking down; its right is `up × normal`,
+/// which is right as seen from outside.
+fn add_face_coordinates(mesh: &mut Mesh) {
+    let (uvs, tangents) = mesh
+        .positions
+        .iter()
+        .zip(&mesh.normals)
+        .map(|(&p, &normal)| {
+            let up = if normal.y.abs() > 0.5 {
+                Vec3::new(0.0, 0.0, -normal.y)
+            } else {
+                Vec3::Y
+            };
+            let right = up.cross(normal);
+            let uv = Vec2::new((p.dot(right) + 1.0) / 2.0, (1.0 - p.dot(up)) / 2.0);
+            (uv, right.extend(1.0))
+        })
+        .unzip();
+    mesh.uvs = uvs;
+    mesh.tangents = tangents;
 }
 
 /// Appends the square `centre ± u ± v` facing `u × v` (u and v orthogonal unit vectors):
@@ -214,6 +296,115 @@ mod tests {
         assert_eq!(
             mesh.bounds(),
             Some((Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0)))
+        );
+    }
+
+    /// The textured variant is the same mesh with valid UVs and tangents whose frame follows
+    /// the image: on every non-degenerate triangle, the tangent points where u grows and
+    /// `n × t` where v shrinks (computed from the triangle's own positions and UVs, as for
+    /// mesh files), and every UV lies in [0, 1]².
+    fn check_textured(plain: &Mesh, textured: &Mesh, max_span: f32) {
+        assert_eq!(textured.positions, plain.positions);
+        assert_eq!(textured.normals, plain.normals);
+        assert_eq!(textured.triangles, plain.triangles);
+        assert_eq!(textured.closed, plain.closed);
+        textured.check_invariant().unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(textured.uvs.len(), textured.positions.len());
+        assert!(
+            textured
+                .uvs
+                .iter()
+                .all(|uv| uv.cmpge(Vec2::ZERO).all() && uv.cmple(Vec2::ONE).all())
+        );
+        let from_uvs = super::super::tangents::compute_tangents(
+            &textured.positions,
+            &textured.normals,
+            &textured.uvs,
+            &textured.triangles,
+        );
+        for triangle in &textured.triangles {
+            let [a, b, c] = triangle.map(|v| textured.positions[v as usize]);
+            if face_normal(a, b, c) == Vec3::ZERO {
+                continue;
+            }
+            // No triangle wraps around the image (a sphere's span one grid cell).
+            let [ua, ub, uc] = triangle.map(|v| textured.uvs[v as usize]);
+            let span = ua.max(ub).max(uc) - ua.min(ub).min(uc);
+            assert!(span.max_element() <= max_span, "{triangle:?} spans {span}");
+            for &v in triangle {
+                let (ours, computed) = (textured.tangents[v as usize], from_uvs[v as usize]);
+                assert!(
+                    ours.truncate().dot(computed.truncate()) > 0.0 && ours.w == computed.w,
+                    "vertex {v}: {ours} vs {computed} from the UVs"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn textured_primitives_are_the_same_meshes_with_a_consistent_frame() {
+        for n in [3, 4, 16, 33] {
+            check_textured(&sphere(n), &textured_sphere(n), 1.0 / n as f32 + 1e-6);
+        }
+        check_textured(&plane(), &textured_plane(), 1.0);
+        check_textured(&cube(), &textured_cube(), 1.0);
+    }
+
+    #[test]
+    fn sphere_uvs_are_longitude_and_latitude_with_the_north_pole_on_top() {
+        let n = 8;
+        let mesh = textured_sphere(n);
+        let row = n as usize + 1;
+        let at = |i: usize, j: usize| (mesh.positions[i * row + j], mesh.uvs[i * row + j]);
+        // The seam: the same position at u = 0 and u = 1 (separate vertices).
+        let (start, start_uv) = at(4, 0);
+        let (end, end_uv) = at(4, n as usize);
+        assert_eq!((start, start_uv.x, end_uv.x), (end, 0.0, 1.0));
+        assert_eq!(start, Vec3::new(-1.0, 0.0, 0.0), "the seam is at −X");
+        // +X (θ = 0) is the middle of the image, the equator its middle row.
+        let (equator, uv) = at(4, 4);
+        assert!(equator.distance(Vec3::X) < 1e-6 && uv == Vec2::new(0.5, 0.5));
+        // Every north pole vertex is on the image's top row, each with its column's u.
+        for j in 0..row {
+            let (pole, uv) = at(n as usize, j);
+            assert_eq!((pole, uv), (Vec3::Z, Vec2::new(j as f32 / n as f32, 0.0)));
+            assert_eq!(at(0, j).1.y, 1.0, "south pole on the bottom row");
+        }
+    }
+
+    #[test]
+    fn cube_faces_each_hold_the_whole_image_upright() {
+        let mesh = textured_cube();
+        for face in 0..6 {
+            let corners = &mesh.uvs[4 * face..4 * face + 4];
+            let mut sorted: Vec<[u32; 2]> = corners.iter().map(|uv| [uv.x as u32, uv.y as u32]).collect();
+            sorted.sort();
+            assert_eq!(
+                sorted,
+                [[0, 0], [0, 1], [1, 0], [1, 1]],
+                "face {face}: {corners:?}"
+            );
+            let normal = mesh.normals[4 * face];
+            for v in 4 * face..4 * face + 4 {
+                // Side faces: the top of the image (v = 0) is at +Y.
+                if normal.y == 0.0 {
+                    assert_eq!(mesh.uvs[v].y == 0.0, mesh.positions[v].y == 1.0, "vertex {v}");
+                }
+            }
+        }
+        // The front face (+Z) reads left to right along +X.
+        let front: Vec<(Vec3, Vec2)> = (0..24)
+            .filter(|&v| mesh.normals[v] == Vec3::Z)
+            .map(|v| (mesh.positions[v], mesh.uvs[v]))
+            .collect();
+        assert!(front.iter().all(|(p, uv)| (uv.x == 1.0) == (p.x == 1.0)));
+        let plane = textured_plane();
+        assert!(
+            plane
+                .positions
+                .iter()
+                .zip(&plane.uvs)
+                .all(|(p, uv)| { *uv == Vec2::new((p.x + 1.0) / 2.0, (p.z + 1.0) / 2.0) })
         );
     }
 

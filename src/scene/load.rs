@@ -20,7 +20,7 @@ use glam::{DMat4, DQuat, DVec3, EulerRot, Vec3};
 use crate::diag::{Diagnostic, SourceId, Sources, from_ron_error};
 use crate::mesh::{
     ImportedCamera, ImportedLight, ImportedProjection, LoadedMesh, Mesh, MeshError, MeshOptions,
-    gltf::load_gltf, obj::load_obj, primitives,
+    gltf::load_gltf, obj::load_obj, primitives, tangents::compute_tangents,
 };
 use crate::render::raster::SamplePattern;
 use crate::ron_path;
@@ -112,17 +112,34 @@ pub struct LoadError {
     pub files_read: Vec<PathBuf>,
 }
 
-/// Meshes loaded by earlier loads, reused while none of their files has changed (watch mode
+/// Meshes already loaded, reused while none of their files has changed: by later objects of
+/// the same load (three objects on one mesh file parse it once) and by later loads (watch mode
 /// re-renders a scene with a million-triangle mesh without reading the mesh again).
+///
+/// Entries are keyed by the file's canonical path (so `m.obj`, `./m.obj` and `sub/../m.obj`
+/// are one file) and by the crease angle only when it shaped the mesh (a file with normals
+/// is the same mesh for every crease angle).
 #[derive(Debug, Default)]
 pub struct MeshCache {
     entries: HashMap<MeshKey, CachedMesh>,
+    /// Mesh files parsed through this cache, over its life.
+    files_parsed: usize,
+}
+
+impl MeshCache {
+    /// How many times a mesh file was parsed through this cache (a hit parses nothing): what
+    /// tests count to show that a file is parsed once.
+    pub fn files_parsed(&self) -> usize {
+        self.files_parsed
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 struct MeshKey {
+    /// The canonical path (`canonical`).
     path: PathBuf,
-    crease_angle_bits: u32,
+    /// The crease angle's bits, or `None` for a mesh the crease angle did not change.
+    crease_angle_bits: Option<u32>,
 }
 
 #[derive(Debug)]
@@ -130,9 +147,27 @@ struct CachedMesh {
     /// Modification times of every file the mesh read, at load time.
     stamps: Vec<(PathBuf, Option<FileStamp>)>,
     mesh: Arc<Mesh>,
+    /// The mesh with tangents computed from its UVs, for objects whose scene material has a
+    /// normal map (a mesh file without tangents of its own); made the first time one asks.
+    with_tangents: Option<Arc<Mesh>>,
     placed: Arc<Placed>,
     files_read: Vec<PathBuf>,
     warnings: Vec<String>,
+}
+
+/// What an object's scene material reads from its mesh, beyond positions and normals.
+#[derive(Debug, Clone, Copy, Default)]
+struct SurfaceNeeds {
+    /// A `texture`: texture coordinates.
+    texture: bool,
+    /// A `normal_map`: texture coordinates and tangents.
+    normal_map: bool,
+}
+
+impl SurfaceNeeds {
+    fn uvs(self) -> bool {
+        self.texture || self.normal_map
+    }
 }
 
 /// The lights and cameras a mesh file places, in its model space.
@@ -194,6 +229,7 @@ fn load_scene_with(
         diagnostics: Vec::new(),
         files_read: Vec::new(),
         cache,
+        meshes_reported: HashSet::new(),
         textures: Vec::new(),
         texture_paths: HashMap::new(),
     };
@@ -229,6 +265,9 @@ struct Loader<'c> {
     diagnostics: Vec<Diagnostic>,
     files_read: Vec<PathBuf>,
     cache: &'c mut MeshCache,
+    /// Meshes whose files and warnings this load has already reported (an object reusing a
+    /// mesh does not repeat them).
+    meshes_reported: HashSet<MeshKey>,
     /// Textures of the scene's own materials, and where each came from (to load each once).
     textures: Vec<Arc<Texture>>,
     texture_paths: HashMap<(PathBuf, bool), u32>,
@@ -1011,7 +1050,6 @@ impl Loader<'_> {
                 .map(|a| a as f32),
             None => Some(crate::mesh::normals::DEFAULT_CREASE_ANGLE_DEGREES),
         };
-        let mesh = self.mesh(&object.mesh, index, source, crease_angle?);
         let transform = self.transform(object, index, source);
         let material = match &object.material {
             None => Some(None),
@@ -1050,6 +1088,21 @@ impl Loader<'_> {
                 )
                 .map(|recipe| Some(recipe.resolve()))
             }
+        };
+        // The material first: a texture or normal map decides what the mesh must carry.
+        let needs = match &material {
+            Some(Some(material)) => SurfaceNeeds {
+                texture: material.textures.diffuse.is_some(),
+                normal_map: material.textures.normal.is_some(),
+            },
+            _ => SurfaceNeeds::default(),
+        };
+        let mesh = self.mesh(&object.mesh, index, source, crease_angle?, needs);
+        let mesh = match mesh {
+            Some((mesh, placed)) if needs.uvs() => {
+                Some((self.check_surface(mesh, needs, object, index, source), placed))
+            }
+            other => other,
         };
         let shading = options.shading.unwrap_or(match object.shading {
             None | Some(ShadingFile::Phong) => Shading::Phong,
@@ -1148,6 +1201,7 @@ impl Loader<'_> {
         index: usize,
         source: SourceId,
         crease_angle: f32,
+        needs: SurfaceNeeds,
     ) -> Option<(Arc<Mesh>, Arc<Placed>)> {
         let mesh_path = ron_path!["objects", index, "mesh"];
         let nothing_placed = || Arc::new(Placed::default());
@@ -1182,10 +1236,31 @@ impl Loader<'_> {
                     );
                     return None;
                 }
-                Some((Arc::new(primitives::sphere(segments)), nothing_placed()))
+                // Texture coordinates and tangents only for a material that reads them: an
+                // untextured object is the plain mesh, which the renderer draws without a
+                // per-vertex attribute pass.
+                let sphere = match needs.uvs() {
+                    true => primitives::textured_sphere(segments),
+                    false => primitives::sphere(segments),
+                };
+                Some((Arc::new(sphere), nothing_placed()))
             }
-            MeshFile::Plane => Some((Arc::new(primitives::plane()), nothing_placed())),
-            MeshFile::Cube => Some((Arc::new(primitives::cube()), nothing_placed())),
+            MeshFile::Plane => {
+                let plane = if needs.uvs() {
+                    primitives::textured_plane()
+                } else {
+                    primitives::plane()
+                };
+                Some((Arc::new(plane), nothing_placed()))
+            }
+            MeshFile::Cube => {
+                let cube = if needs.uvs() {
+                    primitives::textured_cube()
+                } else {
+                    primitives::cube()
+                };
+                Some((Arc::new(cube), nothing_placed()))
+            }
             MeshFile::Obj(file) | MeshFile::Gltf(file) => {
                 let at_path = [mesh_path.as_slice(), &ron_path![0]].concat();
                 let at = At {
@@ -1247,7 +1322,7 @@ impl Loader<'_> {
                     return None;
                 }
                 let is_obj = matches!(mesh, MeshFile::Obj(_));
-                self.load_mesh_file(&path, is_obj, crease_angle, at)
+                self.load_mesh_file(&path, is_obj, crease_angle, needs, at)
             }
         }
     }
@@ -1257,26 +1332,24 @@ impl Loader<'_> {
         path: &Path,
         is_obj: bool,
         crease_angle: f32,
+        needs: SurfaceNeeds,
         at: At,
     ) -> Option<(Arc<Mesh>, Arc<Placed>)> {
-        let key = MeshKey {
-            path: path.to_path_buf(),
-            crease_angle_bits: crease_angle.to_bits(),
-        };
+        let canonical_path = canonical(path);
+        let keys = [None, Some(crease_angle.to_bits())].map(|crease_angle_bits| MeshKey {
+            path: canonical_path.clone(),
+            crease_angle_bits,
+        });
         // Fresh when every file it read is unchanged, and every file it looked for but did not
         // find (a missing texture) is still missing: creating one makes it stale.
-        let fresh = self
-            .cache
-            .entries
-            .get(&key)
-            .filter(|cached| cached.stamps.iter().all(|(file, stamp)| modified(file) == *stamp));
-        let (mesh, placed, files_read, warnings) = match fresh {
-            Some(cached) => (
-                cached.mesh.clone(),
-                cached.placed.clone(),
-                cached.files_read.clone(),
-                cached.warnings.clone(),
-            ),
+        let fresh = keys.iter().find(|key| {
+            self.cache
+                .entries
+                .get(key)
+                .is_some_and(|cached| cached.stamps.iter().all(|(file, stamp)| modified(file) == *stamp))
+        });
+        let key = match fresh {
+            Some(key) => key.clone(),
             None => {
                 // A failed load names the file it failed on, not every file it read or looked for
                 // before failing (its MTL, `.bin`, images): the recording access keeps them, so
@@ -1286,6 +1359,7 @@ impl Loader<'_> {
                     crease_angle_degrees: crease_angle,
                     access,
                 };
+                self.cache.files_parsed += 1;
                 let loaded = if is_obj {
                     load_obj(path, &options)
                 } else {
@@ -1298,24 +1372,30 @@ impl Loader<'_> {
                         warnings,
                         lights,
                         cameras,
+                        crease_angle_used,
                     }) => {
-                        let mesh = Arc::new(mesh);
-                        let placed = Arc::new(Placed { lights, cameras });
                         let mut stamped: Vec<PathBuf> = files_read.clone();
                         if !stamped.iter().any(|f| f == path) {
                             stamped.push(path.to_path_buf());
                         }
+                        let key = keys[usize::from(crease_angle_used)].clone();
+                        // A stale entry under the other key must not outlive this one.
+                        for stale in &keys {
+                            self.cache.entries.remove(stale);
+                        }
+                        self.meshes_reported.remove(&key);
                         self.cache.entries.insert(
-                            key,
+                            key.clone(),
                             CachedMesh {
                                 stamps: stamped.iter().map(|f| (f.clone(), modified(f))).collect(),
-                                mesh: mesh.clone(),
-                                placed: placed.clone(),
-                                files_read: files_read.clone(),
-                                warnings: warnings.clone(),
+                                mesh: Arc::new(mesh),
+                                with_tangents: None,
+                                placed: Arc::new(Placed { lights, cameras }),
+                                files_read,
+                                warnings,
                             },
                         );
-                        (mesh, placed, files_read, warnings)
+                        key
                     }
                     Err(error) => {
                         self.files_read.push(path.to_path_buf());
@@ -1326,30 +1406,102 @@ impl Loader<'_> {
                 }
             }
         };
-        self.files_read.push(path.to_path_buf());
-        self.files_read.extend(files_read);
-        for warning in warnings {
-            self.diagnostics.push(Diagnostic::warning(path, warning));
+        let Some(cached) = self.cache.entries.get_mut(&key) else {
+            return None; // inserted or found just above
+        };
+        // A scene normal map on a mesh with UVs but no tangents: computed once per mesh.
+        let wants_tangents =
+            needs.normal_map && !cached.mesh.uvs.is_empty() && cached.mesh.tangents.is_empty();
+        let mesh = match (&cached.with_tangents, wants_tangents) {
+            (Some(with_tangents), true) => with_tangents.clone(),
+            (None, true) => {
+                let mut mesh = (*cached.mesh).clone();
+                mesh.tangents = compute_tangents(&mesh.positions, &mesh.normals, &mesh.uvs, &mesh.triangles);
+                let mesh = Arc::new(mesh);
+                cached.with_tangents = Some(mesh.clone());
+                mesh
+            }
+            (_, false) => cached.mesh.clone(),
+        };
+        let placed = cached.placed.clone();
+        // Files and warnings once per load, however many objects use the mesh.
+        if self.meshes_reported.insert(key) {
+            let files_read = cached.files_read.clone();
+            let warnings = cached.warnings.clone();
+            self.files_read.push(path.to_path_buf());
+            self.files_read.extend(files_read);
+            for warning in warnings {
+                self.diagnostics.push(Diagnostic::warning(path, warning));
+            }
         }
         Some((mesh, placed))
     }
 
-    fn mesh_error(&mut self, error: MeshError, at: At) {
-        let mut diagnostic = Diagnostic::error(&error.path, error.message);
-        if let Some(line) = error.line {
-            diagnostic = diagnostic.with_line(line);
+    /// Checks that the mesh of an object whose scene material has a `texture` or
+    /// `normal_map` has what they read: without texture coordinates they cannot be applied,
+    /// which is worth a warning at the material (the object is still drawn, untextured).
+    /// Returns the mesh to draw.
+    fn check_surface(
+        &mut self,
+        mesh: Arc<Mesh>,
+        needs: SurfaceNeeds,
+        object: &format::ObjectFile,
+        index: usize,
+        source: SourceId,
+    ) -> Arc<Mesh> {
+        if !mesh.uvs.is_empty() {
+            return mesh;
         }
-        self.diagnostics.push(diagnostic);
-        // Also say which object asked for it, so the user knows where the mesh is used.
-        let used_here = self.locate(
-            Diagnostic::error(
-                self.sources.path(at.source),
-                format!("mesh `{}` could not be loaded", error.path.display()),
-            )
-            .with_label("used here"),
-            at,
+        let what = match (needs.texture, needs.normal_map) {
+            (true, true) => "`texture` and `normal_map` have",
+            (true, false) => "`texture` has",
+            _ => "`normal_map` has",
+        };
+        // At the field in an inline material; at the material's name otherwise.
+        let at_path = match &object.material {
+            Some(MaterialRefFile::Inline(material)) if material.texture.is_some() && needs.texture => {
+                ron_path!["objects", index, "material", "texture"].to_vec()
+            }
+            Some(MaterialRefFile::Inline(material)) if material.normal_map.is_some() => {
+                ron_path!["objects", index, "material", "normal_map"].to_vec()
+            }
+            _ => ron_path!["objects", index, "material"].to_vec(),
+        };
+        let mesh_name = match &object.mesh {
+            MeshFile::Obj(file) | MeshFile::Gltf(file) => format!("mesh file `{file}`"),
+            _ => "the mesh".to_string(),
+        };
+        let diagnostic = Diagnostic::warning(
+            self.sources.path(source),
+            format!("{what} no effect: {mesh_name} has no texture coordinates; the object is drawn without them"),
+        )
+        .with_label("needs texture coordinates")
+        .with_hint(
+            "give the mesh texture coordinates (`vt` in OBJ, `TEXCOORD_0` in glTF), or use a built-in `Sphere`, `Cube` or `Plane`, which have them",
         );
-        self.diagnostics.push(used_here);
+        let diagnostic = self.locate(diagnostic, At::new(source, &at_path));
+        self.diagnostics.push(diagnostic);
+        mesh
+    }
+
+    /// A mesh file that did not load: one diagnostic, saying where in the mesh file (line and
+    /// column when the format has them) and pointing at the object that names it.
+    fn mesh_error(&mut self, error: MeshError, at: At) {
+        let place = match (error.line, error.column) {
+            (Some(line), Some(column)) => format!("{}:{line}:{column}", error.path.display()),
+            (Some(line), None) => format!("{}:{line}", error.path.display()),
+            _ => error.path.display().to_string(),
+        };
+        let mut diagnostic = Diagnostic::error(
+            self.sources.path(at.source),
+            format!("{place}: {}", error.message),
+        )
+        .with_label("this mesh could not be loaded");
+        if let Some(hint) = error.hint {
+            diagnostic = diagnostic.with_hint(hint);
+        }
+        let diagnostic = self.locate(diagnostic, at);
+        self.diagnostics.push(diagnostic);
     }
 
     /// Refuses a scene whose render would need more memory than the budget, before it runs.
@@ -2224,6 +2376,93 @@ mod tests {
             ),
         );
         assert_eq!(load_ok(&scene).scene.lights.len(), 1);
+    }
+
+    #[test]
+    fn each_mesh_file_is_parsed_once_per_load_however_it_is_named() {
+        let folder = tempfile::tempdir().unwrap();
+        let with_normals = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n";
+        write(folder.path(), "normals.obj", with_normals);
+        write(folder.path(), "bare.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        std::fs::create_dir(folder.path().join("sub")).unwrap();
+        let scene = |objects: &str| {
+            write(
+                folder.path(),
+                "scene.ron",
+                &format!("(image: (width: 8, height: 8), objects: [{objects}])"),
+            )
+        };
+        let parses = |path: &Path| {
+            let mut cache = MeshCache::default();
+            let loaded = load_scene_cached(path, &LoadOptions::default(), &mut cache).unwrap();
+            let again = load_scene_cached(path, &LoadOptions::default(), &mut cache).unwrap();
+            assert_eq!(loaded.scene.objects.len(), again.scene.objects.len());
+            (cache.files_parsed(), loaded)
+        };
+        // One file under three names, with crease angles that cannot change it (it has
+        // normals): one parse, one mesh shared by the objects, its warnings once.
+        let (count, loaded) = parses(&scene(
+            r#"(mesh: Obj("normals.obj")), (mesh: Obj("./normals.obj"), crease_angle: 10),
+               (mesh: Obj("sub/../normals.obj"), crease_angle: 80)"#,
+        ));
+        assert_eq!(count, 1);
+        let meshes: Vec<_> = loaded.scene.objects.iter().map(|o| o.mesh.clone()).collect();
+        assert!(meshes.iter().all(|m| Arc::ptr_eq(m, &meshes[0])));
+        // Without normals the crease angle shapes the mesh: one parse per angle.
+        let (count, _) = parses(&scene(
+            r#"(mesh: Obj("bare.obj")), (mesh: Obj("bare.obj")), (mesh: Obj("bare.obj"), crease_angle: 10)"#,
+        ));
+        assert_eq!(count, 2);
+    }
+
+    #[test]
+    fn scene_normal_maps_get_tangents_and_textures_on_meshes_without_uvs_warn() {
+        let folder = tempfile::tempdir().unwrap();
+        let png = std::fs::read(asset("gltf/Avocado/glTF/Avocado_normal.png")).unwrap();
+        std::fs::write(folder.path().join("n.png"), png).unwrap();
+        write(
+            folder.path(),
+            "uv.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+        );
+        write(folder.path(), "bare.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        let scene = write(
+            folder.path(),
+            "scene.ron",
+            r#"(objects: [
+                (mesh: Obj("uv.obj"), material: (normal_map: "n.png")),
+                (mesh: Obj("uv.obj"), material: (normal_map: "n.png", texture: "n.png")),
+                (mesh: Obj("uv.obj")),
+                (mesh: Sphere(segments: 8), material: (normal_map: "n.png")),
+                (mesh: Cube, material: (texture: "n.png")),
+                (mesh: Plane),
+                (mesh: Obj("bare.obj"), material: (texture: "n.png")),
+            ])"#,
+        );
+        let loaded = load_ok(&scene);
+        let objects = &loaded.scene.objects;
+        for object in objects {
+            object.mesh.check_invariant().unwrap();
+        }
+        // The normal-mapped objects share one mesh with tangents; the plain one keeps the file's.
+        assert!(!objects[0].mesh.tangents.is_empty() && Arc::ptr_eq(&objects[0].mesh, &objects[1].mesh));
+        assert!(objects[2].mesh.tangents.is_empty());
+        let texture_ready = |mesh: &Mesh| !mesh.uvs.is_empty() && !mesh.tangents.is_empty();
+        assert!(texture_ready(&objects[3].mesh) && texture_ready(&objects[4].mesh));
+        assert_eq!(
+            *objects[5].mesh,
+            primitives::plane(),
+            "untextured primitives stay plain"
+        );
+        let warnings: Vec<_> = loaded.warnings.iter().map(|w| w.message.as_str()).collect();
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(
+            warnings[0].contains("`texture` has no effect: mesh file `bare.obj` has no texture coordinates")
+        );
+        assert!(
+            loaded.warnings[0].line_column(&loaded.sources).is_some(),
+            "located"
+        );
     }
 
     #[test]

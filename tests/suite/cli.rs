@@ -412,3 +412,28 @@ fn report_accuracy_prints_the_anchor_table() {
     assert!(mean_of("phong") < mean_of("gouraud"), "{table}");
     assert!(mean_of("gouraud") < mean_of("flat"), "{table}");
 }
+
+#[test]
+fn a_mesh_that_cannot_load_is_one_diagnostic() {
+    // Every corpus scene whose mesh file fails: one `error` block, which names the mesh file
+    // and points at the object (not one block for the file and another for the object).
+    let bad = repo().join("tests/bad-scenes");
+    let scenes: Vec<_> = ron_files(&bad)
+        .into_iter()
+        .filter(|scene| {
+            std::fs::read_to_string(scene).is_ok_and(|text| {
+                text.lines()
+                    .any(|l| l.starts_with("// expect: ") && l.ends_with("this mesh could not be loaded"))
+            })
+        })
+        .collect();
+    assert!(scenes.len() >= 10, "{} scenes", scenes.len());
+    let work = tempfile::tempdir().unwrap();
+    for scene in scenes {
+        let name = scene.file_name().unwrap().to_str().unwrap();
+        let image = work.path().join("out.png");
+        let output = lampshade(&["render", name, "-o", image.to_str().unwrap()], &bad);
+        let errors = stderr(&output).lines().filter(|l| l.starts_with("error")).count();
+        assert_eq!(errors, 1, "{name}:\n{}", stderr(&output));
+    }
+}
