@@ -685,7 +685,19 @@ fn reword_common_mistake(
         }
         // A struct variant without its parentheses (`Sphere`), or a tuple or struct written
         // another way (`[0, 0, 5]`, `1`).
-        E::ExpectedStructLike | E::ExpectedNamedStructLike(_) if around.group.is_some() => {
+        E::ExpectedStructLike | E::ExpectedNamedStructLike(_)
+            if around.group.is_some() || is_identifier(previous) =>
+        {
+            if is_identifier(previous) && matches!(found, "{" | "[") {
+                return reworded(
+                    format!("`{previous}` is followed by `( )`, found `{found}`"),
+                    "expected `(`",
+                    vec![format!(
+                        "write `{previous}(...)`: RON uses parentheses for fields"
+                    )],
+                    token_span,
+                );
+            }
             if is_identifier(previous) && found != "(" {
                 let example = match (schema.fields)(field, Some(previous)) {
                     Some(fields) => format!(
