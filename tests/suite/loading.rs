@@ -292,8 +292,7 @@ fn mistakes_made_on_the_docs_examples_give_located_plain_errors_with_hints() {
 fn an_empty_scene_file_says_so_and_shows_a_scene() {
     for text in ["", "\n  \n", "// a scene, later\n"] {
         let error = load_scene_from_str(Path::new("empty.ron"), text, &LoadOptions::default())
-            .err()
-            .expect("an empty file is an error");
+            .expect_err("an empty file is an error");
         let rendered = lampshade::diag::render_diagnostics(&error.diagnostics, &error.sources, false);
         assert!(rendered.contains("the file "), "{rendered}");
         assert!(rendered.contains("empty.ron:"), "{rendered}");
