@@ -217,11 +217,36 @@ fn clamp_span(text: &str, span: &Range<usize>) -> Range<usize> {
     start..end
 }
 
+/// What the serde types of a file expect, so that a hint can show the right form
+/// (`attenuation: (constant: 0, linear: 0.1, quadratic: 0)`) instead of ron's wording
+/// (`invalid std identifier "0"`). Each file kind has one (`scene::format::SCENE_SCHEMA`, the
+/// suite config's); the names of the serde types never reach a message.
+#[derive(Clone, Copy)]
+pub struct Schema {
+    /// The fields of the struct that the value of field `holder` is, or of the struct variant
+    /// `name` written there (`holder: None` at the top level).
+    pub fields: fn(holder: Option<&str>, name: Option<&str>) -> Option<&'static [&'static str]>,
+    /// The variants of the enum that the value of field `holder` is.
+    pub variants: fn(holder: &str) -> Option<&'static [&'static str]>,
+    /// What the file holds, for messages about an empty file: "a scene".
+    pub what: &'static str,
+    /// A small complete file, for hints.
+    pub example: &'static str,
+}
+
 /// Converts ron's parse or type error in `source` into a diagnostic pointing at the same
 /// place, with the message reworded for scene authors and hints for the common mistakes
 /// (unknown field or variant: the expected names and the closest one; missing field: what
-/// to add; unclosed brackets; ...).
-pub fn from_ron_error(source: SourceId, sources: &Sources, error: &ron::error::SpannedError) -> Diagnostic {
+/// to add; unclosed brackets; positional values where fields are named; parentheses after a
+/// unit variant or none after a struct variant; a fraction where a whole number goes; quotes
+/// around a variant or none around a string; JSON; an empty file...). Messages quote what the
+/// user wrote and name the field, never ron's or serde's internal names.
+pub fn from_ron_error(
+    source: SourceId,
+    sources: &Sources,
+    error: &ron::error::SpannedError,
+    schema: &Schema,
+) -> Diagnostic {
     use ron::error::Error as E;
 
     let text = sources.text(source);
@@ -229,6 +254,13 @@ pub fn from_ron_error(source: SourceId, sources: &Sources, error: &ron::error::S
     let end = byte_offset(text, error.span.end.line, error.span.end.col).max(start);
     let (mut start, end) = trim_span(text, start, end);
     let at_end_of_file = start >= text.trim_end().len();
+
+    if let Some(plain) = reword_common_mistake(text, start, &error.code, schema) {
+        let mut diagnostic = Diagnostic::error(sources.path(source), plain.message).at(source, plain.span);
+        diagnostic.label = plain.label;
+        diagnostic.hints = plain.hints;
+        return diagnostic;
+    }
 
     let in_outer = |outer: &Option<String>| match outer {
         Some(outer) => format!(" in `{outer}`"),
@@ -326,6 +358,576 @@ pub fn from_ron_error(source: SourceId, sources: &Sources, error: &ron::error::S
     diagnostic.label = label;
     diagnostic.hints = hints;
     diagnostic
+}
+
+/// A ron error reworded in the user's terms.
+struct Reworded {
+    message: String,
+    label: Option<String>,
+    hints: Vec<String>,
+    span: Range<usize>,
+}
+
+/// The longest quote of the user's text a message shows.
+const MAX_QUOTE_CHARS: usize = 40;
+
+/// `text` as a message quotes it: in backticks, cut to [`MAX_QUOTE_CHARS`].
+fn quote(text: &str) -> String {
+    let mut chars = text.chars();
+    let short: String = chars.by_ref().take(MAX_QUOTE_CHARS).collect();
+    let ellipsis = if chars.next().is_some() { "…" } else { "" };
+    format!("`{short}{ellipsis}`")
+}
+
+/// What a message says was found: "the string `"Cube"`", "`400.5`", "the end of the file".
+fn describe(token: &str) -> String {
+    if token.is_empty() {
+        "the end of the file".to_owned()
+    } else if token.starts_with('"') {
+        format!("the string {}", quote(token))
+    } else {
+        quote(token)
+    }
+}
+
+fn is_identifier(token: &str) -> bool {
+    token.starts_with(|c: char| c.is_alphabetic() || c == '_')
+        && token != "true"
+        && token != "false"
+        && !matches!(token, "inf" | "NaN")
+}
+
+fn is_number(token: &str) -> bool {
+    token.starts_with(|c: char| c.is_ascii_digit() || matches!(c, '-' | '+' | '.'))
+}
+
+/// Rewords the ron errors that hand-written scenes actually produce, using what surrounds the
+/// error (the field being written, the variant before a bracket, the token found). `None`
+/// leaves the error to the general wording of [`from_ron_error`].
+fn reword_common_mistake(
+    text: &str,
+    start: usize,
+    code: &ron::error::Error,
+    schema: &Schema,
+) -> Option<Reworded> {
+    use ron::error::Error as E;
+
+    let around = crate::scene::locate::surroundings(text, start);
+    let slice = |range: &Option<Range<usize>>| range.clone().and_then(|r| text.get(r)).unwrap_or("");
+    // A character the tokenizer does not know (`;`, `=`) is still what was found.
+    let stray = text
+        .get(start..)
+        .and_then(|rest| rest.chars().next())
+        .filter(|c| !c.is_whitespace());
+    let token_span = around
+        .token
+        .clone()
+        .or_else(|| stray.map(|c| start..start + c.len_utf8()))
+        .unwrap_or(start..start);
+    let found = text.get(token_span.clone()).unwrap_or("");
+    let previous = slice(&around.previous);
+    let previous_span = around.previous.clone().unwrap_or(start..start);
+    let field = around.value_of.as_deref();
+    let reworded = |message: String, label: &str, hints: Vec<String>, span: Range<usize>| {
+        Some(Reworded {
+            message,
+            label: (!label.is_empty()).then(|| label.to_owned()),
+            hints,
+            span,
+        })
+    };
+    // "`width`" when the field is known, else "this value".
+    let subject = |field: Option<&str>| field.map_or("this value".to_owned(), |f| format!("`{f}`"));
+
+    // Nothing but whitespace and comments.
+    if around.previous.is_none() && around.token.is_none() {
+        let content_end = text.trim_end().len();
+        return reworded(
+            if text.trim().is_empty() {
+                "the file is empty".to_owned()
+            } else {
+                "the file holds only comments".to_owned()
+            },
+            &format!("expected {} here", schema.what),
+            vec![format!(
+                "{} is one value in parentheses, e.g. `{}`",
+                capitalized(schema.what),
+                schema.example
+            )],
+            content_end..content_end,
+        );
+    }
+
+    // The first token is not the file's `(`: JSON, a bare list, YAML-like `name: value` lines.
+    if around.group.is_none() && around.previous.is_none() {
+        let what = schema.what;
+        let example = schema.example;
+        let after = crate::scene::locate::surroundings(text, token_span.end).token;
+        if found == "{" || found == "[" {
+            let (kind, label) = if found == "{" {
+                ("RON, not JSON", "JSON object")
+            } else {
+                ("RON", "a list")
+            };
+            return reworded(
+                format!("expected `(` at the start of {what}, found {}", describe(found)),
+                label,
+                vec![format!(
+                    "the file is {kind}: fields go in `( )` and names are not quoted, e.g. `{example}`"
+                )],
+                token_span,
+            );
+        }
+        if is_identifier(found) && slice(&after) == ":" {
+            return reworded(
+                format!("expected `(` before `{found}:`"),
+                "fields go inside `( )`",
+                vec![format!(
+                    "{} is one value in parentheses, e.g. `{example}`",
+                    capitalized(what)
+                )],
+                token_span,
+            );
+        }
+    }
+    // At the end of the file something is missing; the general wording says so.
+    if found.is_empty() {
+        return None;
+    }
+    let in_parentheses = around.group.as_ref().is_some_and(|g| g.bracket == '(');
+
+    match code {
+        // A field name was expected (after `(` or `,` in a struct) and something else came.
+        E::SuggestRawIdentifier(_) | E::ExpectedIdentifier | E::InvalidIdentifier(_)
+            if in_parentheses && matches!(previous, "(" | ",") =>
+        {
+            let group = around.group.as_ref()?;
+            let holder = group.holder.as_deref();
+            let name = group.name.as_deref();
+            let owner = name.or(holder);
+            let fields = (schema.fields)(holder, name);
+            let field_list =
+                fields.map(|f| f.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", "));
+            let after = crate::scene::locate::surroundings(text, token_span.end).token;
+            if found.starts_with('"') && slice(&after) == ":" {
+                let bare = found.trim_matches('"');
+                return reworded(
+                    format!(
+                        "field names are written without quotes, found {}",
+                        describe(found)
+                    ),
+                    "no quotes here",
+                    vec![format!("write `{bare}: ...`")],
+                    token_span,
+                );
+            }
+            if previous == "," && is_number(found) && is_number(slice(&around.before_previous)) {
+                let whole = slice(&around.before_previous);
+                return reworded(
+                    format!(
+                        "expected a field name after `{whole},`, found {}",
+                        describe(found)
+                    ),
+                    "not a field name",
+                    vec![format!(
+                        "numbers use a decimal point: `{whole}.{found}`; `,` separates fields"
+                    )],
+                    token_span,
+                );
+            }
+            let owner_text = owner.map_or("this value".to_owned(), |o| format!("`{o}`"));
+            let mut hints = Vec::new();
+            // The values written in order, as the fields they probably mean.
+            let group_start = if name.is_some() {
+                previous_span_of_name(text, group.open)
+            } else {
+                group.open
+            };
+            if let (Some(fields), Some((_, elements))) = (
+                fields,
+                crate::scene::locate::value_and_elements(text, group_start),
+            ) && !elements.is_empty()
+                && elements.len() <= fields.len()
+            {
+                let pairs: Vec<String> = fields
+                    .iter()
+                    .zip(&elements)
+                    .map(|(f, e)| format!("{f}: {}", text.get(e.clone()).unwrap_or("...")))
+                    .collect();
+                let prefix = match (holder, name) {
+                    (_, Some(name)) => name.to_owned(),
+                    (Some(holder), None) => format!("{holder}: "),
+                    (None, None) => String::new(),
+                };
+                hints.push(format!("write `{prefix}({})`", pairs.join(", ")));
+            }
+            match field_list {
+                Some(list) => hints.push(format!("the fields of {owner_text} are {list}")),
+                None => hints.push("write each field as `name: value`".to_owned()),
+            }
+            reworded(
+                format!(
+                    "{owner_text} has named fields: expected `name: value`, found {}",
+                    describe(found)
+                ),
+                "a field name goes here",
+                hints,
+                token_span,
+            )
+        }
+        // A variant name was expected.
+        E::ExpectedIdentifier | E::ExpectedStructLike | E::ExpectedNamedStructLike(_)
+            if field.and_then(schema.variants).is_some() && !is_identifier(previous) =>
+        {
+            let variants = field.and_then(schema.variants)?;
+            let list = variants
+                .iter()
+                .map(|v| format!("`{v}`"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let owner = subject(field);
+            if found.starts_with('"') {
+                let bare = found.trim_matches('"');
+                let mut hints = vec![format!("write `{bare}` without quotes")];
+                if !variants.contains(&bare) {
+                    hints.push(format!("{owner} is one of {list}"));
+                }
+                return reworded(
+                    format!("{owner} takes a name without quotes, found {}", describe(found)),
+                    "no quotes here",
+                    hints,
+                    token_span,
+                );
+            }
+            reworded(
+                format!("expected the kind of {owner}, found {}", describe(found)),
+                "expected a name here",
+                vec![format!("{owner} is one of {list}, e.g. `{}(...)`", variants[0])],
+                token_span,
+            )
+        }
+        // After a unit variant (`Cube(`) or a number ron read as an integer (`400.5`, `400px`).
+        E::ExpectedComma | E::InvalidIntegerDigit { .. } => {
+            let number_span = if around.previous.as_ref().is_some_and(|p| p.end > start) {
+                Some(previous_span.clone())
+            } else if matches!(code, E::InvalidIntegerDigit { .. }) && is_number(found) {
+                Some(token_span.clone())
+            } else {
+                None
+            };
+            if let Some(number_span) = number_span {
+                let number = text.get(number_span.clone()).unwrap_or("");
+                let digits_end = number
+                    .char_indices()
+                    .skip(1)
+                    .find(|&(_, c)| !c.is_ascii_digit())
+                    .map_or(number.len(), |(i, _)| i);
+                let (whole, rest) = number.split_at(digits_end);
+                if rest.starts_with(['.', 'e', 'E']) {
+                    let integer = match number.replace('_', "").parse::<f64>() {
+                        Ok(value) if value.is_finite() && value.abs() < 1e15 => format!("{}", value.trunc()),
+                        _ => whole.to_owned(),
+                    };
+                    return reworded(
+                        format!("{} is a whole number, found `{number}`", subject(field)),
+                        "not a whole number",
+                        vec![format!("write an integer, e.g. `{integer}`")],
+                        number_span,
+                    );
+                }
+                return reworded(
+                    format!("unexpected `{rest}` after the number `{whole}`"),
+                    "not part of a number",
+                    vec!["numbers are written without units or suffixes".to_owned()],
+                    number_span.start + digits_end..number_span.end,
+                );
+            }
+            if found == "(" && is_identifier(previous) {
+                let span =
+                    crate::scene::locate::value_and_elements(text, start).map_or(token_span, |(r, _)| r);
+                let field_part = field.map_or(String::new(), |f| format!("{f}: "));
+                return reworded(
+                    format!("`{previous}` takes no parentheses"),
+                    "remove these",
+                    vec![format!("write `{field_part}{previous}`")],
+                    span,
+                );
+            }
+            // A closing bracket of another kind: the group open here was never closed.
+            if let Some(group) = around.group.as_ref().filter(|_| matches!(found, ")" | "]" | "}")) {
+                let close = match group.bracket {
+                    '(' => ')',
+                    '[' => ']',
+                    _ => '}',
+                };
+                let (line, column) = line_column(text, group.open);
+                return reworded(
+                    format!("expected `,` or `{close}`, found `{found}`"),
+                    &format!("`{}` at {line}:{column} is not closed yet", group.bracket),
+                    vec![format!(
+                        "look for a missing `{close}` that closes the `{}` at {line}:{column}",
+                        group.bracket
+                    )],
+                    token_span,
+                );
+            }
+            let before_or_found = if stray.is_some() && around.token.is_none() {
+                ", found"
+            } else {
+                " before"
+            };
+            reworded(
+                format!("expected `,`{before_or_found} {}", describe(found)),
+                "",
+                vec!["separate fields and list elements with `,`".to_owned()],
+                token_span,
+            )
+        }
+        // A struct variant without its parentheses (`Sphere`), or a tuple or struct written
+        // another way (`[0, 0, 5]`, `1`).
+        E::ExpectedStructLike | E::ExpectedNamedStructLike(_)
+            if around.group.is_some() || is_identifier(previous) =>
+        {
+            if is_identifier(previous) && matches!(found, "{" | "[") {
+                return reworded(
+                    format!("`{previous}` is followed by `( )`, found `{found}`"),
+                    "expected `(`",
+                    vec![format!(
+                        "write `{previous}(...)`: RON uses parentheses for fields"
+                    )],
+                    token_span,
+                );
+            }
+            if is_identifier(previous) && found != "(" {
+                let example = match (schema.fields)(field, Some(previous)) {
+                    Some(fields) => format!(
+                        "write `{previous}()` for the defaults, or give fields: `{previous}({}: ...)`",
+                        fields.first().copied().unwrap_or("name")
+                    ),
+                    None => format!("write `{previous}(...)`"),
+                };
+                return reworded(
+                    format!("`{previous}` needs parentheses"),
+                    "expected `(...)` after this",
+                    vec![example],
+                    previous_span,
+                );
+            }
+            if found == "[" {
+                let span =
+                    crate::scene::locate::value_and_elements(text, start).map_or(token_span, |(r, _)| r);
+                let inner = text
+                    .get(span.start + 1..span.end.saturating_sub(1))
+                    .unwrap_or("...");
+                return reworded(
+                    format!("{} is written in parentheses, found `[`", subject(field)),
+                    "a list",
+                    vec![format!("vectors and colours are tuples: `({inner})`")],
+                    span,
+                );
+            }
+            let owner = subject(field);
+            reworded(
+                format!("expected `(` to start {owner}, found {}", describe(found)),
+                "expected `(`",
+                vec![match (field, (schema.fields)(field, None)) {
+                    (Some(f), Some(fields)) => format!("write `{f}: ({}: ...)`", fields[0]),
+                    (Some(f), None) => format!("write `{f}: (...)`, e.g. `(0, 0, 1)` for a vector or colour"),
+                    _ => "write `(...)`".to_owned(),
+                }],
+                token_span,
+            )
+        }
+        E::ExpectedBoolean => {
+            let hint = if found.eq_ignore_ascii_case("true") || found.eq_ignore_ascii_case("\"true\"") {
+                "write `true`, in lowercase and without quotes"
+            } else if found.eq_ignore_ascii_case("false") || found.eq_ignore_ascii_case("\"false\"") {
+                "write `false`, in lowercase and without quotes"
+            } else {
+                "booleans are `true` or `false`"
+            };
+            reworded(
+                format!(
+                    "{} is `true` or `false`, found {}",
+                    subject(field),
+                    describe(found)
+                ),
+                "not a boolean",
+                vec![hint.to_owned()],
+                token_span,
+            )
+        }
+        E::ExpectedFloat | E::ExpectedInteger => {
+            let kind = if matches!(code, E::ExpectedFloat) {
+                "a number"
+            } else {
+                "a whole number"
+            };
+            let mut hints = Vec::new();
+            let bare = found.trim_matches('"');
+            if found.starts_with('"') && is_number(bare) {
+                hints.push(format!("write `{bare}` without quotes"));
+            } else if found == "(" {
+                hints.push("a single number has no parentheses".to_owned());
+            }
+            reworded(
+                format!("{} is {kind}, found {}", subject(field), describe(found)),
+                "not a number",
+                hints,
+                token_span,
+            )
+        }
+        E::ExpectedString => {
+            // The text up to the end of the value, to show it quoted.
+            let bare_end = text[start..]
+                .find([',', ')', ']', '}', ':', '\n'])
+                .map_or(text.len(), |i| start + i);
+            let bare = text.get(start..bare_end).unwrap_or("").trim_end();
+            let after = crate::scene::locate::surroundings(text, token_span.end).token;
+            let hint = if is_identifier(found) && slice(&after) == ":" && in_parentheses {
+                let owner = around.group.as_ref().and_then(|g| g.name.clone());
+                match owner {
+                    Some(owner) => {
+                        format!("`{owner}` takes the string alone, without a field name: `{owner}(\"...\")`")
+                    }
+                    None => "names and paths are strings in quotes".to_owned(),
+                }
+            } else if !bare.is_empty() && !bare.starts_with(['(', '[', '{']) {
+                format!(
+                    "strings are written in double quotes: `\"{}\"`",
+                    bare.trim_matches('\'')
+                )
+            } else {
+                "strings are written in double quotes: `\"...\"`".to_owned()
+            };
+            let variant = around
+                .group
+                .as_ref()
+                .and_then(|g| g.name.as_deref())
+                .filter(|_| field.is_none());
+            let what = if around.group.as_ref().is_some_and(|g| g.bracket == '{') && field.is_none() {
+                "a name in quotes".to_owned()
+            } else if let Some(variant) = variant {
+                format!("`{variant}` takes a string in quotes")
+            } else {
+                format!("{} is a string in quotes", subject(field))
+            };
+            let message = if what.starts_with('a') {
+                format!("expected {what}, found {}", describe(found))
+            } else {
+                format!("{what}, found {}", describe(found))
+            };
+            reworded(message, "expected `\"...\"`", vec![hint], token_span)
+        }
+        E::ExpectedArray => reworded(
+            format!("{} is a list in `[ ]`, found {}", subject(field), describe(found)),
+            "expected `[`",
+            vec![match field {
+                Some(f) => format!("write `{f}: [...]`, even for one element"),
+                None => "write `[...]`, even for one element".to_owned(),
+            }],
+            token_span,
+        ),
+        E::ExpectedMap => reworded(
+            format!(
+                "{} is a map in `{{ }}`, found {}",
+                subject(field),
+                describe(found)
+            ),
+            "expected `{`",
+            vec!["write `{ \"name\": (...), ... }`".to_owned()],
+            token_span,
+        ),
+        E::ExpectedMapColon => reworded(
+            format!("expected `:`, found {}", describe(found)),
+            "expected `:`",
+            vec!["fields and map entries are written `name: value`".to_owned()],
+            token_span,
+        ),
+        // `[mesh: Cube]`: the fields of an element written without its `( )`.
+        E::ExpectedDifferentStructName { .. }
+            if is_identifier(found)
+                && slice(&crate::scene::locate::surroundings(text, token_span.end).token) == ":" =>
+        {
+            let element = field.map_or(String::new(), |f| format!(" of `{f}`"));
+            reworded(
+                format!("expected `(` before `{found}:`"),
+                "fields go inside `( )`",
+                vec![format!("each element{element} is written `({found}: ..., ...)`")],
+                token_span,
+            )
+        }
+        E::ExpectedStructLikeEnd | E::ExpectedArrayEnd if previous == "," && in_parentheses => reworded(
+            format!(
+                "expected `)` to close {}, found {}",
+                subject(around.group.as_ref().and_then(|g| g.holder.as_deref())),
+                describe(found)
+            ),
+            "one value too many",
+            vec!["vectors and colours have three values: `(x, y, z)`".to_owned()],
+            token_span,
+        ),
+        E::ExpectedAttribute if previous == "#" || found == "#" => reworded(
+            "`#` does not start a comment in RON".to_owned(),
+            "not a comment",
+            vec!["comments are `// ...` to the end of the line, or `/* ... */`".to_owned()],
+            if previous == "#" {
+                previous_span
+            } else {
+                token_span
+            },
+        ),
+        // A name without quotes where a string goes: ron reads `ruby` as a unit value.
+        E::InvalidValueForType {
+            expected,
+            found: what,
+        } if what == "a unit value" && is_identifier(previous) => reworded(
+            format!("expected {expected}, found `{previous}`"),
+            "not in quotes",
+            vec![format!("names are strings: write `\"{previous}\"`")],
+            previous_span,
+        ),
+        E::IntegerOutOfBounds => {
+            let negative = text[..start].trim_end().ends_with('-');
+            let span = if negative {
+                text[..start].trim_end().len() - 1..token_span.end
+            } else {
+                token_span
+            };
+            let number = text.get(span.clone()).unwrap_or("");
+            reworded(
+                format!("`{number}` is out of range for {}", subject(field)),
+                "out of range",
+                vec![if negative {
+                    format!("{} cannot be negative", subject(field))
+                } else {
+                    format!("{} is too large", quote(number))
+                }],
+                span,
+            )
+        }
+        _ => None,
+    }
+}
+
+/// The start of the name before the `(` at `open` (`Sphere` in `Sphere(64)`).
+fn previous_span_of_name(text: &str, open: usize) -> usize {
+    let before = text.get(..open).unwrap_or("").trim_end();
+    let name_len = before
+        .chars()
+        .rev()
+        .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == '#')
+        .map(char::len_utf8)
+        .sum::<usize>();
+    before.len() - name_len
+}
+
+fn capitalized(text: &str) -> String {
+    let mut chars = text.chars();
+    match chars.next() {
+        Some(first) => first.to_uppercase().chain(chars).collect(),
+        None => String::new(),
+    }
 }
 
 /// Moves a span off whitespace. ron starts some spans before the whitespace that precedes
@@ -692,12 +1294,20 @@ mod tests {
         shapes: Vec<Shape>,
     }
 
+    /// No knowledge of the test types: the general wording and hints only.
+    const TEST_SCHEMA: Schema = Schema {
+        fields: |_, _| None,
+        variants: |_| None,
+        what: "a test scene",
+        example: "(camera: (eye: (0, 0, 5), fov_y_degrees: 45))",
+    };
+
     /// Parses `text` as a `Scene`, which must fail, and returns the diagnostic and its
     /// rendering.
     fn ron_diagnostic(text: &str) -> (Diagnostic, String) {
         let (sources, id) = sources_with("scene.ron", text);
         let error = ron::from_str::<Scene>(text).expect_err("the test scene must be invalid");
-        let diagnostic = from_ron_error(id, &sources, &error);
+        let diagnostic = from_ron_error(id, &sources, &error, &TEST_SCHEMA);
         let rendered = render_diagnostics(std::slice::from_ref(&diagnostic), &sources, false);
         (diagnostic, rendered)
     }
@@ -799,11 +1409,106 @@ mod tests {
     }
 
     #[test]
-    fn ron_other_errors_keep_ron_wording() {
+    fn ron_type_errors_name_the_field_and_quote_what_was_found() {
         let text = "Scene(camera: Camera(eye: (0, 0, 5), fov_y_degrees: \"wide\"))";
         let (diagnostic, rendered) = ron_diagnostic(text);
-        assert_eq!(diagnostic.message, "expected float");
-        assert!(rendered.contains("scene.ron:1:"), "{rendered}");
+        assert_eq!(
+            diagnostic.message,
+            "`fov_y_degrees` is a number, found the string `\"wide\"`"
+        );
+        assert_eq!(spanned_text(text, &diagnostic), "\"wide\"");
+        assert!(rendered.contains("scene.ron:1:53"), "{rendered}");
+    }
+
+    /// The common mistakes, each as (text, message, a fragment of a hint, the text spanned).
+    #[test]
+    fn ron_common_mistakes_are_reworded_with_hints() {
+        let camera = "camera: Camera(eye: (0, 0, 5), fov_y_degrees: 45)";
+        let cases = [
+            ("", "the file is empty", "`(camera: (eye: (0, 0, 5)", ""),
+            (
+                "  // nothing\n",
+                "the file holds only comments",
+                "A test scene is one value",
+                "",
+            ),
+            (
+                "{\"camera\": 1}",
+                "expected `(` at the start of a test scene, found `{`",
+                "RON, not JSON",
+                "{",
+            ),
+            (
+                "camera: 1",
+                "expected `(` before `camera:`",
+                "A test scene is one value",
+                "camera",
+            ),
+            (
+                &format!("({camera}, shapes: [Cube()])"),
+                "`Cube` takes no parentheses",
+                "write `shapes: Cube`",
+                "()",
+            ),
+            (
+                &format!("({camera}, shapes: [Sphere(segments: 4.5)])"),
+                "`segments` is a whole number, found `4.5`",
+                "e.g. `4`",
+                "4.5",
+            ),
+            (
+                &format!("({camera}, shapes: [Sphere])"),
+                "`Sphere` needs parentheses",
+                "`Sphere(...)`",
+                "Sphere",
+            ),
+            (
+                &format!("({camera}, shapes: [Obj(teapot.obj)])"),
+                "`Obj` takes a string in quotes, found `teapot`",
+                "`\"teapot.obj\"`",
+                "teapot",
+            ),
+            (
+                "(camera: Camera(eye: [0, 0, 5], fov_y_degrees: 45))",
+                "`eye` is written in parentheses, found `[`",
+                "`(0, 0, 5)`",
+                "[0, 0, 5]",
+            ),
+            (
+                "(camera: Camera(0, 0))",
+                "`Camera` has named fields: expected `name: value`, found `0`",
+                "",
+                "0",
+            ),
+            (
+                "(camera: Camera(eye = (0, 0, 5)))",
+                "expected `:`, found `=`",
+                "`name: value`",
+                "=",
+            ),
+            (
+                "# hello\n()",
+                "`#` does not start a comment in RON",
+                "`// ...`",
+                "#",
+            ),
+        ];
+        for (text, message, hint, spanned) in cases {
+            let (diagnostic, rendered) = ron_diagnostic(text);
+            assert_eq!(diagnostic.message, message, "{text}\n{rendered}");
+            assert!(
+                diagnostic.hints.iter().any(|h| h.contains(hint)) && !diagnostic.hints.is_empty(),
+                "{text}: hint `{hint}` in {:?}",
+                diagnostic.hints
+            );
+            assert_eq!(spanned_text(text, &diagnostic), spanned, "{text}\n{rendered}");
+            for internal in ["r#", "std identifier", "struct `", "Scene`"] {
+                assert!(
+                    !rendered.contains(internal),
+                    "{text}: `{internal}` in\n{rendered}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -24,8 +24,8 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::check::compare::Tolerance;
-use crate::diag::{Diagnostic, SourceId, Sources, from_ron_error};
-use crate::scene::format::{OrderedMap, ron_options};
+use crate::diag::{Diagnostic, Schema, SourceId, Sources, from_ron_error};
+use crate::scene::format::{OrderedMap, probe_fields, ron_options};
 use crate::scene::locate::{PathSegment, locate, locate_key, locate_keys};
 
 /// The file name of a suite config; it is never taken for a scene.
@@ -39,6 +39,23 @@ struct SuiteConfigFile {
     tolerance: ToleranceOverride,
     #[serde(default)]
     scenes: OrderedMap<ToleranceOverride>,
+}
+
+/// What a config holds, for error hints (see [`Schema`]).
+const SUITE_SCHEMA: Schema = Schema {
+    fields: suite_fields,
+    variants: |_| None,
+    what: "a suite config",
+    example: "(tolerance: (max_channel_difference: 2))",
+};
+
+fn suite_fields(holder: Option<&str>, _name: Option<&str>) -> Option<&'static [&'static str]> {
+    let probe = "(lampshade_probe: 0)";
+    match holder {
+        None => probe_fields::<SuiteConfigFile>(probe),
+        Some("tolerance" | "scenes") => probe_fields::<ToleranceOverride>(probe),
+        Some(_) => None,
+    }
 }
 
 /// Some of the limits of a [`Tolerance`]; the rest come from further out.
@@ -123,7 +140,7 @@ pub fn load_config(
     let file: SuiteConfigFile = match ron_options().from_str(sources.text(source)) {
         Ok(file) => file,
         Err(error) => {
-            diagnostics.push(from_ron_error(source, sources, &error));
+            diagnostics.push(from_ron_error(source, sources, &error, &SUITE_SCHEMA));
             return None;
         }
     };
@@ -316,6 +333,34 @@ mod tests {
             assert!(
                 rendered.contains(fragment),
                 "expected `{fragment}` in\n{rendered}"
+            );
+        }
+    }
+
+    /// ron's errors name the serde types (`struct `Suite``); the messages must not.
+    #[test]
+    fn syntax_errors_speak_of_the_config_not_of_internal_types() {
+        for (text, expected) in [
+            ("", "the file is empty"),
+            ("// nothing yet\n", "the file holds only comments"),
+            (
+                "{\"tolerance\": {}}",
+                "expected `(` at the start of a suite config",
+            ),
+            (
+                "(tolerance: (2, 0.001))",
+                "write `tolerance: (max_channel_difference: 2, max_differing_share: 0.001)`",
+            ),
+        ] {
+            let rendered = load(text).expect_err("the config is bad");
+            assert!(
+                rendered.contains(expected),
+                "{text:?}: expected `{expected}` in\n{rendered}"
+            );
+            assert!(rendered.contains("lampshade-check.ron:1:"), "{rendered}");
+            assert!(
+                !rendered.contains("Suite"),
+                "{text:?}: an internal type name in\n{rendered}"
             );
         }
     }

@@ -12,6 +12,8 @@ use std::marker::PhantomData;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 
+use crate::diag::Schema;
+
 /// A position or direction, `(x, y, z)`.
 pub type Vec3File = [f64; 3];
 /// A linear RGB colour `(r, g, b)`.
@@ -398,6 +400,88 @@ pub fn ron_options() -> ron::Options {
     ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
 }
 
+/// What the scene file's types expect, for error hints that show the right form: the
+/// fields and variants are asked of the serde types themselves (through ron's own "unknown
+/// field" and "unknown variant" errors), so the hints cannot drift from the format.
+pub const SCENE_SCHEMA: Schema = Schema {
+    fields: scene_fields,
+    variants: scene_variants,
+    what: "a scene",
+    example: "(objects: [(mesh: Sphere())])",
+};
+
+/// The schema of a material library file.
+pub const LIBRARY_SCHEMA: Schema = Schema {
+    what: "a material library",
+    example: "Materials(materials: { \"red\": (color: (1, 0, 0)) })",
+    ..SCENE_SCHEMA
+};
+
+/// A name no type of the format accepts, to make ron list what they do accept.
+const PROBE: &str = "lampshade_probe";
+
+/// The field names ron reports when `probe` (a struct with the field [`PROBE`]) is read as `T`.
+pub fn probe_fields<T: de::DeserializeOwned>(probe: &str) -> Option<&'static [&'static str]> {
+    match ron_options().from_str::<T>(probe) {
+        Err(ron::error::SpannedError {
+            code: ron::Error::NoSuchStructField { expected, .. },
+            ..
+        }) => Some(expected),
+        _ => None,
+    }
+}
+
+/// The variant names ron reports when an unknown variant is read as `T`.
+pub fn probe_variants<T: de::DeserializeOwned>() -> Option<&'static [&'static str]> {
+    match ron_options().from_str::<T>(PROBE) {
+        Err(ron::error::SpannedError {
+            code: ron::Error::NoSuchEnumVariant { expected, .. },
+            ..
+        }) => Some(expected),
+        _ => None,
+    }
+}
+
+/// The fields of the struct that the value of field `holder` is, or of the struct variant
+/// `name` written there (`Sphere`, `Spot`, `Perspective`...).
+fn scene_fields(holder: Option<&str>, name: Option<&str>) -> Option<&'static [&'static str]> {
+    let struct_probe = format!("({PROBE}: 0)");
+    let variant_probe = |variant: &str| format!("{variant}({PROBE}: 0)");
+    match (holder, name) {
+        (Some("mesh") | None, Some(variant @ "Sphere")) => probe_fields::<MeshFile>(&variant_probe(variant)),
+        (Some("camera") | None, Some(variant @ ("Perspective" | "Orthographic" | "Gltf"))) => {
+            probe_fields::<CameraFile>(&variant_probe(variant))
+        }
+        (Some("lights") | None, Some(variant @ ("Directional" | "Point" | "Spot"))) => {
+            probe_fields::<LightFile>(&variant_probe(variant))
+        }
+        (None, None | Some("Scene")) => probe_fields::<SceneFile>(&struct_probe),
+        (None, Some("Materials")) => probe_fields::<MaterialLibraryFile>(&struct_probe),
+        (Some("image"), _) => probe_fields::<ImageFile>(&struct_probe),
+        (Some("attenuation"), _) => probe_fields::<AttenuationFile>(&struct_probe),
+        (Some("shadow_map"), _) => probe_fields::<ShadowMapFile>(&struct_probe),
+        (Some("material" | "materials"), _) => probe_fields::<MaterialFile>(&struct_probe),
+        (Some("objects"), _) => probe_fields::<ObjectFile>(&struct_probe),
+        _ => None,
+    }
+}
+
+/// The variants of the enum that the value of field `holder` is.
+fn scene_variants(holder: &str) -> Option<&'static [&'static str]> {
+    match holder {
+        "mesh" => probe_variants::<MeshFile>(),
+        "camera" => probe_variants::<CameraFile>(),
+        "lights" => probe_variants::<LightFile>(),
+        "model" => probe_variants::<LightingModelFile>(),
+        "distribution" => probe_variants::<DistributionFile>(),
+        "shading" => probe_variants::<ShadingFile>(),
+        "back_faces" => probe_variants::<BackFacesFile>(),
+        "component" => probe_variants::<ComponentFile>(),
+        "normal_interpolation" => probe_variants::<NormalInterpolationFile>(),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -494,5 +578,60 @@ mod tests {
                 "{bad}: {error}"
             );
         }
+    }
+
+    #[test]
+    fn the_schema_asks_the_types_themselves() {
+        let fields = SCENE_SCHEMA.fields;
+        assert_eq!(
+            fields(Some("attenuation"), None),
+            Some(&["constant", "linear", "quadratic"][..])
+        );
+        assert_eq!(fields(Some("mesh"), Some("Sphere")), Some(&["segments"][..]));
+        assert_eq!(fields(Some("mesh"), Some("Gltf")), None, "a path, not fields");
+        assert_eq!(
+            fields(Some("camera"), Some("Gltf")),
+            Some(&["object", "camera"][..])
+        );
+        for (holder, name) in [
+            (None, None),
+            (None, Some("Materials")),
+            (Some("image"), None),
+            (Some("shadow_map"), None),
+            (Some("material"), None),
+            (Some("materials"), None),
+            (Some("objects"), None),
+            (Some("camera"), Some("Perspective")),
+            (Some("camera"), Some("Orthographic")),
+            (Some("lights"), Some("Directional")),
+            (Some("lights"), Some("Point")),
+            (Some("lights"), Some("Spot")),
+        ] {
+            assert!(
+                fields(holder, name).is_some_and(|f| !f.is_empty()),
+                "{holder:?} {name:?}"
+            );
+        }
+        for holder in [
+            "mesh",
+            "camera",
+            "lights",
+            "model",
+            "distribution",
+            "shading",
+            "back_faces",
+            "component",
+            "normal_interpolation",
+        ] {
+            assert!(
+                (SCENE_SCHEMA.variants)(holder).is_some_and(|v| !v.is_empty()),
+                "{holder}"
+            );
+        }
+        assert_eq!(
+            (SCENE_SCHEMA.variants)("mesh"),
+            Some(&["Sphere", "Plane", "Cube", "Obj", "Gltf"][..])
+        );
+        assert_eq!((SCENE_SCHEMA.variants)("width"), None);
     }
 }

@@ -17,7 +17,7 @@ use std::time::SystemTime;
 
 use glam::{DMat4, DQuat, DVec3, EulerRot, Vec3};
 
-use crate::diag::{Diagnostic, SourceId, Sources, from_ron_error};
+use crate::diag::{Diagnostic, Schema, SourceId, Sources, from_ron_error};
 use crate::mesh::{
     ImportedCamera, ImportedLight, ImportedProjection, LoadedMesh, Mesh, MeshError, MeshOptions,
     gltf::load_gltf, obj::load_obj, primitives, tangents::compute_tangents,
@@ -299,7 +299,7 @@ impl Loader<'_> {
     fn load(&mut self, options: &LoadOptions) -> Option<Scene> {
         let scene_path = self.scene_path.clone();
         let source = self.read_source(&scene_path, None)?;
-        let file: SceneFile = self.parse(source)?;
+        let file: SceneFile = self.parse(source, &format::SCENE_SCHEMA)?;
 
         // Materials: included libraries first, then the scene's own table, later overriding earlier.
         let mut table: HashMap<String, MaterialDefinition> = HashMap::new();
@@ -310,28 +310,22 @@ impl Loader<'_> {
 
         let image = self.image(&file, source, options);
         let mut objects = Vec::new();
+        // The index in `file.objects` of each loaded object.
+        let mut file_indices = Vec::new();
         let mut placements = Vec::new();
         for (index, object) in file.objects.iter().enumerate() {
             let loaded = self.object(object, index, source, &table, &materials, options);
             placements.push(loaded.map(|(object, placed)| {
                 let transform = object.transform;
                 objects.push(object);
+                file_indices.push(index);
                 ObjectPlacement { transform, placed }
             }));
         }
         let bounds = bounding_sphere(&objects);
         let extent = bounds.center.length() + bounds.radius;
         if extent.is_nan() || extent > limits::MAX_WORLD_EXTENT {
-            self.diagnostics.push(
-                Diagnostic::error(
-                    &scene_path,
-                    format!(
-                        "the objects reach {extent:.3e} units from the origin; lampshade draws scenes within {:e} units",
-                        limits::MAX_WORLD_EXTENT
-                    ),
-                )
-                .with_hint("check the objects' `scale` and `translate`, and the mesh files' coordinates"),
-            );
+            self.world_extent_error(&file.objects, &objects, &file_indices, extent, source);
             return None;
         }
         let camera = match &file.camera {
@@ -396,6 +390,57 @@ impl Loader<'_> {
         })
     }
 
+    /// The objects reach farther than [`limits::MAX_WORLD_EXTENT`]: points at the value that
+    /// puts the farthest object there (its `translate`, else its `scale`, else its mesh).
+    fn world_extent_error(
+        &mut self,
+        files: &[format::ObjectFile],
+        objects: &[Object],
+        file_indices: &[usize],
+        extent: f64,
+        source: SourceId,
+    ) {
+        let reach = |object: &Object| {
+            let bounds = bounding_sphere(std::slice::from_ref(object));
+            let reach = bounds.center.length() + bounds.radius;
+            // NaN counts as the farthest: it is what makes the scene undrawable.
+            if reach.is_nan() { f64::INFINITY } else { reach }
+        };
+        let farthest = objects
+            .iter()
+            .zip(file_indices)
+            .max_by(|(a, _), (b, _)| reach(a).total_cmp(&reach(b)));
+        let message = format!(
+            "the objects reach {extent:.3e} units from the origin; lampshade draws scenes within {:e} units",
+            limits::MAX_WORLD_EXTENT
+        );
+        let hint = "check the objects' `scale` and `translate`, and the mesh files' coordinates";
+        let Some((object, &index)) = farthest else {
+            let path = self.sources.path(source).to_path_buf();
+            self.diagnostics
+                .push(Diagnostic::error(path, message).with_hint(hint));
+            return;
+        };
+        let file = &files[index];
+        let translation = object.transform.w_axis.truncate().length();
+        // A NaN translation is the culprit too.
+        let field =
+            if file.translate.is_some() && (translation.is_nan() || translation >= reach(object) / 2.0) {
+                "translate"
+            } else if file.scale.is_some() {
+                "scale"
+            } else {
+                "mesh"
+            };
+        let label = format!("puts `{}` {:.1e} units away", object.name, reach(object));
+        self.error(
+            At::new(source, &ron_path!["objects", index, field]),
+            message,
+            Some(&label),
+            Some(hint.to_owned()),
+        );
+    }
+
     // ----- reading and parsing -----
 
     /// Reads a text file into `sources`. `referenced_at` is where another file named it.
@@ -432,11 +477,11 @@ impl Loader<'_> {
         None
     }
 
-    fn parse<T: serde::de::DeserializeOwned>(&mut self, source: SourceId) -> Option<T> {
+    fn parse<T: serde::de::DeserializeOwned>(&mut self, source: SourceId, schema: &Schema) -> Option<T> {
         match format::ron_options().from_str::<T>(self.sources.text(source)) {
             Ok(value) => Some(value),
             Err(error) => {
-                let diagnostic = from_ron_error(source, &self.sources, &error);
+                let diagnostic = from_ron_error(source, &self.sources, &error, schema);
                 self.diagnostics.push(diagnostic);
                 None
             }
@@ -465,18 +510,41 @@ impl Loader<'_> {
 
     // ----- numbers -----
 
+    /// `value` when it is finite; otherwise an error that quotes what the file says (`1e39`,
+    /// not the `inf` ron made of it).
     fn finite(&mut self, value: f64, at: At) -> Option<f64> {
         if value.is_finite() {
-            Some(value)
-        } else {
-            self.error(
-                at,
-                format!("`{value}` is not a finite number"),
-                Some("must be finite"),
-                Some("NaN and infinities have no meaning here (note: ron reads numbers like 1e400 as infinity)".into()),
-            );
-            None
+            return Some(value);
         }
+        let written = locate(self.sources.text(at.source), at.path)
+            .and_then(|span| self.sources.text(at.source).get(span))
+            .map(str::to_owned);
+        let (message, label, hint) = match written.as_deref().map(|w| (w, w.replace('_', "").parse::<f64>()))
+        {
+            // Finite as written, infinite as read: too large for the field's 32-bit float.
+            Some((written, Ok(parsed))) if parsed.is_finite() => (
+                format!("`{written}` is out of range for a 32-bit number"),
+                "too large",
+                "this field is a 32-bit float, at most about 3.4e38".to_owned(),
+            ),
+            Some((written, Ok(parsed))) if parsed.is_infinite() && !written.contains("inf") => (
+                format!("`{written}` is out of range for a 64-bit number"),
+                "too large",
+                "this field is a 64-bit float, at most about 1.8e308".to_owned(),
+            ),
+            Some((written, _)) => (
+                format!("`{written}` is not a finite number"),
+                "must be finite",
+                "NaN and infinities have no meaning here".to_owned(),
+            ),
+            None => (
+                format!("`{value}` is not a finite number"),
+                "must be finite",
+                "NaN and infinities, and numbers too large for the field, have no meaning here".to_owned(),
+            ),
+        };
+        self.error(at, message, Some(label), Some(hint));
+        None
     }
 
     fn vector(&mut self, value: [f64; 3], at: At) -> Option<DVec3> {
@@ -605,7 +673,8 @@ impl Loader<'_> {
             let Some(library_source) = self.read_source(&path, Some(at)) else {
                 continue;
             };
-            let Some(library) = self.parse::<MaterialLibraryFile>(library_source) else {
+            let Some(library) = self.parse::<MaterialLibraryFile>(library_source, &format::LIBRARY_SCHEMA)
+            else {
                 continue;
             };
             stack.push(key);
@@ -1583,6 +1652,7 @@ impl Loader<'_> {
                 ..
             }) => (*eye, *target, *up, *near, *far),
         };
+        let (up_given, eye_given, target_given) = (up.is_some(), eye.is_some(), target.is_some());
         let up = match up {
             Some(up) => self.direction(up, At::new(source, &field("up")))?,
             None => DVec3::Y,
@@ -1613,14 +1683,30 @@ impl Loader<'_> {
             return None;
         }
         if offset.normalize().cross(up).length() < 1e-9 {
+            // Without an `up`, the default (0, 1, 0) is parallel: point at what set the view
+            // direction (the eye, else the target, else the camera).
+            let culprit = match (up_given, eye_given, target_given) {
+                (true, _, _) => field("up").to_vec(),
+                (false, true, _) => field("eye").to_vec(),
+                (false, false, true) => field("target").to_vec(),
+                _ => ron_path!["camera"].to_vec(),
+            };
+            let (label, hint) = if up_given {
+                (
+                    "parallel to `target - eye`",
+                    "pick an `up` that is not along the line of sight, e.g. (0, 0, 1) when looking along Y",
+                )
+            } else {
+                (
+                    "looks along Y, the default `up`",
+                    "add an `up` that is not along the line of sight, e.g. `up: (0, 0, 1)`",
+                )
+            };
             self.error(
-                At::new(source, &field("up")),
+                At::new(source, &culprit),
                 "the camera's `up` is parallel to its view direction",
-                Some("parallel to `target - eye`"),
-                Some(
-                    "pick an `up` that is not along the line of sight, e.g. (0, 0, 1) when looking along Y"
-                        .into(),
-                ),
+                Some(label),
+                Some(hint.into()),
             );
             return None;
         }

@@ -126,6 +126,127 @@ pub fn locate_keys(source: &str, path_to_map: &[PathSegment], key: &str) -> Vec<
         .collect()
 }
 
+/// What surrounds a position in RON text that ron rejected, read from the start of the text up
+/// to the position: enough to reword a syntax or type error in the user's terms ("`attenuation`
+/// has named fields") without knowing what follows, which is broken.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Surroundings {
+    /// The innermost bracket still open at the position.
+    pub group: Option<OpenGroup>,
+    /// The field whose value is being written at the position: the pending `name:` in a
+    /// `( )`; for a list element or a map value, the field holding the list or map. `None`
+    /// where a field name or map key is expected, and at the top level.
+    pub value_of: Option<String>,
+    /// The token just before the position, and the one before that.
+    pub previous: Option<Range<usize>>,
+    pub before_previous: Option<Range<usize>>,
+    /// The token at (or just after) the position, when one can be read there.
+    pub token: Option<Range<usize>>,
+}
+
+/// A bracket opened before a position and not yet closed there.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OpenGroup {
+    /// `(`, `[` or `{`.
+    pub bracket: char,
+    /// Byte offset of the bracket.
+    pub open: usize,
+    /// The name written before a `(`: `Sphere` in `Sphere(`, `Scene` in `Scene(`.
+    pub name: Option<String>,
+    /// The field whose value the group is (`attenuation` for `attenuation: (`); for a list
+    /// element or map value, the field holding the list or map (`lights` for `lights: [(`).
+    pub holder: Option<String>,
+    /// Inside a `{ }`: whether the position is in a value (after the key's `:`).
+    after_colon: bool,
+    /// Inside a `( )`: the field whose `name:` came last since the last `,`.
+    pending: Option<String>,
+}
+
+impl OpenGroup {
+    fn value_of(&self) -> Option<String> {
+        match self.bracket {
+            '(' => self.pending.clone(),
+            '[' => self.holder.clone(),
+            _ => self.after_colon.then(|| self.holder.clone()).flatten(),
+        }
+    }
+}
+
+/// Reads `source` up to byte `offset` and says what surrounds it (see [`Surroundings`]).
+/// Reading stops early at anything the tokenizer cannot read; nesting is followed to any depth
+/// (the stack is a `Vec`, not recursion).
+pub fn surroundings(source: &str, offset: usize) -> Surroundings {
+    let mut stack: Vec<OpenGroup> = Vec::new();
+    let mut previous: Option<Token> = None;
+    let mut before_previous: Option<Token> = None;
+    let mut pos = 0;
+    let text = |token: Token| source.get(token.range()).unwrap_or("").to_owned();
+    while let Some(token) = lex(source, pos).filter(|token| token.start < offset) {
+        match token.kind {
+            Kind::Open(bracket) => {
+                let name = previous
+                    .filter(|p| p.kind == Kind::Ident && bracket == b'(')
+                    .map(text);
+                let holder = stack.last().and_then(OpenGroup::value_of);
+                stack.push(OpenGroup {
+                    bracket: char::from(bracket),
+                    open: token.start,
+                    // `Some(x)` is transparent: `x` is the value of the same field.
+                    name: name.filter(|n| n != "Some"),
+                    holder,
+                    after_colon: false,
+                    pending: None,
+                });
+            }
+            Kind::Close(_) => {
+                stack.pop();
+            }
+            Kind::Colon => {
+                if let Some(group) = stack.last_mut() {
+                    match (group.bracket, previous) {
+                        ('(', Some(p)) if p.kind == Kind::Ident => {
+                            group.pending = Some(strip_raw(&text(p)).to_owned());
+                        }
+                        ('{', _) => group.after_colon = true,
+                        _ => {}
+                    }
+                }
+            }
+            Kind::Comma => {
+                if let Some(group) = stack.last_mut() {
+                    group.pending = None;
+                    group.after_colon = false;
+                }
+            }
+            _ => {}
+        }
+        before_previous = previous;
+        previous = Some(token);
+        pos = token.end;
+    }
+    Surroundings {
+        value_of: stack.last().and_then(OpenGroup::value_of),
+        group: stack.pop(),
+        previous: previous.map(|t| t.range()),
+        before_previous: before_previous.map(|t| t.range()),
+        token: lex(source, offset).map(|t| t.range()),
+    }
+}
+
+/// The byte range of the value that starts at `offset` (`(0, 0.1, 0)`, `"a"`, `Sphere(...)`),
+/// and the ranges of its positional elements when it is a bracketed group without field names.
+pub fn value_and_elements(source: &str, offset: usize) -> Option<(Range<usize>, Vec<Range<usize>>)> {
+    let mut walker = Walker::new(source);
+    walker.pos = offset;
+    let range = walker.skip_value()?;
+    let text = &source[range.clone()];
+    let elements = (0..)
+        .map_while(|i| locate(text, &[PathSegment::Index(i)]))
+        .map(|element| range.start + element.start..range.start + element.end)
+        .collect();
+    Some((range, elements))
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
     /// `(`, `[` or `{`.
@@ -821,5 +942,47 @@ Scene(
         assert_eq!(string_contents("r\"x\"").as_deref(), Some("x"));
         assert_eq!(string_contents("ruby").as_deref(), None);
         assert_eq!(string_contents("r#").as_deref(), None);
+    }
+
+    #[test]
+    fn surroundings_name_the_field_the_variant_and_the_neighbouring_tokens() {
+        let source = "(lights: [Point(position: (0, 1, 0), attenuation: (0, 0.1, 0))], materials: { \"a\": (kd: 1.5e) })";
+        let at = source.find("(0, 0.1").unwrap() + 1;
+        let around = surroundings(source, at);
+        let group = around.group.clone().unwrap();
+        assert_eq!(
+            (group.bracket, group.holder.as_deref(), group.name),
+            ('(', Some("attenuation"), None)
+        );
+        assert_eq!(around.value_of, None, "a field name is expected there");
+        assert_eq!(&source[around.previous.unwrap()], "(");
+        assert_eq!(&source[around.before_previous.unwrap()], ":");
+        assert_eq!(&source[around.token.unwrap()], "0");
+        let point = surroundings(source, source.find("(0, 1").unwrap());
+        let group = point.group.unwrap();
+        assert_eq!(
+            (group.holder.as_deref(), group.name.as_deref()),
+            (Some("lights"), Some("Point"))
+        );
+        assert_eq!(point.value_of.as_deref(), Some("position"));
+        // A map value is held by the map's field; a list element by the list's.
+        let entry = surroundings(source, source.find("(kd").unwrap());
+        assert_eq!(entry.value_of.as_deref(), Some("materials"));
+        let element = surroundings(source, source.find("Point").unwrap());
+        assert_eq!(element.value_of.as_deref(), Some("lights"));
+        // Nothing before the first token; nothing readable at all in an empty text.
+        assert_eq!(surroundings(source, 0).previous, None);
+        assert_eq!(surroundings("", 0), Surroundings::default());
+        assert_eq!(surroundings("  // c", 6), Surroundings::default());
+    }
+
+    #[test]
+    fn value_and_elements_split_a_tuple() {
+        let source = "x: Sphere(64, (1, 2), \"a,b\")";
+        let (range, elements) = value_and_elements(source, 3).unwrap();
+        assert_eq!(&source[range], "Sphere(64, (1, 2), \"a,b\")");
+        let texts: Vec<&str> = elements.into_iter().map(|e| &source[e]).collect();
+        assert_eq!(texts, ["64", "(1, 2)", "\"a,b\""]);
+        assert_eq!(value_and_elements(source, source.len()), None);
     }
 }

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use glam::Vec3;
 use lampshade::render::{FrameBuffer, RenderOptions, render};
-use lampshade::scene::{LoadOptions, Scene, load_scene};
+use lampshade::scene::{LoadOptions, Scene, load_scene, load_scene_from_str};
 
 use crate::repo;
 
@@ -204,5 +204,99 @@ fn every_bundled_scene_loads_without_warnings_except_unsampled_gltf_textures() {
                 warning.message
             );
         }
+    }
+}
+
+/// The mistakes a new user makes, applied to every complete scene of the docs: each must give
+/// an error with a location, a hint, and no word of ron's or serde's internals.
+#[test]
+fn mistakes_made_on_the_docs_examples_give_located_plain_errors_with_hints() {
+    let mut examples = Vec::new();
+    for doc in ["docs/scene-format.md", "README.md"] {
+        let text = std::fs::read_to_string(repo().join(doc)).unwrap();
+        for block in text.split("```ron").skip(1) {
+            let code = block.split("```").next().unwrap();
+            let body = code.trim_start_matches(|c: char| c.is_whitespace());
+            let first = body
+                .lines()
+                .find(|l| !l.trim_start().starts_with("//"))
+                .unwrap_or("");
+            if first.starts_with("Scene(") || first.starts_with("(objects") {
+                examples.push((doc, code.to_owned()));
+            }
+        }
+    }
+    assert!(examples.len() >= 2, "the docs have complete scenes");
+    // (what the mistake is, the text it changes, what it becomes)
+    let mistakes: [(&str, &str, &str); 10] = [
+        ("parentheses after a unit variant", "Cube", "Cube()"),
+        ("no parentheses after Sphere", "Sphere(segments: 12)", "Sphere"),
+        ("no parentheses after Sphere", "Sphere()", "Sphere"),
+        ("a positional field", "segments: ", ""),
+        ("a quoted variant", "Phong", "\"Phong\""),
+        ("a quoted variant", "Flat", "\"Flat\""),
+        ("a fraction for an integer", "width: 900", "width: 900.5"),
+        ("a vector in brackets", "eye: (0, 0, 9)", "eye: [0, 0, 9]"),
+        (
+            "an unquoted name",
+            "material: \"porcelain\"",
+            "material: porcelain",
+        ),
+        ("a wrong-case variant", "Directional(", "directional("),
+    ];
+    let mut tried = 0;
+    for (doc, full) in &examples {
+        // Mistakes are made in the scene, not in the comments before it.
+        let scene_start = full
+            .split_inclusive('\n')
+            .take_while(|line| line.trim().is_empty() || line.trim_start().starts_with("//"))
+            .map(str::len)
+            .sum();
+        let (comments, example) = full.split_at(scene_start);
+        let mutations = mistakes
+            .iter()
+            .filter(|(_, from, _)| example.contains(from))
+            .map(|(what, from, to)| (what.to_string(), example.replacen(from, to, 1)))
+            .chain([
+                ("trailing text".to_owned(), format!("{example})")),
+                ("JSON braces".to_owned(), example.replacen("(", "{", 1)),
+            ])
+            .chain(
+                example
+                    .contains(',')
+                    .then(|| ("a missing comma".to_owned(), example.replacen(",", "", 1))),
+            );
+        for (what, text) in mutations {
+            let text = format!("{comments}{text}");
+            tried += 1;
+            let error = match load_scene_from_str(Path::new("example.ron"), &text, &LoadOptions::default()) {
+                Ok(_) => panic!("{doc}, {what}: loads\n{text}"),
+                Err(error) => error,
+            };
+            let rendered = lampshade::diag::render_diagnostics(&error.diagnostics, &error.sources, false);
+            let first = &error.diagnostics[0];
+            assert!(first.location.is_some(), "{doc}, {what}: no location\n{rendered}");
+            assert!(!first.hints.is_empty(), "{doc}, {what}: no hint\n{rendered}");
+            for internal in ["r#", "std identifier", "struct `", "unit value"] {
+                assert!(
+                    !rendered.contains(internal),
+                    "{doc}, {what}: `{internal}` in\n{rendered}"
+                );
+            }
+        }
+    }
+    assert!(tried >= 15, "only {tried} mistakes tried");
+}
+
+#[test]
+fn an_empty_scene_file_says_so_and_shows_a_scene() {
+    for text in ["", "\n  \n", "// a scene, later\n"] {
+        let error = load_scene_from_str(Path::new("empty.ron"), text, &LoadOptions::default())
+            .expect_err("an empty file is an error");
+        let rendered = lampshade::diag::render_diagnostics(&error.diagnostics, &error.sources, false);
+        assert!(rendered.contains("the file "), "{rendered}");
+        assert!(rendered.contains("empty.ron:"), "{rendered}");
+        assert!(rendered.contains("(objects: [(mesh: Sphere())])"), "{rendered}");
+        assert!(!rendered.contains("Scene`"), "{rendered}");
     }
 }
