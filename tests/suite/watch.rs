@@ -701,15 +701,54 @@ fn an_image_that_cannot_be_written_is_reported_by_its_own_name() {
 }
 
 #[test]
-fn an_output_that_would_replace_the_scene_is_refused() {
+fn an_output_that_would_replace_an_input_or_is_not_a_png_is_refused() {
     let folder = SceneFolder::new();
-    let output = Command::new(env!("CARGO_BIN_EXE_lampshade"))
-        .args(["watch", "scene.ron", "-o", "./scene.ron"])
-        .current_dir(&folder.path)
-        .output()
+    std::fs::copy(folder.file("scene.ron"), folder.file("odd-name.png")).unwrap();
+    // (arguments, what stderr must say): refused before anything is watched or written.
+    let cases: &[(&[&str], &str)] = &[
+        (&["scene.ron", "-o", "./scene.ron"], "not .ron"),
+        (&["odd-name.png"], "would replace the scene"),
+        (&["scene.ron", "-o", "out.exr"], "watch writes PNG images"),
+        (&["scene.ron", "-o", "out.hdr"], "watch writes PNG images"),
+        (&["scene.ron", "-o", "out.jpg"], "not .jpg"),
+        (&["scene.ron", "-o", "-"], "needs a file"),
+    ];
+    for &(args, expected) in cases {
+        let before = std::fs::read(folder.file("odd-name.png")).unwrap();
+        let output = Command::new(env!("CARGO_BIN_EXE_lampshade"))
+            .arg("watch")
+            .args(args)
+            .current_dir(&folder.path)
+            .stdin(Stdio::null())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert_eq!(std::fs::read(folder.file("odd-name.png")).unwrap(), before);
+    }
+
+    // An input that only the build knows (a texture): reported each build, never written over.
+    image::RgbImage::from_pixel(4, 4, image::Rgb([200, 30, 30]))
+        .save(folder.file("red.png"))
         .unwrap();
-    assert_eq!(output.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&output.stderr).contains("would replace the scene"));
+    let texture = std::fs::read(folder.file("red.png")).unwrap();
+    folder.write(
+        "textured.ron",
+        r#"(image: (width: 32, height: 32), materials: { "red": (texture: "red.png") },
+            objects: [(mesh: Sphere(), material: "red")])"#,
+    );
+    let watch = WatchProcess::start(&folder.path, &["textured.ron", "-o", "red.png"]);
+    wait_for(
+        "the refusal",
+        || watch.output(),
+        || watch.stderr().contains("a file the scene reads").then_some(()),
+    );
+    assert_eq!(
+        std::fs::read(folder.file("red.png")).unwrap(),
+        texture,
+        "the texture was overwritten"
+    );
 }
 
 // ----- the preview server, without a browser -----
