@@ -4,10 +4,12 @@
 //! The pixel test: a pixel *differs* when any of its channels is more than
 //! [`Tolerance::max_channel_difference`] levels (of 255) away from the reference, and a render
 //! passes when at most [`Tolerance::max_differing_share`] of its pixels differ. The defaults
-//! ([`DEFAULT_TOLERANCE`]: 2 levels, 0.1 %) absorb last-bit differences in `powf` and friends
-//! between machines and compilers, and nothing a person would notice: a moved highlight, a
-//! changed colour or a missing object changes far more pixels than that, by far more. On one
-//! machine lampshade is bit-identical for any thread count, so the defaults pass with room.
+//! ([`DEFAULT_TOLERANCE`]: 2 levels, 0.1 %) absorb last-bit differences in `sin`, `powf` and
+//! friends between C libraries (README, "Reference images"), and nothing a person would
+//! notice: a moved highlight, a changed colour or a missing object changes far more pixels
+//! than that, by far more. A zero tolerance (0 levels, share 0) is exact equality, for suites
+//! checked on one system, as the bundled one is: lampshade is bit-identical for any thread
+//! count, and for the same binary and C library.
 //!
 //! The FLIP test (`--flip`, NVIDIA's perceptual metric through the `nv-flip` crate, built when
 //! the `flip` feature is on): FLIP scores each pixel from 0 (identical) to 1 by how visible
@@ -17,8 +19,9 @@
 //! their `max_differing_share` to 1.
 //!
 //! Rejected: a mean-squared-error or PSNR limit (one bright speck and a uniformly shifted
-//! image can score the same, and neither number says where to look); exact equality (a
-//! suite could then never move between machines); a difference image scaled to its own
+//! image can score the same, and neither number says where to look); exact equality as the
+//! default (a suite could then not move between systems whose C libraries round differently);
+//! a difference image scaled to its own
 //! maximum (a one-level difference would look as alarming as a missing object).
 
 use image::RgbImage;
