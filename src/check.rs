@@ -25,6 +25,10 @@
 //!   exist, a bad `lampshade-check.ron`, no scenes found, or a reference, report or JUnit file
 //!   that could not be written.
 //! - `101`: a bug in lampshade (a panic), after the other scenes ran.
+//! - `130`: interrupted by Ctrl-C (or SIGTERM). No scene starts after the first Ctrl-C; the
+//!   scenes that finished are reported as usual (lines, summary, JUnit file, HTML report),
+//!   those not run or still under way as not run, and one line says what was kept. A second
+//!   Ctrl-C exits at once. Either way a file being written is finished and renamed first.
 //!
 //! Architecture invariants:
 //! - A reference is only ever written by `--bless`, and only for a scene that was run (after
@@ -34,6 +38,9 @@
 //!   count.
 //! - `check` never writes next to the scenes except references under `--bless`; report
 //!   pictures go to the `--report` folder only.
+//! - A report holds one run: the pictures an earlier report wrote into `DIR/images/` are
+//!   removed before the scenes run (only files named the way reports name them, so a person's
+//!   own files there stay).
 //!
 //! Rejected: running the suite as `cargo test` cases (users of lampshade have no Cargo
 //! project); writing a missing reference on first run (an unreviewed image would become the
@@ -51,11 +58,13 @@ pub mod select;
 pub mod suite;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::check::compare::FLIP_AVAILABLE;
 use crate::check::console::Console;
-use crate::check::runner::{RunOptions, SceneResult, SceneStatus, Tally, run_scenes};
+use crate::check::runner::{RunOptions, SceneResult, SceneStatus, StopReason, Tally, run_scenes};
 use crate::check::select::{NameFilter, Shard};
 use crate::check::suite::{SuiteScene, discover};
 use crate::cli::{EXIT_BAD_INPUT, EXIT_INTERNAL_ERROR, EXIT_OK, use_color};
@@ -63,6 +72,9 @@ use crate::diag::render_diagnostics;
 
 /// Some scene differs from its reference (or has none).
 pub const EXIT_MISMATCH: i32 = 1;
+
+/// Interrupted by Ctrl-C (128 + SIGINT, the shell's convention).
+pub const EXIT_INTERRUPTED: i32 = 130;
 
 /// The suite checked when no path is given.
 pub const DEFAULT_SUITE: &str = "scenes";
@@ -176,16 +188,22 @@ pub fn run(args: &CheckArgs) -> i32 {
         .report
         .as_ref()
         .map(|folder| folder.join(report::PICTURE_FOLDER));
-    if let Some(folder) = &pictures
-        && let Err(error) = std::fs::create_dir_all(folder)
-    {
-        errln!(
-            "error: cannot create the report folder `{}`: {error}",
-            folder.display()
-        );
-        return EXIT_BAD_INPUT;
+    if let Some(folder) = &pictures {
+        if let Err(error) = report::remove_old_pictures(folder) {
+            errln!("error: {error}");
+            return EXIT_BAD_INPUT;
+        }
+        if let Err(error) = std::fs::create_dir_all(folder) {
+            errln!(
+                "error: cannot create the report folder `{}`: {error}",
+                folder.display()
+            );
+            return EXIT_BAD_INPUT;
+        }
     }
+    let interrupted = Arc::new(AtomicBool::new(false));
     let options = RunOptions {
+        interrupted: Arc::clone(&interrupted),
         bless: args.bless,
         flip: args.flip,
         pictures,
@@ -208,31 +226,56 @@ pub fn run(args: &CheckArgs) -> i32 {
             return EXIT_BAD_INPUT;
         }
     };
+    let pool = Arc::new(pool);
     let workers = pool.current_num_threads();
 
+    if let Err(error) = stop_on_ctrl_c(Arc::clone(&interrupted)) {
+        errln!("warning: cannot catch Ctrl-C ({error}); it will end the run without a summary");
+    }
     let mut console = Console::new(scenes.len(), args.quiet);
     let results = run_scenes(&scenes, &options, &pool, &mut console);
     console.finish();
     let elapsed = started.elapsed();
+    let was_interrupted = interrupted.load(Ordering::Relaxed);
 
     let tally = Tally::of(&results);
-    let summary = summary_line(&tally, scenes.len(), all_scenes.len(), args.shard, elapsed);
+    let stopped_by = if was_interrupted {
+        StopReason::Interrupted
+    } else {
+        StopReason::FailFast
+    };
+    let summary = summary_line(
+        &tally,
+        stopped_by,
+        scenes.len(),
+        all_scenes.len(),
+        args.shard,
+        elapsed,
+    );
     let mut exit_code = exit_code(&results);
+    let mut kept = Vec::new();
     if let Some(file) = &args.junit {
         let title = match args.shard {
             Some(shard) => format!("lampshade check {} (shard {shard})", shown_paths.join(" ")),
             None => format!("lampshade check {}", shown_paths.join(" ")),
         };
         let xml = junit::junit_xml(&scenes, &results, &title, elapsed);
-        if let Err(error) = write_text(file, &xml) {
-            errln!("error: {error}");
-            exit_code = exit_code.max(EXIT_BAD_INPUT);
+        match write_text(file, &xml) {
+            Ok(()) => kept.push(format!("the JUnit file `{}`", file.display())),
+            Err(error) => {
+                errln!("error: {error}");
+                exit_code = exit_code.max(EXIT_BAD_INPUT);
+            }
         }
     }
     if let Some(folder) = &args.report {
         let html = report::report_html(&scenes, &results, &summary);
+        let index = folder.join("index.html");
         match report::write_report(folder, &html) {
-            Ok(()) => outln!("report: {}", folder.join("index.html").display()),
+            Ok(()) => {
+                outln!("report: {}", index.display());
+                kept.push(format!("the report `{}`", index.display()));
+            }
             Err(error) => {
                 errln!("error: {error}");
                 exit_code = exit_code.max(EXIT_BAD_INPUT);
@@ -257,7 +300,31 @@ pub fn run(args: &CheckArgs) -> i32 {
         outln!("hint: {report_hint}if the new images are right, make them the references with --bless");
     }
     outln!("{summary}");
+    if was_interrupted {
+        let finished = scenes.len() - tally.not_run;
+        let mut line = format!(
+            "interrupted: kept the results of the {finished} {} that finished",
+            if finished == 1 { "scene" } else { "scenes" }
+        );
+        if !kept.is_empty() {
+            line.push_str(&format!(" in {}", kept.join(" and ")));
+        }
+        errln!("{line}");
+        // Scenes still under way may be writing report pictures: let those finish, then end
+        // here, without waiting for their renders.
+        crate::output::exit_when_no_write_is_in_progress(EXIT_INTERRUPTED);
+    }
     exit_code
+}
+
+/// On the first Ctrl-C (or SIGTERM) sets `interrupted`: the run starts no more scenes and
+/// reports those that finished. A second one exits at once.
+fn stop_on_ctrl_c(interrupted: Arc<AtomicBool>) -> Result<(), ctrlc::Error> {
+    ctrlc::set_handler(move || {
+        if interrupted.swap(true, Ordering::Relaxed) {
+            crate::output::exit_when_no_write_is_in_progress(EXIT_INTERRUPTED);
+        }
+    })
 }
 
 /// 101 for a bug, else 2 for a scene that could not be checked, else 1 for a mismatch, else 0.
@@ -269,7 +336,7 @@ fn exit_code(results: &[SceneResult]) -> i32 {
             SceneStatus::Errored(SceneError::Internal(_)) => EXIT_INTERNAL_ERROR,
             SceneStatus::Errored(_) => EXIT_BAD_INPUT,
             SceneStatus::Failed(_) => EXIT_MISMATCH,
-            SceneStatus::Passed(_) | SceneStatus::Blessed(_) | SceneStatus::NotRun => EXIT_OK,
+            SceneStatus::Passed(_) | SceneStatus::Blessed(_) | SceneStatus::NotRun(_) => EXIT_OK,
         })
         .max()
         .unwrap_or(EXIT_OK)
@@ -279,6 +346,7 @@ fn exit_code(results: &[SceneResult]) -> i32 {
 /// shard counts when there are any.
 fn summary_line(
     tally: &Tally,
+    stopped_by: StopReason,
     selected: usize,
     found: usize,
     shard: Option<Shard>,
@@ -292,7 +360,11 @@ fn summary_line(
         line.push_str(&format!(", {} blessed", tally.blessed));
     }
     if tally.not_run > 0 {
-        line.push_str(&format!(", {} not run (--fail-fast)", tally.not_run));
+        let why = match stopped_by {
+            StopReason::FailFast => "--fail-fast",
+            StopReason::Interrupted => "interrupted",
+        };
+        line.push_str(&format!(", {} not run ({why})", tally.not_run));
     }
     let scenes = if selected == 1 { "scene" } else { "scenes" };
     line.push_str(&format!(" — {selected} {scenes}"));
@@ -317,7 +389,7 @@ fn timings_table(
     let ran: Vec<(&SuiteScene, &SceneResult)> = scenes
         .iter()
         .zip(results)
-        .filter(|(_, result)| !matches!(result.status, SceneStatus::NotRun))
+        .filter(|(_, result)| !matches!(result.status, SceneStatus::NotRun(_)))
         .collect();
     let mut out = format!(
         "timings: {} scenes in {:.3} s wall ({:.1} scenes/s) on {workers} worker {}; \

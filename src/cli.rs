@@ -291,19 +291,16 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
             exit_on_ctrl_c_after_render_line();
             run_render(&args)
         }
-        Command::Check(args) => {
-            exit_on_ctrl_c();
-            crate::check::run(&args)
-        }
+        Command::Check(args) => crate::check::run(&args),
         Command::Watch(args) => crate::watch::run(&args),
         Command::Bench(args) => crate::bench::run(&args),
         Command::Report(args) => crate::report::run(&args),
     }
 }
 
-/// Ctrl-C (or SIGTERM) ends `render` and `check` with 130 at once, except that an output being
-/// written is finished and renamed first: no truncated image and no stray temporary file.
-/// (`watch` has its own handler, which finishes the current render.)
+/// Ctrl-C (or SIGTERM) ends `render` with 130 at once, except that an output being written is
+/// finished and renamed first: no truncated image and no stray temporary file. (`watch` and
+/// `check` have their own handlers: the current render, the finished scenes' report.)
 fn exit_on_ctrl_c() {
     if let Err(error) = ctrlc::set_handler(|| output::exit_when_no_write_is_in_progress(130)) {
         errln!("warning: cannot catch Ctrl-C ({error}); an interrupted write may leave a temporary file");

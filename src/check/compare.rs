@@ -4,10 +4,12 @@
 //! The pixel test: a pixel *differs* when any of its channels is more than
 //! [`Tolerance::max_channel_difference`] levels (of 255) away from the reference, and a render
 //! passes when at most [`Tolerance::max_differing_share`] of its pixels differ. The defaults
-//! ([`DEFAULT_TOLERANCE`]: 2 levels, 0.1 %) absorb last-bit differences in `powf` and friends
-//! between machines and compilers, and nothing a person would notice: a moved highlight, a
-//! changed colour or a missing object changes far more pixels than that, by far more. On one
-//! machine lampshade is bit-identical for any thread count, so the defaults pass with room.
+//! ([`DEFAULT_TOLERANCE`]: 2 levels, 0.1 %) absorb last-bit differences in `sin`, `powf` and
+//! friends between C libraries (README, "Reference images"), and nothing a person would
+//! notice: a moved highlight, a changed colour or a missing object changes far more pixels
+//! than that, by far more. A zero tolerance (0 levels, share 0) is exact equality, for suites
+//! checked on one system, as the bundled one is: lampshade is bit-identical for any thread
+//! count, and for the same binary and C library.
 //!
 //! The FLIP test (`--flip`, NVIDIA's perceptual metric through the `nv-flip` crate, built when
 //! the `flip` feature is on): FLIP scores each pixel from 0 (identical) to 1 by how visible
@@ -17,8 +19,9 @@
 //! their `max_differing_share` to 1.
 //!
 //! Rejected: a mean-squared-error or PSNR limit (one bright speck and a uniformly shifted
-//! image can score the same, and neither number says where to look); exact equality (a
-//! suite could then never move between machines); a difference image scaled to its own
+//! image can score the same, and neither number says where to look); exact equality as the
+//! default (a suite could then not move between systems whose C libraries round differently);
+//! a difference image scaled to its own
 //! maximum (a one-level difference would look as alarming as a missing object).
 
 use image::RgbImage;
@@ -49,6 +52,37 @@ pub const DEFAULT_TOLERANCE: Tolerance = Tolerance {
     max_flip_mean: 0.07,
     max_flip_percentile: 0.12,
 };
+
+impl Tolerance {
+    /// The limits in words, for reports: "a pixel differs when a channel is more than 2 levels
+    /// off; up to 0.100% of pixels may differ", with FLIP's limits when `flip`.
+    pub fn describe(&self, flip: bool) -> String {
+        let mut text = if self.max_differing_share == 0.0 && self.max_channel_difference == 0 {
+            "exact: every channel of every pixel must be equal".to_owned()
+        } else if self.max_differing_share == 0.0 {
+            format!(
+                "no channel may be more than {} levels off",
+                self.max_channel_difference
+            )
+        } else {
+            format!(
+                "a pixel differs when a channel is more than {} levels off; up to {} of pixels \
+                 may differ",
+                self.max_channel_difference,
+                percent(self.max_differing_share)
+            )
+        };
+        if flip {
+            text.push_str(&format!(
+                "; FLIP mean up to {:.4}, {} up to {:.4}",
+                self.max_flip_mean,
+                percentile_name(),
+                self.max_flip_percentile
+            ));
+        }
+        text
+    }
+}
 
 impl Default for Tolerance {
     fn default() -> Self {
@@ -138,15 +172,24 @@ impl Comparison {
     pub fn violations(&self, tolerance: &Tolerance) -> Vec<String> {
         let mut violations = Vec::new();
         if self.differing_share() > tolerance.max_differing_share {
-            let mut text = format!(
-                "{} of pixels ({} of {}) differ by more than {} levels (allowed {}), by up to {}",
-                percent(self.differing_share()),
-                crate::cli::thousands(self.differing_pixels),
-                crate::cli::thousands(self.pixel_count()),
-                self.channel_threshold,
-                percent(tolerance.max_differing_share),
-                self.largest_difference,
-            );
+            let mut text = if self.channel_threshold == 0 && tolerance.max_differing_share == 0.0 {
+                format!(
+                    "{} of {} pixels differ (the tolerance is exact), by up to {}",
+                    crate::cli::thousands(self.differing_pixels),
+                    crate::cli::thousands(self.pixel_count()),
+                    self.largest_difference,
+                )
+            } else {
+                format!(
+                    "{} of pixels ({} of {}) differ by more than {} levels (allowed {}), by up to {}",
+                    percent(self.differing_share()),
+                    crate::cli::thousands(self.differing_pixels),
+                    crate::cli::thousands(self.pixel_count()),
+                    self.channel_threshold,
+                    percent(tolerance.max_differing_share),
+                    self.largest_difference,
+                )
+            };
             if let Some(region) = self.differing_region {
                 text.push_str(&format!(
                     ", within x {}–{}, y {}–{}",
@@ -178,9 +221,14 @@ impl Comparison {
     }
 }
 
-/// `0.001` → `0.100%`.
+/// `0.001` → `0.100%`; a share that is not zero never shows as `0.000%` (two pixels of two
+/// million are `<0.001%`), since exact suites fail on it.
 pub fn percent(share: f64) -> String {
-    format!("{:.3}%", share * 100.0)
+    if share > 0.0 && share < 0.000_005 {
+        "<0.001%".to_owned()
+    } else {
+        format!("{:.3}%", share * 100.0)
+    }
 }
 
 /// `p99` for [`FLIP_PERCENTILE`] = 0.99.
@@ -385,6 +433,34 @@ mod tests {
             ..DEFAULT_TOLERANCE
         };
         assert_eq!(comparison.violations(&strict).len(), 1);
+    }
+
+    #[test]
+    fn a_zero_tolerance_allows_no_difference_at_all() {
+        let exact = Tolerance {
+            max_channel_difference: 0,
+            max_differing_share: 0.0,
+            ..DEFAULT_TOLERANCE
+        };
+        let a = image(2000, 1000, [100, 100, 100]);
+        let same = compare_pixels(&a, &a.clone(), &exact).expect("same size");
+        assert!(same.violations(&exact).is_empty());
+        let mut b = a.clone();
+        b.put_pixel(1999, 999, image::Rgb([100, 100, 101]));
+        let comparison = compare_pixels(&a, &b, &exact).expect("same size");
+        let violations = comparison.violations(&exact);
+        assert_eq!(
+            violations,
+            [
+                "1 of 2,000,000 pixels differ (the tolerance is exact), by up to 1, within x 1999–1999, y 999–999"
+            ]
+        );
+        assert_eq!(
+            exact.describe(false),
+            "exact: every channel of every pixel must be equal"
+        );
+        // A share too small for three decimals still does not read as none.
+        assert_eq!(percent(comparison.differing_share()), "<0.001%");
     }
 
     #[test]

@@ -12,7 +12,9 @@
 //! ```
 //!
 //! Every field is optional; what is left out keeps the value from further out (the defaults,
-//! then configs in enclosing folders). `scenes` keys are scene names relative to the config's
+//! then configs in enclosing folders). An empty file (or one of comments only) is a config
+//! with every field left out, as `()` is: `touch lampshade-check.ron` marks a suite, and a
+//! config whose last override was deleted is still valid. `scenes` keys are scene names relative to the config's
 //! folder, without `.ron`. Parsed by serde with `deny_unknown_fields` (a misspelt limit must
 //! not silently keep the default), with the scene files' ron options (`Some(...)` may be left
 //! out); every problem becomes a located [`Diagnostic`], all of them collected, like a scene
@@ -24,6 +26,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::check::compare::Tolerance;
+use crate::check::suite::skip_trivia;
 use crate::diag::{Diagnostic, Schema, SourceId, Sources, from_ron_error};
 use crate::scene::format::{OrderedMap, probe_fields, ron_options};
 use crate::scene::locate::{PathSegment, locate, locate_key, locate_keys};
@@ -139,8 +142,17 @@ pub fn load_config(
     let source = sources.add(path.to_path_buf(), text);
     let file: SuiteConfigFile = match ron_options().from_str(sources.text(source)) {
         Ok(file) => file,
+        // Nothing but whitespace and comments (an unclosed comment is another error).
+        Err(error)
+            if !matches!(
+                error.code,
+                ron::error::Error::UnclosedBlockComment | ron::error::Error::UnclosedLineComment
+            ) && skip_trivia(sources.text(source).as_bytes()).is_empty() =>
+        {
+            SuiteConfigFile::default()
+        }
         Err(error) => {
-            diagnostics.push(from_ron_error(source, sources, &error, &SUITE_SCHEMA));
+            diagnostics.push(config_syntax_error(source, sources, &error));
             return None;
         }
     };
@@ -174,6 +186,52 @@ pub fn load_config(
         tolerance: file.tolerance,
         scenes: file.scenes.0,
     })
+}
+
+/// What a config may hold, for hints.
+const CONFIG_EXAMPLE: &str = "a `lampshade-check.ron` holds `(tolerance: (max_channel_difference: 2, \
+     max_differing_share: 0.001), scenes: { \"NAME\": (max_channel_difference: 3) })`; every \
+     field may be left out, and an empty file keeps the defaults";
+
+/// What a `tolerance` or a scene's entry may hold, for hints.
+const LIMITS_EXAMPLE: &str = "limits are written in parentheses, each optional: \
+     `(max_channel_difference: 2, max_differing_share: 0.001, max_flip_mean: 0.07, \
+     max_flip_percentile: 0.12)`";
+
+/// A syntax error in a config, in the words of the config: the serde type names (`Suite`,
+/// `Tolerance`) that ron's own messages use are the code's, not the user's.
+fn config_syntax_error(source: SourceId, sources: &Sources, error: &ron::error::SpannedError) -> Diagnostic {
+    use ron::error::Error as E;
+    // The scene format's rewriting first (JSON, quoting, numbers, named fields), then what only
+    // a config has.
+    let mut diagnostic = from_ron_error(source, sources, error, &SUITE_SCHEMA);
+    let (message, hint) = match &error.code {
+        E::ExpectedNamedStructLike("Suite") => {
+            diagnostic.hints.push(CONFIG_EXAMPLE.to_owned());
+            return diagnostic;
+        }
+        E::ExpectedNamedStructLike("Tolerance") => ("expected limits, `(...)`".to_owned(), LIMITS_EXAMPLE),
+        E::ExpectedMap => (
+            "expected the scenes' limits by name, `{ ... }`".to_owned(),
+            "write `scenes: { \"NAME\": (max_channel_difference: 3) }`, NAME being the scene's \
+             path below this folder without `.ron`",
+        ),
+        E::NoSuchStructField { outer, .. }
+        | E::MissingStructField { outer, .. }
+        | E::DuplicateStructField { outer, .. } => {
+            let message = match outer.as_deref() {
+                Some("Suite") => diagnostic.message.replace(" in `Suite`", " at the top level"),
+                Some("Tolerance") => diagnostic.message.replace(" in `Tolerance`", " in the limits"),
+                _ => diagnostic.message.clone(),
+            };
+            diagnostic.message = message;
+            return diagnostic;
+        }
+        _ => return diagnostic,
+    };
+    diagnostic.message = message;
+    diagnostic.hints = vec![hint.to_owned()];
+    diagnostic
 }
 
 /// Checks on a parsed config, pointing each problem at its place in the text.
@@ -323,6 +381,13 @@ mod tests {
     #[test]
     fn an_empty_config_and_named_structs_are_fine() {
         assert_eq!(load("()").expect("empty").scenes, []);
+        for empty in ["", " \n\t", "// nothing yet\n/* later */"] {
+            let config = load(empty).unwrap_or_else(|e| panic!("{empty:?}: {e}"));
+            assert_eq!(
+                (config.tolerance, config.scenes),
+                (ToleranceOverride::default(), vec![])
+            );
+        }
         let config = load("Suite(tolerance: Tolerance(max_channel_difference: 1))").expect("named");
         assert_eq!(config.tolerance.max_channel_difference, Some(1));
     }
@@ -341,8 +406,6 @@ mod tests {
     #[test]
     fn syntax_errors_speak_of_the_config_not_of_internal_types() {
         for (text, expected) in [
-            ("", "the file is empty"),
-            ("// nothing yet\n", "the file holds only comments"),
             (
                 "{\"tolerance\": {}}",
                 "expected `(` at the start of a suite config",
@@ -362,6 +425,47 @@ mod tests {
                 !rendered.contains("Suite"),
                 "{text:?}: an internal type name in\n{rendered}"
             );
+        }
+    }
+
+    #[test]
+    fn shape_errors_say_what_the_file_may_hold_without_type_names() {
+        for (text, message, help) in [
+            (
+                "[]",
+                "expected `(` at the start of a suite config",
+                "every field may be left out",
+            ),
+            (
+                "(tolerance: 3)",
+                "expected limits, `(...)`",
+                "max_differing_share: 0.001",
+            ),
+            (
+                "(scenes: [])",
+                "expected the scenes' limits by name",
+                "scenes: { \"NAME\"",
+            ),
+            (
+                "(toleranc: ())",
+                "unknown field `toleranc` at the top level",
+                "`tolerance`",
+            ),
+            (
+                "(tolerance: (max: 1))",
+                "unknown field `max` in the limits",
+                "max_flip_mean",
+            ),
+            ("/* unclosed", "", ""),
+        ] {
+            let rendered = load(text).expect_err(text);
+            assert!(
+                rendered.contains(message) && rendered.contains(help),
+                "{text}:\n{rendered}"
+            );
+            for internal in ["Suite", "Tolerance", "struct"] {
+                assert!(!rendered.contains(internal), "{text}:\n{rendered}");
+            }
         }
     }
 

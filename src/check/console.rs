@@ -92,7 +92,7 @@ impl RunObserver for Console {
         let path = scene.path.display();
         match &result.status {
             SceneStatus::Passed(_) if self.print_passes => self.line(&format!("ok      {path}")),
-            SceneStatus::Passed(_) | SceneStatus::NotRun => {}
+            SceneStatus::Passed(_) | SceneStatus::NotRun(_) => {}
             SceneStatus::Failed(failure) => {
                 self.line(&format!("FAILED  {path}: {}", failure.describe(scene)))
             }

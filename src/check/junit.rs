@@ -4,7 +4,8 @@
 //! One `<testsuite>` per folder named on the command line, one `<testcase>` per scene that
 //! was selected (`name` = the scene name, `classname` = the suite folder, `file` = the scene
 //! file). A mismatch or missing reference is a `<failure>`, a scene that could not be
-//! rendered an `<error>` with its diagnostics, a scene `--fail-fast` did not run `<skipped>`.
+//! rendered an `<error>` with its diagnostics, a scene `--fail-fast` or Ctrl-C kept from running
+//! (or finishing) `<skipped>`.
 //! Shards write separate files with disjoint test cases, which CI systems merge as usual.
 //!
 //! Written by hand: the format is a few elements, and the only subtlety is escaping
@@ -86,18 +87,20 @@ fn write_test_case(xml: &mut String, scene: &SuiteScene, result: &SceneResult, s
             None,
             format!("blessed {}: {reason}", scene.reference.display()),
         ),
-        SceneStatus::NotRun => (
+        SceneStatus::NotRun(reason) => (
             "skipped",
-            Some("not run: --fail-fast stopped the run".to_owned()),
+            Some(format!("not run: {}", reason.describe())),
             String::new(),
         ),
         SceneStatus::Failed(failure) => {
             let message = failure.describe(scene);
+            // FLIP's limits matter only where FLIP was computed (`--flip`).
+            let flip = result.comparison().is_some_and(|c| c.flip.is_some());
             let body = format!(
-                "{message}\nscene: {}\nreference: {}\ntolerance: {:?}",
+                "{message}\nscene: {}\nreference: {}\ntolerance: {}",
                 scene.path.display(),
                 scene.reference.display(),
-                scene.tolerance
+                scene.tolerance.describe(flip)
             );
             ("failure", Some(message), body)
         }

@@ -12,6 +12,13 @@
 //!
 //! The pictures are written by the workers as scenes fail ([`crate::check::runner`]); this
 //! module writes only the page, atomically, once all results are in.
+//!
+//! A report holds one run: before the scenes run, [`remove_old_pictures`] removes what an
+//! earlier report wrote into `DIR/images/`, recognised by the names reports give their
+//! pictures ([`is_report_picture`]), so a folder shared with a person's own files keeps them.
+//! Rejected: removing `DIR/images/` whole (`--report .` or a shared folder would lose files
+//! lampshade never wrote); a manifest of written files (one more file to keep in step, and
+//! lost with an interrupted run, which is exactly when stale pictures would linger).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -26,6 +33,51 @@ use crate::output::{OutputError, write_atomically};
 
 /// The folder, inside the report folder, that holds the pictures.
 pub const PICTURE_FOLDER: &str = "images";
+
+/// The kinds of picture a report shows, as the last part of their file names.
+pub const PICTURE_KINDS: [&str; 4] = ["expected", "actual", "difference", "flip"];
+
+/// Whether `name` is a file name a report gives its pictures, `NNNN-NAME-KIND.png`
+/// (see [`crate::check::runner`]), or a temporary file of one being written.
+pub fn is_report_picture(name: &str) -> bool {
+    if name.starts_with(".lampshade-") && name.ends_with(".tmp") {
+        return true;
+    }
+    let Some(stem) = name.strip_suffix(".png") else {
+        return false;
+    };
+    // At least four digits: a suite of ten thousand scenes or more numbers with five.
+    let digits = stem.bytes().take_while(u8::is_ascii_digit).count();
+    let Some(rest) = stem[digits..].strip_prefix('-') else {
+        return false;
+    };
+    digits >= 4
+        && PICTURE_KINDS
+            .iter()
+            .any(|kind| rest.ends_with(&format!("-{kind}")))
+}
+
+/// Removes the pictures an earlier report left in `folder` (`DIR/images/`); other files stay.
+pub fn remove_old_pictures(folder: &Path) -> Result<(), OutputError> {
+    let io_error = |path: &Path, source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let entries = match std::fs::read_dir(folder) {
+        Ok(entries) => entries,
+        Err(error) if error.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(error) => return Err(io_error(folder, error)),
+    };
+    for entry in entries {
+        let entry = entry.map_err(|error| io_error(folder, error))?;
+        let is_ours = entry.file_name().to_str().is_some_and(is_report_picture)
+            && entry.file_type().is_ok_and(|kind| kind.is_file());
+        if is_ours {
+            std::fs::remove_file(entry.path()).map_err(|error| io_error(&entry.path(), error))?;
+        }
+    }
+    Ok(())
+}
 
 /// Writes `DIR/index.html`; the pictures are already in `DIR/images/`.
 pub fn write_report(folder: &Path, html: &str) -> Result<(), OutputError> {
@@ -72,7 +124,7 @@ pub fn report_html(scenes: &[SuiteScene], results: &[SceneResult], summary: &str
             let (status, note) = match &result.status {
                 SceneStatus::Passed(_) => ("passed", String::new()),
                 SceneStatus::Blessed(reason) => ("blessed", format!(": {reason}")),
-                SceneStatus::NotRun => ("not run", String::new()),
+                SceneStatus::NotRun(reason) => ("not run", format!(": {}", reason.describe())),
                 // Problems are listed above.
                 SceneStatus::Failed(_) | SceneStatus::Errored(_) => continue,
             };
@@ -221,3 +273,33 @@ const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:
     .pictures{display:grid;grid-template-columns:repeat(auto-fill,minmax(260px,1fr));gap:.8em;margin-top:.8em}\
     figure{margin:0}figure img{width:100%;image-rendering:pixelated;background:#888;display:block}\
     figcaption{font-size:.9em;color:#555}";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_pictures_are_recognised_by_name() {
+        for ours in [
+            "0000-minimal-actual.png",
+            "0012-hard-large-image-expected.png",
+            "0003-a-difference.png",
+            "9999-x-y-flip.png",
+            "12345-many-actual.png",
+            ".lampshade-Ab12cd.tmp",
+        ] {
+            assert!(is_report_picture(ours), "{ours}");
+        }
+        for theirs in [
+            "notes.txt",
+            "actual.png",
+            "0001-actual.jpg",
+            "12-a-actual.png",
+            "0001-a-actual-2.png",
+            "0001_a-actual.png",
+            "index.html",
+        ] {
+            assert!(!is_report_picture(theirs), "{theirs}");
+        }
+    }
+}

@@ -15,6 +15,14 @@
 //! A panic while checking a scene (a bug in lampshade) is caught and becomes that scene's
 //! [`SceneError::Internal`]; the other scenes still run.
 //!
+//! Interruption ([`RunOptions::interrupted`], set by Ctrl-C): no scene starts after it, and
+//! [`run_scenes`] returns at once with the results it has, the rest [`SceneStatus::NotRun`],
+//! without waiting for the scenes under way (a render cannot be cancelled, and a big one would
+//! hold the report back for as long as it takes). So the scenes run on a detached thread that
+//! owns what it needs; the caller exits soon after, through
+//! [`crate::output::exit_when_no_write_is_in_progress`], so a picture being written is still
+//! renamed into place.
+//!
 //! Rejected: one process per scene (cannot share the thread pool, and pays start-up per
 //! scene); a pool of scene workers each rendering single-threaded (a suite with one big scene
 //! and many small ones would leave cores idle at the end).
@@ -23,7 +31,7 @@ use std::io::Write as _;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc;
+use std::sync::{Arc, mpsc};
 use std::time::{Duration, Instant};
 
 use image::RgbImage;
@@ -49,6 +57,8 @@ pub struct RunOptions {
     pub fail_fast: bool,
     /// `--sandbox` and `--max-memory`.
     pub load_options: LoadOptions,
+    /// Set by Ctrl-C: start no more scenes, and stop waiting for those under way.
+    pub interrupted: Arc<AtomicBool>,
 }
 
 /// Where one scene's time went.
@@ -106,8 +116,27 @@ pub enum SceneStatus {
     Blessed(String),
     /// The scene could not be checked.
     Errored(SceneError),
-    /// Skipped by `--fail-fast` after an earlier failure.
-    NotRun,
+    /// Not run, or not finished when the run was interrupted.
+    NotRun(StopReason),
+}
+
+/// Why a scene was not run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// `--fail-fast`, after an earlier failure.
+    FailFast,
+    /// Ctrl-C (or SIGTERM) before the scene finished.
+    Interrupted,
+}
+
+impl StopReason {
+    /// "--fail-fast stopped the run", for a sentence starting "not run: ".
+    pub fn describe(self) -> &'static str {
+        match self {
+            StopReason::FailFast => "--fail-fast stopped the run",
+            StopReason::Interrupted => "the run was interrupted (Ctrl-C)",
+        }
+    }
 }
 
 /// Why a scene that rendered does not pass.
@@ -162,7 +191,7 @@ impl Tally {
                 SceneStatus::Failed(_) => tally.failed += 1,
                 SceneStatus::Errored(_) => tally.errored += 1,
                 SceneStatus::Blessed(_) => tally.blessed += 1,
-                SceneStatus::NotRun => tally.not_run += 1,
+                SceneStatus::NotRun(_) => tally.not_run += 1,
             }
         }
         tally
@@ -450,59 +479,91 @@ pub trait RunObserver {
 }
 
 /// Checks every scene in `pool`, in parallel, and returns the results in `scenes` order.
+/// Returns early, without the scenes under way, once [`RunOptions::interrupted`] is set.
 pub fn run_scenes(
     scenes: &[SuiteScene],
     options: &RunOptions,
-    pool: &rayon::ThreadPool,
+    pool: &Arc<rayon::ThreadPool>,
     observer: &mut dyn RunObserver,
 ) -> Vec<SceneResult> {
-    let stop = AtomicBool::new(false);
+    let interrupted = Arc::clone(&options.interrupted);
     let (sender, receiver) = mpsc::channel::<(usize, SceneResult)>();
+    // The workers own their inputs, so that an interrupted run can return while they finish.
+    let worker = {
+        let scenes: Arc<[SuiteScene]> = scenes.into();
+        let options = options.clone();
+        let pool = Arc::clone(pool);
+        std::thread::spawn(move || pool.install(|| run_in_pool(&scenes, &options, sender)))
+    };
     let mut slots: Vec<Option<SceneResult>> = scenes.iter().map(|_| None).collect();
-    std::thread::scope(|scope| {
-        let stop = &stop;
-        scope.spawn(move || {
-            pool.install(|| {
-                scenes
-                    .par_iter()
-                    .enumerate()
-                    .for_each_with(sender, |sender, (index, scene)| {
-                        let result = if stop.load(Ordering::Relaxed) {
-                            SceneResult::new(SceneStatus::NotRun, PhaseTimes::default())
-                        } else {
-                            let result = check_scene_catching_panics(scene, index, options);
-                            if options.fail_fast && result.is_problem() {
-                                stop.store(true, Ordering::Relaxed);
-                            }
-                            result
-                        };
-                        // The receiver lives until every sender is gone.
-                        let _ = sender.send((index, result));
-                    });
-            });
-        });
-        let mut next_in_order = 0;
-        for (index, result) in receiver {
-            observer.scene_finished(&scenes[index], &result);
-            slots[index] = Some(result);
-            while let Some(Some(result)) = slots.get(next_in_order) {
-                observer.scene_in_order(&scenes[next_in_order], result);
-                next_in_order += 1;
+    let mut next_in_order = 0;
+    loop {
+        // A short timeout, so that Ctrl-C is noticed while a long scene runs.
+        let (index, result) = match receiver.recv_timeout(Duration::from_millis(50)) {
+            Ok(received) => received,
+            Err(mpsc::RecvTimeoutError::Timeout) if interrupted.load(Ordering::Relaxed) => break,
+            Err(mpsc::RecvTimeoutError::Timeout) => continue,
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                // Every result is in; the thread is ending, and a panic in it is reported as
+                // missing results below.
+                let _ = worker.join();
+                break;
             }
+        };
+        observer.scene_finished(&scenes[index], &result);
+        slots[index] = Some(result);
+        while let Some(Some(result)) = slots.get(next_in_order) {
+            observer.scene_in_order(&scenes[next_in_order], result);
+            next_in_order += 1;
         }
-    });
-    slots
+    }
+    let was_interrupted = interrupted.load(Ordering::Relaxed);
+    let results: Vec<SceneResult> = slots
         .into_iter()
-        .map(|slot| {
+        .map(|slot| match slot {
+            Some(result) => result,
+            None if was_interrupted => SceneResult::new(
+                SceneStatus::NotRun(StopReason::Interrupted),
+                PhaseTimes::default(),
+            ),
             // Every index is sent exactly once unless the worker thread itself died.
-            slot.unwrap_or_else(|| {
+            None => SceneResult::new(
+                SceneStatus::Errored(SceneError::Internal("the scene's worker stopped".to_owned())),
+                PhaseTimes::default(),
+            ),
+        })
+        .collect();
+    // Scenes that finished out of order behind one still under way are printed now.
+    for (scene, result) in scenes.iter().zip(&results).skip(next_in_order) {
+        observer.scene_in_order(scene, result);
+    }
+    results
+}
+
+/// The workers' side of [`run_scenes`]: every scene, in parallel, each result sent as it comes.
+fn run_in_pool(scenes: &[SuiteScene], options: &RunOptions, sender: mpsc::Sender<(usize, SceneResult)>) {
+    let failed = AtomicBool::new(false);
+    scenes
+        .par_iter()
+        .enumerate()
+        .for_each_with(sender, |sender, (index, scene)| {
+            let result = if options.interrupted.load(Ordering::Relaxed) {
                 SceneResult::new(
-                    SceneStatus::Errored(SceneError::Internal("the scene's worker stopped".to_owned())),
+                    SceneStatus::NotRun(StopReason::Interrupted),
                     PhaseTimes::default(),
                 )
-            })
-        })
-        .collect()
+            } else if failed.load(Ordering::Relaxed) {
+                SceneResult::new(SceneStatus::NotRun(StopReason::FailFast), PhaseTimes::default())
+            } else {
+                let result = check_scene_catching_panics(scene, index, options);
+                if options.fail_fast && result.is_problem() {
+                    failed.store(true, Ordering::Relaxed);
+                }
+                result
+            };
+            // After an interruption the receiver may be gone; the result is then not wanted.
+            let _ = sender.send((index, result));
+        });
 }
 
 fn check_scene_catching_panics(scene: &SuiteScene, index: usize, options: &RunOptions) -> SceneResult {

@@ -261,7 +261,7 @@ pub fn is_material_library(text: &[u8]) -> bool {
 }
 
 /// `text` after any leading whitespace, comments (`//`, nested `/* */`) and `#![...]`.
-fn skip_trivia(mut text: &[u8]) -> &[u8] {
+pub(crate) fn skip_trivia(mut text: &[u8]) -> &[u8] {
     loop {
         let start = text
             .iter()

@@ -721,7 +721,7 @@ struct Viewport {
 /// clip plane (so triangles that need no clipping reuse it instead of projecting their corners
 /// again).
 #[derive(Debug, Clone, Copy, Default)]
-struct ProjectedVertex {
+pub(crate) struct ProjectedVertex {
     clip: Vec4,
     /// Snapped to fixed point; meaningful only when `inside`.
     screen: SnappedVertex,

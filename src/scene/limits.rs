@@ -6,7 +6,9 @@
 //! file from its size before it is parsed, and the whole render (image, shadow maps, the
 //! transformed geometry of every object) once the meshes are known, before `render` runs.
 //! Byte counts come from the renderer's own types (`size_of`), so they follow the code; what
-//! they leave out is small and bounded (per-tile buffers, at most a few MiB per thread).
+//! they do not itemise (the allocator's rounding, per-tile buffers, loaders' temporaries) is
+//! covered by a share of the rest and a fixed amount for the process, so that the estimate is
+//! at least the process's real peak: `tests/memory.rs` measures it for scenes of each kind.
 //! A scene over the budget is a located error naming the biggest part and the flag that
 //! raises the budget, `--max-memory`.
 
@@ -14,8 +16,12 @@ use std::mem::size_of;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::render::geometry::FrameVertex;
+use std::sync::atomic::AtomicBool;
+
+use crate::render::TILE_SIZE;
+use crate::render::geometry::{FrameVertex, ProjectedVertex, TRIANGLE_CHUNK, VertexAttributes};
 use crate::render::raster::RasterTriangle;
+use crate::scene::{ImageSettings, Light, Object};
 
 /// How far from the origin objects may reach (world units, after their transforms). The
 /// renderer works in `f32` eye-relative coordinates and squares distances: at 10¹⁵ a square is
@@ -32,25 +38,47 @@ pub const MAX_WORLD_EXTENT: f64 = 1e15;
 pub const MAX_LIGHTING_VALUE: f64 = 1e6;
 
 /// The memory a render may need when `--max-memory` is not given: the largest image
-/// (16384 × 16384, 8 GiB) with a few million triangles, or some 30 million triangles at a
+/// (16384 × 16384, 4.75 GiB) with a few million triangles, or some 30 million triangles at a
 /// usual size. A scene above it is almost certainly a typo (an extra zero in a size or a
 /// segment count); one that means it raises the budget.
 pub const DEFAULT_MEMORY_BUDGET: u64 = 12 << 30;
 
-/// Bytes per image pixel: the tiles' colour and coverage, the stitched frame buffer (the same
-/// again), and the 8-bit image handed to the encoder with the encoder's own copy.
-pub const BYTES_PER_PIXEL: u64 = 2 * (size_of::<Vec3>() as u64 + 1) + 2 * 3;
+/// Bytes per image pixel: the frame buffer's colour and coverage, the 8-bit image handed to
+/// the encoder, and the encoder's filtered rows and output (at most the image again).
+pub const BYTES_PER_PIXEL: u64 = (size_of::<Vec3>() + size_of::<bool>() + 2 * 3) as u64;
 
 /// Bytes per vertex of a mesh: the mesh's arrays (positions, normals, UVs, second UVs,
-/// colours, tangents; the optional ones counted as present) and the renderer's transformed
-/// copy.
-pub const BYTES_PER_VERTEX: u64 =
-    (2 * size_of::<Vec3>() + 2 * size_of::<Vec2>() + 2 * size_of::<Vec4>() + size_of::<FrameVertex>()) as u64;
+/// colours, tangents; the optional ones counted as present) and what the renderer keeps per
+/// vertex for a frame: the transformed vertex, its colours lit per vertex (plain and for
+/// textures), its attributes, its projection, and whether a triangle uses it.
+pub const BYTES_PER_VERTEX: u64 = (2 * size_of::<Vec3>()
+    + 2 * size_of::<Vec2>()
+    + 2 * size_of::<Vec4>()
+    + size_of::<FrameVertex>()
+    + 2 * size_of::<Vec3>()
+    + size_of::<VertexAttributes>()
+    + size_of::<ProjectedVertex>()
+    + size_of::<AtomicBool>()) as u64;
 
-/// Bytes per triangle: the mesh's indices and material index, one raster triangle (clipping
-/// rarely makes more; it carries its frame triangle), and its entries in two tiles' bins.
+/// Bytes per triangle: the mesh's indices and material index, one raster triangle (a shadow
+/// map's depth frame culls nothing, so every triangle may have one; clipping rarely makes
+/// more; it carries its frame triangle), and its entries in two tiles' bins.
 pub const BYTES_PER_TRIANGLE: u64 =
     (size_of::<[u32; 3]>() + size_of::<u32>() + size_of::<RasterTriangle>() + 2 * size_of::<u32>()) as u64;
+
+/// Bytes per texel of the shadow map being rendered, besides its depth: every tile's
+/// visibility buffer (a depth and a triangle number per texel) is kept until the map is
+/// stitched from them.
+pub const BYTES_PER_SHADOW_TEXEL_RENDERED: u64 = (size_of::<f32>() + size_of::<u32>()) as u64;
+
+/// What the estimate does not itemise, as a share of what it does (one part in this many):
+/// the allocator's rounding and the memory it keeps, per-tile buffers, the mesh loaders'
+/// temporary arrays, clipped triangles. `tests/memory.rs` measures the peak of scenes of
+/// each kind against the estimate.
+pub const UNITEMISED_SHARE: u64 = 8;
+
+/// The process itself: code, thread stacks, the thread pool, small allocations.
+pub const PROCESS_BYTES: u64 = 48 << 20;
 
 /// Parsing a mesh file holds the text, the parser's arrays and the baked mesh at once: about
 /// this many bytes of memory per byte of file, at worst (an OBJ face line `f 1 2 3` is 8 bytes
@@ -63,6 +91,8 @@ pub struct MemoryEstimate {
     pub image: u64,
     pub shadow_maps: u64,
     pub geometry: u64,
+    /// The process, and what the parts above do not itemise ([`UNITEMISED_SHARE`]).
+    pub other: u64,
 }
 
 impl MemoryEstimate {
@@ -70,17 +100,73 @@ impl MemoryEstimate {
         self.image
             .saturating_add(self.shadow_maps)
             .saturating_add(self.geometry)
+            .saturating_add(self.other)
     }
 
-    /// "image 7.5 GiB, shadow maps 0 B, geometry 1.2 GiB".
+    /// "image 7.5 GiB, shadow maps 0 B, geometry 1.2 GiB, other 2.2 GiB".
     pub fn parts(&self) -> String {
         format!(
-            "image {}, shadow maps {}, geometry {}",
+            "image {}, shadow maps {}, geometry {}, other {}",
             human_bytes(self.image),
             human_bytes(self.shadow_maps),
-            human_bytes(self.geometry)
+            human_bytes(self.geometry),
+            human_bytes(self.other)
         )
     }
+}
+
+/// What rendering a scene of this image, these lights and these objects needs, at most.
+pub fn scene_memory(image: &ImageSettings, lights: &[Light], objects: &[Object]) -> MemoryEstimate {
+    let shadow_faces: Vec<(u32, bool)> = lights
+        .iter()
+        .filter_map(|light| Some((light.shadow()?.resolution, matches!(light, Light::Point { .. }))))
+        .collect();
+    // The largest face rendered, which is the side of its map (half of it for a cube's face).
+    let largest_face = shadow_faces
+        .iter()
+        .map(|&(resolution, cube)| if cube { resolution / 2 } else { resolution })
+        .max()
+        .unwrap_or(0);
+    let shadow_maps = shadow_faces
+        .iter()
+        .map(|&(resolution, cube)| shadow_map_bytes(resolution, cube))
+        .fold(0, u64::saturating_add)
+        .saturating_add(u64::from(largest_face).pow(2) * BYTES_PER_SHADOW_TEXEL_RENDERED);
+    let triangles: u64 = objects
+        .iter()
+        .map(|object| object.mesh.triangle_count() as u64)
+        .sum();
+    let geometry = objects
+        .iter()
+        .map(|object| {
+            mesh_bytes(
+                object.mesh.positions.len() as u64,
+                object.mesh.triangle_count() as u64,
+            )
+        })
+        .fold(0, u64::saturating_add)
+        .saturating_add(bin_bytes(
+            triangles,
+            image.width.max(largest_face),
+            image.height.max(largest_face),
+        ));
+    let mut estimate = MemoryEstimate {
+        image: image_bytes(image.width, image.height),
+        shadow_maps,
+        geometry,
+        other: 0,
+    };
+    estimate.other = PROCESS_BYTES.saturating_add(estimate.total() / UNITEMISED_SHARE);
+    estimate
+}
+
+/// The bins' tile tables: every chunk of the triangle stream has an offset per tile.
+pub fn bin_bytes(triangles: u64, width: u32, height: u32) -> u64 {
+    let tiles = u64::from(width.div_ceil(TILE_SIZE)) * u64::from(height.div_ceil(TILE_SIZE)) + 1;
+    let chunks = triangles.div_ceil(TRIANGLE_CHUNK as u64);
+    chunks
+        .saturating_mul(tiles)
+        .saturating_mul(size_of::<u32>() as u64)
 }
 
 /// Memory for the image itself (independent of the samples per pixel: samples live in

@@ -1575,26 +1575,7 @@ impl Loader<'_> {
 
     /// Refuses a scene whose render would need more memory than the budget, before it runs.
     fn check_memory(&mut self, image: ImageSettings, lights: &[Light], objects: &[Object], source: SourceId) {
-        let estimate = limits::MemoryEstimate {
-            image: limits::image_bytes(image.width, image.height),
-            shadow_maps: lights
-                .iter()
-                .filter_map(|light| {
-                    let settings = light.shadow()?;
-                    let cube = matches!(light, Light::Point { .. });
-                    Some(limits::shadow_map_bytes(settings.resolution, cube))
-                })
-                .sum(),
-            geometry: objects
-                .iter()
-                .map(|object| {
-                    limits::mesh_bytes(
-                        object.mesh.positions.len() as u64,
-                        object.mesh.triangle_count() as u64,
-                    )
-                })
-                .fold(0, u64::saturating_add),
-        };
+        let estimate = limits::scene_memory(&image, lights, objects);
         if estimate.total() <= self.memory_budget {
             return;
         }

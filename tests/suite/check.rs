@@ -301,6 +301,26 @@ fn junit_output_is_well_formed_with_the_right_counts() {
         .and_then(|n| n.text())
         .unwrap_or_default();
     assert!(error_text.contains("unknown material `<&>`"), "{error_text}");
+    // Failure texts are for people: the limits in words, no Rust `Debug` output.
+    let failure_text = document
+        .descendants()
+        .find(|n| n.has_tag_name("failure"))
+        .and_then(|n| n.text())
+        .unwrap_or_default();
+    assert!(
+        failure_text.contains("tolerance: a pixel differs when a channel is more than 2 levels off"),
+        "{failure_text}"
+    );
+    for failure in document.descendants().filter(|n| n.has_tag_name("failure")) {
+        let text = format!(
+            "{} {}",
+            failure.attribute("message").unwrap_or_default(),
+            failure.text().unwrap_or_default()
+        );
+        for debug in ["Tolerance", "{", "max_channel_difference", "Some("] {
+            assert!(!text.contains(debug), "`{debug}` in\n{text}");
+        }
+    }
 }
 
 #[test]
@@ -396,4 +416,191 @@ fn arguments_that_select_nothing_are_errors() {
     assert!(everything(&output).contains("no such file or folder"));
     let output = suite.check(&["--shard", "3/2"]);
     assert_eq!(output.status.code(), Some(2), "{}", everything(&output));
+}
+
+#[test]
+fn ctrl_c_reports_the_scenes_that_finished_and_exits_130() {
+    use std::io::BufRead as _;
+    // `a` is tiny; each slow scene takes a second or more, so the interrupt lands while the
+    // first of them runs (one worker: scenes start in suite order).
+    let slow = "(image: (width: 4000, height: 4000, samples: 16), objects: [(mesh: Sphere(segments: 400))])";
+    let suite = Suite::new(&[
+        ("a.ron", &sphere(RED)),
+        ("slow-1.ron", slow),
+        ("slow-2.ron", slow),
+        ("slow-3.ron", slow),
+    ]);
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lampshade"))
+        .args([
+            "check",
+            "suite",
+            "--jobs",
+            "1",
+            "--junit",
+            "out/results.xml",
+            "--report",
+            "report",
+        ])
+        .current_dir(suite.dir())
+        .env("NO_COLOR", "1")
+        .env("CI", "true")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the lampshade binary runs");
+    let mut lines = std::io::BufReader::new(child.stdout.take().expect("stdout")).lines();
+    let mut printed = String::new();
+    for line in lines.by_ref() {
+        let line = line.expect("a line");
+        printed.push_str(&line);
+        printed.push('\n');
+        if line.starts_with("FAILED  suite/a.ron") {
+            break;
+        }
+    }
+    assert!(printed.contains("suite/a.ron"), "{printed}");
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(killed.success());
+    for line in lines {
+        printed.push_str(&line.expect("a line"));
+        printed.push('\n');
+    }
+    let output = child.wait_with_output().expect("the run ends");
+    let errors = String::from_utf8_lossy(&output.stderr);
+    let text = format!("--- stdout\n{printed}--- stderr\n{errors}");
+    assert_eq!(output.status.code(), Some(130), "{text}");
+    assert!(
+        printed.contains("check: 0 passed, 1 failed, 0 errored, 3 not run (interrupted)"),
+        "{text}"
+    );
+    assert!(
+        errors.contains("interrupted: kept the results of the 1 scene that finished in the JUnit file"),
+        "{text}"
+    );
+
+    let xml = std::fs::read_to_string(suite.dir().join("out/results.xml")).expect("the JUnit file");
+    let document = roxmltree::Document::parse(&xml).unwrap_or_else(|e| panic!("{e}\n{xml}"));
+    let outcome = |name: &str| {
+        let case = document
+            .descendants()
+            .find(|n| n.has_tag_name("testcase") && n.attribute("name") == Some(name))
+            .unwrap_or_else(|| panic!("no test case {name} in\n{xml}"));
+        let element = case.children().find(|n| n.is_element()).expect("an outcome");
+        (
+            element.tag_name().name().to_owned(),
+            element.attribute("message").unwrap_or_default().to_owned(),
+        )
+    };
+    assert_eq!(outcome("a").0, "failure", "{xml}");
+    // The scene under way when Ctrl-C came was not waited for.
+    for name in ["slow-1", "slow-2", "slow-3"] {
+        let (element, message) = outcome(name);
+        assert_eq!(element, "skipped", "{xml}");
+        assert!(message.contains("interrupted"), "{xml}");
+    }
+    let html = std::fs::read_to_string(suite.dir().join("report/index.html")).expect("the report");
+    assert!(
+        html.contains("suite/a.ron") && html.contains("interrupted"),
+        "{html}"
+    );
+}
+
+#[test]
+fn a_report_holds_one_run_and_keeps_other_files() {
+    let suite = three_spheres();
+    suite.bless_all();
+    let images = suite.dir().join("report/images");
+    std::fs::create_dir_all(&images).expect("the images folder");
+    std::fs::write(images.join("notes.txt"), "mine").expect("a file of the user's");
+    let pictures = || -> BTreeSet<String> {
+        std::fs::read_dir(&images)
+            .expect("the images folder")
+            .map(|entry| {
+                entry
+                    .expect("an entry")
+                    .file_name()
+                    .to_string_lossy()
+                    .into_owned()
+            })
+            .collect()
+    };
+    let changed_scene = |name: &str| {
+        pictures()
+            .iter()
+            .filter(|file| file.ends_with("-actual.png"))
+            .map(|file| file.contains(&format!("-{name}-")))
+            .collect::<Vec<bool>>()
+    };
+
+    suite.write("c.ron", &sphere(GREEN));
+    let output = suite.check(&["--report", "report"]);
+    assert_eq!(output.status.code(), Some(1), "{}", everything(&output));
+    assert_eq!(changed_scene("c"), [true], "{:?}", pictures());
+
+    // The next run fails on b only: c's pictures are gone, the user's file stays.
+    suite.write("c.ron", &sphere(BLUE));
+    suite.write("b.ron", &sphere(RED));
+    let output = suite.check(&["--report", "report"]);
+    assert_eq!(output.status.code(), Some(1), "{}", everything(&output));
+    assert_eq!(changed_scene("b"), [true], "{:?}", pictures());
+    assert!(
+        pictures().iter().all(|file| !file.contains("-c-")),
+        "{:?}",
+        pictures()
+    );
+    assert!(pictures().contains("notes.txt"), "{:?}", pictures());
+
+    // A passing run leaves no pictures at all.
+    suite.write("b.ron", &sphere(GREEN));
+    let output = suite.check(&["--report", "report"]);
+    assert_eq!(output.status.code(), Some(0), "{}", everything(&output));
+    assert_eq!(pictures(), BTreeSet::from(["notes.txt".to_owned()]));
+}
+
+#[test]
+fn an_empty_suite_config_keeps_the_defaults_and_a_wrong_one_says_what_it_may_hold() {
+    let suite = three_spheres();
+    suite.bless_all();
+    for empty in ["", "\n  // nothing to change yet\n"] {
+        suite.write("lampshade-check.ron", empty);
+        let output = suite.check(&[]);
+        assert_eq!(output.status.code(), Some(0), "{}", everything(&output));
+    }
+    suite.write("lampshade-check.ron", "[]");
+    let output = suite.check(&[]);
+    let text = everything(&output);
+    assert_eq!(output.status.code(), Some(2), "{text}");
+    assert!(text.contains("lampshade-check.ron:1:1"), "{text}");
+    assert!(
+        text.contains("help: a `lampshade-check.ron` holds `(tolerance:"),
+        "{text}"
+    );
+    assert!(!text.contains("Suite") && !text.contains("struct"), "{text}");
+}
+
+#[test]
+fn the_bundled_suite_is_checked_exactly_with_its_subfolders() {
+    let scenes = lampshade::check::suite::discover(&[crate::repo().join("scenes")]).expect("the suite reads");
+    for folder in ["hard", "bench"] {
+        assert!(
+            scenes
+                .iter()
+                .any(|scene| scene.name.starts_with(&format!("{folder}/"))),
+            "scenes/{folder}/ is not part of the bundled suite"
+        );
+    }
+    for scene in scenes {
+        assert_eq!(
+            (
+                scene.tolerance.max_channel_difference,
+                scene.tolerance.max_differing_share
+            ),
+            (0, 0.0),
+            "{} is not checked exactly",
+            scene.path.display()
+        );
+    }
 }

@@ -31,12 +31,14 @@ pub fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Every `*.ron` file directly in `folder`, sorted.
+/// Every `*.ron` scene file directly in `folder`, sorted: a suite's `lampshade-check.ron` is
+/// not a scene.
 pub fn ron_files(folder: &Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(folder)
         .unwrap_or_else(|e| panic!("cannot list {}: {e}", folder.display()))
         .map(|entry| entry.unwrap().path())
         .filter(|path| path.extension().is_some_and(|e| e == "ron"))
+        .filter(|path| !path.ends_with(lampshade::check::config::CONFIG_FILE_NAME))
         .collect();
     files.sort();
     files

@@ -230,7 +230,7 @@ fn max_memory_takes_sizes_and_refuses_nonsense() {
             .output()
             .unwrap()
     };
-    // 2000 × 2000 pixels need about 122 MiB.
+    // 2000 × 2000 pixels need about 130 MiB.
     let refused = run("100M");
     assert_eq!(refused.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&refused.stderr).contains("more than the memory budget of 100.0 MiB"));
