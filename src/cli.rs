@@ -298,17 +298,10 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
     }
 }
 
-/// Ctrl-C (or SIGTERM) ends `render` with 130 at once, except that an output being written is
-/// finished and renamed first: no truncated image and no stray temporary file. (`watch` and
-/// `check` have their own handlers: the current render, the finished scenes' report.)
-fn exit_on_ctrl_c() {
-    if let Err(error) = ctrlc::set_handler(|| output::exit_when_no_write_is_in_progress(130)) {
-        errln!("warning: cannot catch Ctrl-C ({error}); an interrupted write may leave a temporary file");
-    }
-}
-
-/// `render`'s Ctrl-C: as [`exit_on_ctrl_c`], then one line saying which images were written and
-/// which was left as it was.
+/// `render`'s Ctrl-C (or SIGTERM): exit 130 at once, except that an output being written is
+/// finished and renamed first (no truncated image, no stray temporary file); then one line says
+/// which images were written and which was left as it was. (`watch` and `check` have their own
+/// handlers: the current render, the finished scenes' report.)
 fn exit_on_ctrl_c_after_render_line() {
     let handler = || {
         output::exit_after_writes(130, || {

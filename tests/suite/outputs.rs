@@ -144,10 +144,11 @@ fn the_format_follows_the_extension_and_contradictions_are_errors() {
     let folder = scene_with_inputs();
     let dir = folder.path();
     // (arguments, exit code, the file written and its first bytes)
+    type Case<'a> = (&'a str, i32, Option<(&'a str, &'a [u8])>);
     let png_magic: &[u8] = b"\x89PNG";
     let exr_magic: &[u8] = b"\x76\x2f\x31\x01";
     let hdr_magic: &[u8] = b"#?RADIANCE";
-    let cases: &[(&str, i32, Option<(&str, &[u8])>)] = &[
+    let cases: &[Case] = &[
         ("-o a.png", 0, Some(("a.png", png_magic))),
         ("-o b.EXR", 0, Some(("b.EXR", exr_magic))),
         ("-o c.hdr", 0, Some(("c.hdr", hdr_magic))),
