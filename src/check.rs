@@ -254,7 +254,38 @@ pub fn run(args: &CheckArgs) -> i32 {
     );
     let mut exit_code = exit_code(&results);
     let mut kept = Vec::new();
-    if let Some(file) = &args.junit {
+    // The JUnit file and the report never replace a scene or a file a scene read.
+    let inputs: Vec<&Path> = scenes
+        .iter()
+        .map(|scene| scene.path.as_path())
+        .chain(
+            results
+                .iter()
+                .flat_map(|result| result.inputs.iter().map(PathBuf::as_path)),
+        )
+        .collect();
+    let refuse_input = |output: &Path| -> bool {
+        match crate::output::overwritten_input(output, inputs.iter().copied()) {
+            Some(input) => {
+                errln!(
+                    "error: not writing `{}`: it is `{}`, a file the suite reads\n  = help: choose another path",
+                    output.display(),
+                    input.display()
+                );
+                true
+            }
+            None => false,
+        }
+    };
+    let junit_file = args.junit.as_ref().filter(|file| !refuse_input(file));
+    let report_folder = args
+        .report
+        .as_ref()
+        .filter(|folder| !refuse_input(&folder.join("index.html")));
+    if (args.junit.is_some() && junit_file.is_none()) || (args.report.is_some() && report_folder.is_none()) {
+        exit_code = exit_code.max(EXIT_BAD_INPUT);
+    }
+    if let Some(file) = junit_file {
         let title = match args.shard {
             Some(shard) => format!("lampshade check {} (shard {shard})", shown_paths.join(" ")),
             None => format!("lampshade check {}", shown_paths.join(" ")),
@@ -268,7 +299,7 @@ pub fn run(args: &CheckArgs) -> i32 {
             }
         }
     }
-    if let Some(folder) = &args.report {
+    if let Some(folder) = report_folder {
         let html = report::report_html(&scenes, &results, &summary);
         let index = folder.join("index.html");
         match report::write_report(folder, &html) {

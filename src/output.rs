@@ -37,11 +37,7 @@ pub enum OutputError {
         #[source]
         source: std::io::Error,
     },
-    #[error(
-        "not writing `{}`: it is `{}`, a file the scene reads (choose another output with -o)",
-        path.display(),
-        input.display()
-    )]
+    #[error("{}", would_replace_message(path, input))]
     WouldReplaceInput { path: PathBuf, input: PathBuf },
     #[error("cannot encode `{}`: {source}", path.display())]
     Encode {
@@ -49,6 +45,20 @@ pub enum OutputError {
         #[source]
         source: image::ImageError,
     },
+}
+
+/// "not writing `out.png`: the scene reads it", naming the input too when it is spelled
+/// differently (a symlink, `..`, a hard link).
+fn would_replace_message(path: &Path, input: &Path) -> String {
+    if path == input {
+        format!("not writing `{}`: the scene reads it", path.display())
+    } else {
+        format!(
+            "not writing `{}`: it is `{}`, a file the scene reads",
+            path.display(),
+            input.display()
+        )
+    }
 }
 
 /// One channel of linear light to an 8-bit level. `f32::max` returns the other operand when one

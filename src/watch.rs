@@ -348,6 +348,9 @@ impl WatchSession {
             }
             Ok(BuildOutcome::OutputFailed { error, files_read }) => {
                 errln!("error: {error}");
+                if matches!(error, OutputError::WouldReplaceInput { .. }) {
+                    errln!("  = help: rename the file the scene reads, or watch with another -o");
+                }
                 self.report_failure(trigger, "the image could not be written", None, || {
                     error.to_string()
                 });

@@ -105,6 +105,9 @@ pub struct SceneResult {
     pub pictures: Pictures,
     /// A report picture that could not be written (the run then exits with 2).
     pub picture_error: Option<String>,
+    /// Every file the scene's build read (empty when it did not load): nothing the run writes
+    /// may replace one of them.
+    pub inputs: Vec<PathBuf>,
 }
 
 #[derive(Debug)]
@@ -205,6 +208,7 @@ impl SceneResult {
             times,
             pictures: Pictures::default(),
             picture_error: None,
+            inputs: Vec::new(),
         }
     }
 
@@ -282,6 +286,7 @@ pub fn check_scene(scene: &SuiteScene, index: usize, options: &RunOptions) -> Sc
     };
     times.load = rendered.load_time;
     times.render = started.elapsed().saturating_sub(rendered.load_time);
+    let inputs = rendered.files_read.clone();
 
     let phase = Instant::now();
     let actual = to_rgb8(&rendered.framebuffer);
@@ -312,8 +317,9 @@ pub fn check_scene(scene: &SuiteScene, index: usize, options: &RunOptions) -> Sc
 
     let phase = Instant::now();
     if options.bless {
-        let mut result = bless(scene, &actual, compared, times);
+        let mut result = bless(scene, &actual, compared, times, &inputs);
         result.times.encode = phase.elapsed();
+        result.inputs = inputs;
         return result;
     }
     let status = match compared {
@@ -331,6 +337,7 @@ pub fn check_scene(scene: &SuiteScene, index: usize, options: &RunOptions) -> Sc
         Err(failure) => SceneStatus::Failed(failure),
     };
     let mut result = SceneResult::new(status, times);
+    result.inputs = inputs;
     if let (Some(folder), SceneStatus::Failed(_)) = (&options.pictures, &result.status) {
         let expected = reference.as_ref().ok();
         let difference = expected
@@ -356,7 +363,19 @@ fn bless(
     actual: &RgbImage,
     compared: Result<Comparison, Failure>,
     times: PhaseTimes,
+    inputs: &[PathBuf],
 ) -> SceneResult {
+    // A scene that reads its own reference (as a texture, say) must not have it replaced.
+    if let Some(input) = output::overwritten_input(&scene.reference, inputs.iter().map(PathBuf::as_path)) {
+        let error = OutputError::WouldReplaceInput {
+            path: scene.reference.clone(),
+            input: input.to_path_buf(),
+        };
+        return SceneResult::new(
+            SceneStatus::Errored(SceneError::WriteReference(error.to_string())),
+            times,
+        );
+    }
     let reason = match compared {
         Ok(comparison) if comparison.is_identical() => {
             return SceneResult::new(SceneStatus::Passed(comparison), times);

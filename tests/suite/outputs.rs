@@ -416,3 +416,42 @@ fn help_shows_examples_and_every_output_format() {
     let help = String::from_utf8_lossy(&lampshade(&["--help"], repo()).stdout).into_owned();
     assert!(help.contains("PNG, OpenEXR or Radiance HDR"), "{help}");
 }
+
+#[test]
+fn check_never_writes_its_junit_report_or_references_over_an_input() {
+    let folder = scene_with_inputs();
+    let dir = folder.path();
+    // A scene textured with its own reference image: `--bless` must not replace it.
+    std::fs::create_dir(dir.join("refs")).unwrap();
+    std::fs::copy(dir.join("textures/checker.png"), dir.join("refs/mirror.png")).unwrap();
+    std::fs::write(
+        dir.join("mirror.ron"),
+        r#"(image: (width: 32, height: 32), materials: { "m": (texture: "refs/mirror.png") },
+            objects: [(mesh: Sphere(), material: "m")])"#,
+    )
+    .unwrap();
+    let before = snapshot(dir);
+    let cases: &[&[&str]] = &[
+        &["check", ".", "--junit", "scene.ron"],
+        &["check", ".", "--junit", "textures/checker.png"],
+        &["check", ".", "--filter", "mirror", "--bless"],
+    ];
+    for &args in cases {
+        let result = lampshade(args, dir);
+        // The summary lines (a scene's error among them) go to stdout, other errors to stderr.
+        let message = stderr(&result) + &String::from_utf8_lossy(&result.stdout);
+        assert_eq!(result.status.code(), Some(2), "{args:?}: {message}");
+        assert!(
+            message.contains("a file the") || message.contains("the scene reads it"),
+            "{args:?}: {message}"
+        );
+        for (path, bytes) in &before {
+            assert_eq!(
+                &std::fs::read(path).unwrap(),
+                bytes,
+                "{args:?} changed {}",
+                path.display()
+            );
+        }
+    }
+}

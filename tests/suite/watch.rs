@@ -742,7 +742,12 @@ fn an_output_that_would_replace_an_input_or_is_not_a_png_is_refused() {
     wait_for(
         "the refusal",
         || watch.output(),
-        || watch.stderr().contains("a file the scene reads").then_some(()),
+        || {
+            watch
+                .stderr()
+                .contains("not writing `red.png`: the scene reads it")
+                .then_some(())
+        },
     );
     assert_eq!(
         std::fs::read(folder.file("red.png")).unwrap(),
