@@ -627,6 +627,8 @@ fn render_one(
 fn report_overwritten_input(output: &Path, input: &Path, scene: &Path) {
     let what = if output::overwritten_input(input, [scene]).is_some() {
         "the scene file itself".to_string()
+    } else if input == output {
+        format!("a file the scene `{}` reads", scene.display())
     } else {
         format!(
             "`{}`, a file the scene `{}` reads",
