@@ -43,7 +43,8 @@ use rayon::prelude::*;
 use crate::diag::Diagnostic;
 use crate::mesh::{Mesh, primitives};
 use crate::pipeline::RenderedScene;
-use crate::render::geometry::{CameraSetup, Viewer};
+use crate::render::frame::Viewer;
+use crate::render::geometry::CameraSetup;
 use crate::render::raster::SamplePattern;
 use crate::render::{FrameBuffer, RenderStats};
 use crate::scene::load::{LoadError, LoadOptions, load_scene};
@@ -340,7 +341,7 @@ impl ReferenceScene<'_> {
                 to_viewer.as_vec3(),
             );
             let (textured, rest) =
-                crate::render::geometry::select_component_split(None, surface.component, &terms);
+                crate::render::frame::select_component_split(None, surface.component, &terms);
             return Some((textured + rest).as_dvec3());
         }
         let terms = illuminate_exact(
@@ -375,7 +376,7 @@ impl ReferenceScene<'_> {
 }
 
 /// The terms an object shows, in `f64` (the same selection as
-/// `render::geometry::select_component_split`, which works in `f32`).
+/// `render::frame::select_component_split`, which works in `f32`).
 fn select_exact(component: LightingComponent, terms: &exact_lighting::ExactTerms) -> DVec3 {
     match component {
         LightingComponent::All => terms.emission + terms.ambient + terms.diffuse + terms.specular,

@@ -20,6 +20,7 @@
 
 pub mod bin;
 pub mod clip;
+pub mod frame;
 pub mod geometry;
 pub mod lanes;
 pub mod raster;
@@ -199,7 +200,7 @@ fn render_frame(
     spare: &mut geometry::SpareBuffers,
     framebuffer: &mut FrameBuffer,
     progress: &RenderProgress,
-) -> (RenderStats, geometry::Frame) {
+) -> (RenderStats, frame::Frame) {
     let started = Instant::now();
     progress.start_geometry();
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);

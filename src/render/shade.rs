@@ -18,9 +18,7 @@ use glam::{Vec3, Vec3A, Vec4};
 
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
-use crate::render::geometry::{
-    Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted,
-};
+use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
 use crate::render::lanes::{LANES, Mask, Vec3s};
 use crate::render::raster::{
     Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_steps_y,

@@ -16,7 +16,7 @@ use crate::lighting::{
     MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, attenuate, power_by_squaring, reflect, specular_power,
     whole_exponent,
 };
-use crate::render::geometry::{Frame, FrameTriangle, ObjectStyle, Viewer};
+use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::shade::renormalize_or_else;
 use crate::scene::{
@@ -520,7 +520,7 @@ pub(crate) mod tests {
             let mut frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
             for viewer in [
                 frame.viewer,
-                crate::render::geometry::Viewer::Infinite { to_viewer: Vec3::Z },
+                crate::render::frame::Viewer::Infinite { to_viewer: Vec3::Z },
             ] {
                 frame.viewer = viewer;
                 let style = &frame.objects[0];

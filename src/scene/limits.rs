@@ -19,7 +19,8 @@ use glam::{Vec2, Vec3, Vec4};
 use std::sync::atomic::AtomicBool;
 
 use crate::render::TILE_SIZE;
-use crate::render::geometry::{FrameVertex, ProjectedVertex, TRIANGLE_CHUNK, VertexAttributes};
+use crate::render::frame::{FrameVertex, VertexAttributes};
+use crate::render::geometry::{ProjectedVertex, TRIANGLE_CHUNK};
 use crate::render::raster::RasterTriangle;
 use crate::scene::{ImageSettings, Light, Object};
 
