@@ -25,8 +25,9 @@ use std::sync::Arc;
 use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
 use rayon::prelude::*;
 
+use crate::render::TILE_SIZE;
 use crate::render::geometry::{CameraSetup, build_depth_frame};
-use crate::render::raster::{SamplePattern, rasterize_tile};
+use crate::render::raster::{SamplePattern, Visibility};
 use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
 
 /// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
@@ -213,19 +214,28 @@ fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32) -> Vec<(C
 fn render_face(scene: &Scene, camera: &Camera, size: u32, frame_eye: DVec3) -> ShadowFace {
     let frame = build_depth_frame(scene, camera, size);
     let grid = frame.tiles;
-    let tiles: Vec<_> = (0..grid.count())
-        .into_par_iter()
-        .map(|index| rasterize_tile(grid.rect(index), SamplePattern::SINGLE, &frame.raster, index))
-        .collect();
-    let mut depth = vec![f32::NEG_INFINITY; size as usize * size as usize];
-    for (index, tile) in tiles.iter().enumerate() {
-        let rect = grid.rect(index);
-        let width = rect.width() as usize;
-        for row in 0..rect.height() as usize {
-            let start = (rect.y0 as usize + row) * size as usize + rect.x0 as usize;
-            depth[start..start + width].copy_from_slice(&tile.depth[row * width..(row + 1) * width]);
-        }
-    }
+    // As the image's tiles are: bands of tile rows in parallel, each band's tiles in order
+    // through one visibility buffer, each tile's depths copied straight into the band's rows. No
+    // tile's buffer outlives it, so rendering a map needs the map and a tile per thread.
+    let side = size as usize;
+    let mut depth = vec![f32::NEG_INFINITY; side * side];
+    depth
+        .par_chunks_mut(TILE_SIZE as usize * side)
+        .enumerate()
+        .for_each(|(tile_row, band)| {
+            let mut visibility = Visibility::new();
+            for column in 0..grid.columns as usize {
+                let index = tile_row * grid.columns as usize + column;
+                let rect = grid.rect(index);
+                visibility.rasterize(rect, SamplePattern::SINGLE, &frame.raster, index);
+                let width = rect.width() as usize;
+                for row in 0..rect.height() as usize {
+                    let start = row * side + rect.x0 as usize;
+                    band[start..start + width]
+                        .copy_from_slice(&visibility.depth[row * width..(row + 1) * width]);
+                }
+            }
+        });
     let setup = CameraSetup::new(camera, 1.0);
     let clip_from_frame = setup.clip_from_world * DMat4::from_translation(frame_eye - camera.eye);
     let (texel_size, perspective) = match camera.projection {

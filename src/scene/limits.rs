@@ -67,11 +67,6 @@ pub const BYTES_PER_VERTEX: u64 = (2 * size_of::<Vec3>()
 pub const BYTES_PER_TRIANGLE: u64 =
     (size_of::<[u32; 3]>() + size_of::<u32>() + size_of::<RasterTriangle>() + 2 * size_of::<u32>()) as u64;
 
-/// Bytes per texel of the shadow map being rendered, besides its depth: every tile's
-/// visibility buffer (a depth and a triangle number per texel) is kept until the map is
-/// stitched from them.
-pub const BYTES_PER_SHADOW_TEXEL_RENDERED: u64 = (size_of::<f32>() + size_of::<u32>()) as u64;
-
 /// What the estimate does not itemise, as a share of what it does (one part in this many):
 /// the allocator's rounding and the memory it keeps, per-tile buffers, the mesh loaders'
 /// temporary arrays, clipped triangles. `tests/memory.rs` measures the peak of scenes of
@@ -122,17 +117,19 @@ pub fn scene_memory(image: &ImageSettings, lights: &[Light], objects: &[Object])
         .iter()
         .filter_map(|light| Some((light.shadow()?.resolution, matches!(light, Light::Point { .. }))))
         .collect();
-    // The largest face rendered, which is the side of its map (half of it for a cube's face).
+    // The largest face rendered, which is the side of its map (half of it for a cube's face):
+    // its tile grid's bins count like the image's.
     let largest_face = shadow_faces
         .iter()
         .map(|&(resolution, cube)| if cube { resolution / 2 } else { resolution })
         .max()
         .unwrap_or(0);
+    // A map is rendered straight into its own depths, a tile per thread at a time (see
+    // `render::shadow`): the maps themselves are what they need.
     let shadow_maps = shadow_faces
         .iter()
         .map(|&(resolution, cube)| shadow_map_bytes(resolution, cube))
-        .fold(0, u64::saturating_add)
-        .saturating_add(u64::from(largest_face).pow(2) * BYTES_PER_SHADOW_TEXEL_RENDERED);
+        .fold(0, u64::saturating_add);
     let triangles: u64 = objects
         .iter()
         .map(|object| object.mesh.triangle_count() as u64)
