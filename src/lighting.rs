@@ -268,8 +268,9 @@ pub fn power_by_squaring<T: Copy + std::ops::Mul<Output = T>>(base: T, one: T, e
 }
 
 /// The unit direction towards `light` from `position` and the light's strength there
-/// (attenuation × spot factor), or `None` when the light has no direction at that point.
-fn incidence(light: &ShadingLight, position: Vec3) -> Option<(Vec3, f32)> {
+/// (spot factor × attenuation), or `None` when the light has no direction at that point. The
+/// fast lighting's one-point form calls it too; its lanes repeat it operation for operation.
+pub fn incidence(light: &ShadingLight, position: Vec3) -> Option<(Vec3, f32)> {
     match light.kind {
         ShadingLightKind::Directional { to_light } => Some((to_light, 1.0)),
         ShadingLightKind::Point {

@@ -425,15 +425,24 @@ impl Vec3s {
     }
 }
 
-/// `-v`: a sign flip, so `-0.0` stays distinct from `0.0 - 0.0` as in the scalar code.
+/// `-a`: a sign flip, so `-0.0` stays distinct from `0.0 - 0.0` as in the scalar code.
+impl Neg for Floats {
+    type Output = Floats;
+    #[inline(always)]
+    fn neg(self) -> Floats {
+        Floats(self.0.map(|a| -a))
+    }
+}
+
+/// `-v`: each component's sign flipped (see `Floats`' `-`).
 impl Neg for Vec3s {
     type Output = Vec3s;
     #[inline(always)]
     fn neg(self) -> Vec3s {
         Vec3s {
-            x: Floats(self.x.0.map(|a| -a)),
-            y: Floats(self.y.0.map(|a| -a)),
-            z: Floats(self.z.0.map(|a| -a)),
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
         }
     }
 }
@@ -509,6 +518,7 @@ mod tests {
         let divided = la.divide(lb.length()).to_array();
         let combined = (la + lb * la - lb).to_array();
         let negated = (-la).to_array();
+        let negated_dots = -la.dot(lb);
         let matrix = Mat3::from_cols(a[0], a[7], b[3]);
         let transformed = lb.transformed_by(matrix).to_array();
         for i in 0..LANES {
@@ -528,6 +538,11 @@ mod tests {
                 "arithmetic, lane {i}"
             );
             assert!(same_bits(negated[i], -a[i]), "negation, lane {i}");
+            assert_eq!(
+                negated_dots.0[i].to_bits(),
+                (-a[i].dot(b[i])).to_bits(),
+                "negated dot, lane {i}"
+            );
             assert!(same_bits(transformed[i], matrix * b[i]), "transform, lane {i}");
         }
     }

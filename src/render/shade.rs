@@ -871,10 +871,14 @@ mod tests {
     use crate::scene::{BackFaces, LightingModel};
 
     /// Every visible pixel, shaded by the per-run shaders and by the general `shade_sample`:
-    /// the same bits, for each shading mode and back-face mode.
+    /// the same bits, for each shading mode, back-face mode and light set.
     #[test]
     fn triangle_shaders_equal_the_general_path_bit_for_bit() {
-        for shading in [Shading::Constant, Shading::Flat, Shading::Gouraud, Shading::Phong] {
+        let modes = [Shading::Constant, Shading::Flat, Shading::Gouraud, Shading::Phong];
+        for (shading, lights) in modes
+            .into_iter()
+            .flat_map(|m| shade_fast::tests::LIGHTS.map(|l| (m, l)))
+        {
             for (back_faces, view) in [
                 (BackFaces::ReverseLit, None),
                 (BackFaces::Lit, None),
@@ -883,7 +887,7 @@ mod tests {
                 (BackFaces::Cull, Some(DebugView::Diffuse)),
             ] {
                 let mut scene =
-                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces);
+                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces, lights);
                 scene.override_shading(shading);
                 // Cut the spheres open so that back faces are seen too.
                 scene.camera.projection = crate::scene::Projection::Perspective {
@@ -891,7 +895,7 @@ mod tests {
                     near: 4.9,
                     far: 100.0,
                 };
-                let frame = build_frame(&scene, SamplePattern::SINGLE, view, vec![None, None]);
+                let frame = build_frame(&scene, SamplePattern::SINGLE, view, vec![None; 3]);
                 let phong_allowed = FastPhong::frame_allows(&frame);
                 let new_caches = || TileCaches {
                     flat: TriangleColorCache::new(),
@@ -937,7 +941,10 @@ mod tests {
                             TriangleShader::Phong(fast) => fast.shade(source_weights(raster, &corners, at)),
                             TriangleShader::General => continue,
                         };
-                        assert_eq!(run, general, "{shading:?} {back_faces:?} {view:?} at {px}, {py}");
+                        assert_eq!(
+                            run, general,
+                            "{shading:?} {back_faces:?} {view:?} {lights:?} at {px}, {py}"
+                        );
                         shaded += 1;
                         back_seen += usize::from(raster.back_facing);
                     }
@@ -945,7 +952,7 @@ mod tests {
                 if view.is_some() {
                     continue;
                 }
-                assert!(shaded > 100, "{shading:?}: {shaded} pixels compared");
+                assert!(shaded > 100, "{shading:?} {lights:?}: {shaded} pixels compared");
                 if shading == Shading::Flat && back_faces != BackFaces::Unlit {
                     assert!(
                         flat_lit > 100,
@@ -981,9 +988,12 @@ mod tests {
             (Flat, Flat),
         ];
         for (first, second) in modes {
-            for back_faces in [BackFaces::ReverseLit, BackFaces::Lit] {
+            for (back_faces, lights) in [BackFaces::ReverseLit, BackFaces::Lit]
+                .into_iter()
+                .flat_map(|b| shade_fast::tests::LIGHTS.map(|l| (b, l)))
+            {
                 let mut scene =
-                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces);
+                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces, lights);
                 scene.objects[0].shading = first;
                 scene.objects[1].shading = second;
                 scene.image.width = 260;
@@ -996,7 +1006,7 @@ mod tests {
                     far: 100.0,
                 };
                 let background = scene.image.background;
-                let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+                let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
                 let width = scene.image.width as usize;
                 let mut caches = TileCaches {
                     flat: TriangleColorCache::new(),
@@ -1036,7 +1046,7 @@ mod tests {
                         assert_eq!(
                             bits(color[offset]),
                             bits(expected),
-                            "{first:?}/{second:?} {back_faces:?} at {px}, {py}: {} against {expected}",
+                            "{first:?}/{second:?} {back_faces:?} {lights:?} at {px}, {py}: {} against {expected}",
                             color[offset]
                         );
                         assert_eq!(covered[offset], id != NO_TRIANGLE);

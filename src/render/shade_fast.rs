@@ -9,11 +9,32 @@
 //! The arithmetic is the general path's (`lighting::illuminate_with_visibility` followed by the
 //! split of `Frame::light_material`), operation for operation and in the same order, so a pixel
 //! has the same bits whichever path shaded it; a test holds the two together.
+//!
+//! Eight points are lit at once ([`FastLighting::light_lanes`]), each scalar step of
+//! `lighting::incidence` and `illuminate_with_visibility` becoming the same IEEE operation on
+//! every lane (`render::lanes`), and each `continue` a mask:
+//!
+//! ```text
+//! directional  L = to_light                      strength = 1                  every lane
+//! point        d = |p_l − p|, L = (p_l − p)/d    strength = att(d)             where 0 < d < ∞
+//! spot         as point, c = −(L·D)              strength = spot(c)·att(d)     where 0 < d < ∞
+//!                                                                              and not c < cos cutoff
+//! att(d)  = 1 / max(k_c + d·(k_l + d·k_q), 1e−6)   the max as a select: NaN gives 1e−6, as f32::max
+//! spot(c) = max(c, 0)^e, spec = max(cos, 0)^n      by squaring where the exponent is whole
+//!                                                  (`power_by_squaring`: the scalar multiplications
+//!                                                  in the scalar order), else `powf` lane by lane
+//! lit     = reaches ∧ ¬(N·L ≤ 0 ∨ strength ≤ 0)    outside the cone `incidence` gives strength 0,
+//!                                                  so "does not reach" turns the same lanes away
+//! ```
+//!
+//! `powf` has no lane-wise form with the scalar bits, so an exponent that is not a whole number
+//! up to `MAX_SQUARED_EXPONENT` (the OpenGL table's shininess 76.8, a spot exponent of 2.5) costs
+//! one call per lane that needs it.
 
 use glam::Vec3;
 
 use crate::lighting::{
-    MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, attenuate, power_by_squaring, reflect, specular_power,
+    MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, incidence, power_by_squaring, reflect, specular_power,
     whole_exponent,
 };
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer};
@@ -142,23 +163,27 @@ impl<'f> FastLighting<'f> {
                     position: light_position,
                     attenuation,
                 } => {
-                    let offset = Vec3s::splat(light_position) - position;
-                    let distance = offset.length();
-                    let reaches = distance.gt(Floats::splat(0.0)).and(distance.is_finite());
-                    // `attenuate`, lane-wise: `f32::max` against a positive constant is
-                    // "the denominator where it is larger", NaN giving the constant.
-                    let Attenuation {
-                        constant,
-                        linear,
-                        quadratic,
-                    } = attenuation;
-                    let denominator = Floats::splat(constant)
-                        + distance * (Floats::splat(linear) + distance * Floats::splat(quadratic));
-                    let least = Floats::splat(MIN_ATTENUATION_DENOMINATOR);
-                    let strength = Floats::splat(1.0) / denominator.gt(least).select(denominator, least);
-                    (offset.divide(distance), strength, reaches)
+                    let (to_light, distance, reaches) =
+                        direction_and_distance_lanes(light_position, position);
+                    (to_light, attenuate_lanes(attenuation, distance), reaches)
                 }
-                ShadingLightKind::Spot { .. } => unreachable!("spot lights take the general path"),
+                ShadingLightKind::Spot {
+                    position: light_position,
+                    axis,
+                    cos_cutoff,
+                    exponent,
+                    attenuation,
+                } => {
+                    let (to_light, distance, reaches) =
+                        direction_and_distance_lanes(light_position, position);
+                    let cos_angle = -to_light.dot(Vec3s::splat(axis));
+                    // Outside the cone `incidence` gives strength 0, which the `strength <= 0`
+                    // test below turns away: the lane does not reach. `cos_cutoff > cos_angle` is
+                    // `cos_angle < cos_cutoff`, false for NaN as there.
+                    let reaches = reaches.and(!Floats::splat(cos_cutoff).gt(cos_angle));
+                    let spot = specular_power_lanes(cos_angle, exponent, reaches);
+                    (to_light, spot * attenuate_lanes(attenuation, distance), reaches)
+                }
             };
             let n_dot_l = normal.dot(to_light);
             let unlit = n_dot_l.le(Floats::splat(0.0)).or(strength.le(Floats::splat(0.0)));
@@ -178,20 +203,7 @@ impl<'f> FastLighting<'f> {
                     reflected.dot(to_viewer)
                 };
                 let intensity = color.scale(strength);
-                let power = match whole_exponent(material.shininess) {
-                    // `specular_power`'s squaring, lane-wise.
-                    Some(exponent) => {
-                        power_by_squaring(cosine.max(Floats::splat(0.0)), Floats::splat(1.0), exponent)
-                    }
-                    // `powf` has no lane-wise form with the same bits: one call per lit lane.
-                    None => Floats(std::array::from_fn(|i| {
-                        if lit.lane(i) {
-                            specular_power(cosine.0[i], material.shininess)
-                        } else {
-                            0.0
-                        }
-                    })),
-                };
+                let power = specular_power_lanes(cosine, material.shininess, lit);
                 let added = specular + (Vec3s::splat(material.specular) * intensity).scale(power);
                 specular = lit.select3(added, specular);
             }
@@ -201,7 +213,8 @@ impl<'f> FastLighting<'f> {
 
     /// `illuminate_with_visibility` for a Phong or Blinn-Phong material without shadows, then
     /// `(ambient + diffuse) + (specular + emission)`. `SPECULAR` is [`Specular`] as a number so
-    /// each model gets its own loop.
+    /// each model gets its own loop. Each light's direction and strength (attenuation, spot
+    /// factor) come from the general path's own `incidence`.
     #[inline]
     fn light_model<const SPECULAR: u8>(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
         let material = self.material;
@@ -209,20 +222,8 @@ impl<'f> FastLighting<'f> {
         let mut diffuse = Vec3::ZERO;
         let mut specular = Vec3::ZERO;
         for light in &self.frame.lights {
-            let (to_light, strength) = match light.kind {
-                ShadingLightKind::Directional { to_light } => (to_light, 1.0),
-                ShadingLightKind::Point {
-                    position: light_position,
-                    attenuation,
-                } => {
-                    let offset = light_position - position;
-                    let distance = offset.length();
-                    if !(distance > 0.0 && distance.is_finite()) {
-                        continue;
-                    }
-                    (offset / distance, attenuate(attenuation, distance))
-                }
-                ShadingLightKind::Spot { .. } => unreachable!("spot lights take the general path"),
+            let Some((to_light, strength)) = incidence(light, position) else {
+                continue;
             };
             let n_dot_l = normal.dot(to_light);
             if n_dot_l <= 0.0 || strength <= 0.0 {
@@ -243,6 +244,50 @@ impl<'f> FastLighting<'f> {
             }
         }
         (ambient + diffuse) + (specular + material.emission)
+    }
+}
+
+/// `lighting::direction_and_distance` lane-wise, from the points `position` towards the light at
+/// `light_position`: the unit direction, the distance, and where the light has a direction
+/// (a distance above 0 and finite; elsewhere the direction is not used).
+#[inline(always)]
+fn direction_and_distance_lanes(light_position: Vec3, position: Vec3s) -> (Vec3s, Floats, Mask) {
+    let offset = Vec3s::splat(light_position) - position;
+    let distance = offset.length();
+    let reaches = distance.gt(Floats::splat(0.0)).and(distance.is_finite());
+    (offset.divide(distance), distance, reaches)
+}
+
+/// `lighting::attenuate` lane-wise. Its `f32::max` against a positive constant is "the
+/// denominator where it is larger", NaN giving the constant: a compare and a select.
+#[inline(always)]
+fn attenuate_lanes(attenuation: Attenuation, distance: Floats) -> Floats {
+    let Attenuation {
+        constant,
+        linear,
+        quadratic,
+    } = attenuation;
+    let denominator =
+        Floats::splat(constant) + distance * (Floats::splat(linear) + distance * Floats::splat(quadratic));
+    let least = Floats::splat(MIN_ATTENUATION_DENOMINATOR);
+    Floats::splat(1.0) / denominator.gt(least).select(denominator, least)
+}
+
+/// `lighting::specular_power(base, exponent)` lane-wise, for the shininess and the spot
+/// exponent: a whole exponent by the same squaring on every lane; another through `powf`, which
+/// has no lane-wise form with the same bits, called only for the lanes in `wanted` (the others
+/// are masked off by the caller and get 0).
+#[inline(always)]
+fn specular_power_lanes(base: Floats, exponent: f32, wanted: Mask) -> Floats {
+    match whole_exponent(exponent) {
+        Some(whole) => power_by_squaring(base.max(Floats::splat(0.0)), Floats::splat(1.0), whole),
+        None => Floats(std::array::from_fn(|i| {
+            if wanted.lane(i) {
+                specular_power(base.0[i], exponent)
+            } else {
+                0.0
+            }
+        })),
     }
 }
 
@@ -338,15 +383,12 @@ impl<'f> PhongBatch<'f> {
 
 impl<'f> FastPhong<'f> {
     /// Whether any triangle of `frame` may take the fast path: no debug view, no vertex
-    /// attributes (tints, texture coordinates), no shadows, no spot light. Asked once per tile.
+    /// attributes (tints, texture coordinates), no shadows. Every light kind is lit in lanes.
+    /// Asked once per tile.
     pub fn frame_allows(frame: &Frame) -> bool {
         frame.debug_view.is_none()
             && frame.vertex_attributes.is_empty()
             && frame.shadows.iter().all(Option::is_none)
-            && frame
-                .lights
-                .iter()
-                .all(|light| !matches!(light.kind, ShadingLightKind::Spot { .. }))
     }
 
     /// The fast path for `triangle` seen from the front or the back, or `None` when it needs the
@@ -403,6 +445,51 @@ pub(crate) mod tests {
         (LightingModel::Phong, Vec3::ZERO),
     ];
 
+    /// The light sets the fast path is held to the general path under.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    pub(crate) enum Lights {
+        /// A directional light and an attenuated point light.
+        DirectionalAndPoint,
+        /// A directional light and two attenuated spot lights, each with its cone's edge across
+        /// one sphere: one with a whole exponent (squared lane-wise), one with a fractional
+        /// exponent (`powf`).
+        DirectionalAndSpots,
+    }
+
+    pub(crate) const LIGHTS: [Lights; 2] = [Lights::DirectionalAndPoint, Lights::DirectionalAndSpots];
+
+    /// How many of `points` (position, side normal) each spot light of `frame` lights, and how
+    /// many its cone leaves dark though they face it, asserting both are at least `least`: a
+    /// comparison of the fast and general paths over those points then covers the inside of
+    /// each cone, its edge and its outside.
+    fn assert_cones_cross(frame: &Frame, points: &[(Vec3, Vec3)], least: usize) {
+        let spots = frame
+            .lights
+            .iter()
+            .filter(|light| matches!(light.kind, ShadingLightKind::Spot { .. }));
+        let mut count = 0;
+        for light in spots {
+            let (mut inside, mut outside) = (0, 0);
+            for &(position, normal) in points {
+                if let Some((to_light, strength)) = incidence(light, position)
+                    && normal.dot(to_light) > 0.0
+                {
+                    if strength > 0.0 {
+                        inside += 1;
+                    } else {
+                        outside += 1;
+                    }
+                }
+            }
+            assert!(
+                inside >= least && outside >= least,
+                "{light:?}: {inside} points lit, {outside} outside the cone"
+            );
+            count += 1;
+        }
+        assert_eq!(count, 2, "two spot lights");
+    }
+
     /// The frame triangles that reached the rasterizer, each once, in submission order.
     fn frame_triangles(frame: &Frame) -> Vec<FrameTriangle> {
         let mut seen = std::collections::HashSet::new();
@@ -413,7 +500,12 @@ pub(crate) mod tests {
             .collect()
     }
 
-    pub(crate) fn scene(model: LightingModel, specular: Vec3, back_faces: BackFaces) -> Scene {
+    pub(crate) fn scene(
+        model: LightingModel,
+        specular: Vec3,
+        back_faces: BackFaces,
+        lights: Lights,
+    ) -> Scene {
         let material = Material {
             ambient: Vec3::new(0.1, 0.05, 0.0),
             diffuse: Vec3::new(0.6, 0.3, 0.2),
@@ -458,31 +550,67 @@ pub(crate) mod tests {
                     color: Vec3::new(1.0, 0.9, 0.8),
                     shadow: None,
                 },
-                Light::Point {
-                    position: DVec3::new(1.0, -3.0, 2.0),
-                    color: Vec3::ONE,
+                match lights {
+                    Lights::DirectionalAndPoint => Light::Point {
+                        position: DVec3::new(1.0, -3.0, 2.0),
+                        color: Vec3::ONE,
+                        attenuation: Attenuation {
+                            constant: 1.0,
+                            linear: 0.1,
+                            quadratic: 0.05,
+                        },
+                        shadow: None,
+                    },
+                    // Aimed at the left sphere's front from the right, 4 units away: the
+                    // sphere spans 14° from the axis, the cone 9°.
+                    Lights::DirectionalAndSpots => Light::Spot {
+                        position: DVec3::new(1.0, -3.0, 2.0),
+                        direction: Vec3::new(-2.2, 3.0, -1.8).normalize(),
+                        color: Vec3::ONE,
+                        cutoff_degrees: 9.0,
+                        exponent: 2.0,
+                        attenuation: Attenuation {
+                            constant: 1.0,
+                            linear: 0.1,
+                            quadratic: 0.05,
+                        },
+                        shadow: None,
+                    },
+                },
+            ]
+            .into_iter()
+            .chain((lights == Lights::DirectionalAndSpots).then_some(
+                // At the right sphere from below and the left.
+                Light::Spot {
+                    position: DVec3::new(-0.5, -3.5, -1.0),
+                    direction: Vec3::new(1.7, 3.5, 1.3).normalize(),
+                    color: Vec3::new(0.9, 1.0, 0.7),
+                    cutoff_degrees: 10.0,
+                    exponent: 7.5,
                     attenuation: Attenuation {
-                        constant: 1.0,
-                        linear: 0.1,
-                        quadratic: 0.05,
+                        constant: 0.5,
+                        linear: 0.2,
+                        quadratic: 0.0,
                     },
                     shadow: None,
                 },
-            ],
+            ))
+            .collect(),
             objects: vec![object(-1.2), object(1.2)],
             textures: Vec::new(),
         }
     }
 
     /// Every visible pixel of the fast path's scenes against the general path (`Frame::light`
-    /// with the same interpolated normal), bit for bit.
+    /// with the same interpolated normal), bit for bit, per model and light set.
     #[test]
     fn fast_path_equals_the_general_lighting_bit_for_bit() {
-        for (model, specular) in MODELS {
+        for ((model, specular), lights) in MODELS.into_iter().flat_map(|m| LIGHTS.map(|l| (m, l))) {
             for back_faces in [BackFaces::ReverseLit, BackFaces::Lit] {
-                let scene = scene(model, specular, back_faces);
-                let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+                let scene = scene(model, specular, back_faces, lights);
+                let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
                 let mut checked = 0;
+                let mut points = Vec::new();
                 for triangle in &frame_triangles(&frame) {
                     for back_facing in [false, true] {
                         let fast = FastPhong::new(&frame, triangle, back_facing).expect("eligible");
@@ -497,12 +625,20 @@ pub(crate) mod tests {
                             let style = &frame.objects[triangle.object as usize];
                             let general =
                                 frame.light(triangle.material, style, position, normal, back_facing);
-                            assert_eq!(fast.shade(weights), general, "{model:?} {back_faces:?}");
+                            assert_eq!(
+                                fast.shade(weights),
+                                general,
+                                "{model:?} {back_faces:?} {lights:?}"
+                            );
+                            points.push((position, style.side_normal(normal, back_facing)));
                             checked += 1;
                         }
                     }
                 }
                 assert!(checked > 1000);
+                if lights == Lights::DirectionalAndSpots {
+                    assert_cones_cross(&frame, &points, 100);
+                }
             }
         }
     }
@@ -512,12 +648,13 @@ pub(crate) mod tests {
     #[test]
     fn lighting_eight_points_at_once_equals_lighting_each_bit_for_bit() {
         // A whole shininess is raised by squaring, lane-wise; another goes through `powf`.
-        for ((model, specular), shininess) in MODELS.into_iter().flat_map(|m| [(m, 17.0), (m, 17.5)]) {
-            let mut scene = scene(model, specular, BackFaces::ReverseLit);
+        let shininesses = MODELS.into_iter().flat_map(|m| [(m, 17.0), (m, 17.5)]);
+        for (((model, specular), shininess), lights) in shininesses.flat_map(|s| LIGHTS.map(|l| (s, l))) {
+            let mut scene = scene(model, specular, BackFaces::ReverseLit, lights);
             for object in &mut scene.objects {
                 object.material.as_mut().expect("a material").shininess = shininess;
             }
-            let mut frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+            let mut frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
             for viewer in [
                 frame.viewer,
                 crate::render::frame::Viewer::Infinite { to_viewer: Vec3::Z },
@@ -526,6 +663,7 @@ pub(crate) mod tests {
                 let style = &frame.objects[0];
                 let lighting = FastLighting::new(&frame, 0, style, Shading::Phong, false).expect("eligible");
                 let mut compared = 0;
+                let mut points = Vec::new();
                 for (group, vertices) in frame.vertices.chunks_exact(LANES).enumerate() {
                     let positions: [Vec3; LANES] = std::array::from_fn(|i| vertices[i].position);
                     let normals: [Vec3; LANES] = std::array::from_fn(|i| match (group + i) % 5 {
@@ -540,12 +678,16 @@ pub(crate) mod tests {
                         assert_eq!(
                             lit[i].to_array().map(f32::to_bits),
                             one.to_array().map(f32::to_bits),
-                            "{model:?}, point {i} of group {group}"
+                            "{model:?} {lights:?}, point {i} of group {group}"
                         );
+                        points.push((positions[i], normals[i]));
                         compared += 1;
                     }
                 }
                 assert!(compared > 500);
+                if lights == Lights::DirectionalAndSpots {
+                    assert_cones_cross(&frame, &points, 20);
+                }
             }
         }
     }
@@ -554,9 +696,10 @@ pub(crate) mod tests {
     /// normals that cancel out so the face normal stands in) against `FastPhong::shade`.
     #[test]
     fn phong_batches_equal_shading_each_pixel_bit_for_bit() {
-        for model in [LightingModel::Phong, LightingModel::BlinnPhong] {
-            let scene = scene(model, Vec3::splat(0.7), BackFaces::ReverseLit);
-            let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+        let models = [LightingModel::Phong, LightingModel::BlinnPhong];
+        for (model, lights) in models.into_iter().flat_map(|m| LIGHTS.map(|l| (m, l))) {
+            let scene = scene(model, Vec3::splat(0.7), BackFaces::ReverseLit, lights);
+            let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
             let weights = [
                 Vec3::new(0.2, 0.3, 0.5),
                 Vec3::splat(1.0 / 3.0),
@@ -583,7 +726,7 @@ pub(crate) mod tests {
             assert!(expected.len() > 20);
             for (i, want) in expected.iter().enumerate() {
                 let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-                assert_eq!(bits(colors[i]), bits(*want), "{model:?}, pixel {i}");
+                assert_eq!(bits(colors[i]), bits(*want), "{model:?} {lights:?}, pixel {i}");
             }
         }
     }
@@ -592,14 +735,15 @@ pub(crate) mod tests {
     /// `Frame::light_material`, bit for bit; and only vertices of rasterized triangles are lit.
     #[test]
     fn gouraud_vertices_lit_by_the_fast_path_equal_the_general_lighting_bit_for_bit() {
-        for (model, specular) in MODELS {
-            let mut scene = scene(model, specular, BackFaces::ReverseLit);
+        for ((model, specular), lights) in MODELS.into_iter().flat_map(|m| LIGHTS.map(|l| (m, l))) {
+            let mut scene = scene(model, specular, BackFaces::ReverseLit, lights);
             for object in &mut scene.objects {
                 object.shading = Shading::Gouraud;
             }
-            let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
+            let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
             assert!(FastPhong::frame_allows(&frame));
             let mut lit = 0;
+            let mut points = Vec::new();
             for triangle in &frame_triangles(&frame) {
                 for v in triangle.vertices {
                     let color = frame.vertex_colors[v as usize];
@@ -611,11 +755,15 @@ pub(crate) mod tests {
                     let material = &frame.materials[triangle.material as usize];
                     let (textured, rest) =
                         frame.light_material(material, style, vertex.position, vertex.normal, false);
-                    assert_eq!(color, textured + rest, "{model:?}");
+                    assert_eq!(color, textured + rest, "{model:?} {lights:?}");
+                    points.push((vertex.position, vertex.normal));
                     lit += 1;
                 }
             }
             assert!(lit > 1000, "{lit}");
+            if lights == Lights::DirectionalAndSpots {
+                assert_cones_cross(&frame, &points, 20);
+            }
             let unlit = frame.vertex_colors.iter().filter(|&&c| c == Vec3::ZERO).count();
             assert!(
                 unlit > frame.vertices.len() / 4,
@@ -626,7 +774,12 @@ pub(crate) mod tests {
 
     #[test]
     fn textures_slerp_and_debug_views_take_the_general_path() {
-        let mut scene = scene(LightingModel::Phong, Vec3::ONE, BackFaces::ReverseLit);
+        let mut scene = scene(
+            LightingModel::Phong,
+            Vec3::ONE,
+            BackFaces::ReverseLit,
+            Lights::DirectionalAndPoint,
+        );
         scene.objects[0].normal_interpolation = NormalInterpolation::Slerp;
         let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
         assert!(FastPhong::frame_allows(&frame));
