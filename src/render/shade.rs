@@ -867,7 +867,7 @@ pub fn slerp(n0: Vec3, n1: Vec3, t: f32) -> Vec3 {
 mod tests {
     use super::*;
     use crate::render::raster::{SamplePattern, rasterize_tile};
-    use crate::render::{DebugView, geometry::build_frame, shade_fast};
+    use crate::render::{DebugView, shade_fast};
     use crate::scene::{BackFaces, LightingModel};
 
     /// Every visible pixel, shaded by the per-run shaders and by the general `shade_sample`:
@@ -895,7 +895,7 @@ mod tests {
                     near: 4.9,
                     far: 100.0,
                 };
-                let frame = build_frame(&scene, SamplePattern::SINGLE, view, vec![None; 3]);
+                let frame = shade_fast::tests::frame_of(&scene, view);
                 let phong_allowed = FastPhong::frame_allows(&frame);
                 let new_caches = || TileCaches {
                     flat: TriangleColorCache::new(),
@@ -1006,7 +1006,7 @@ mod tests {
                     far: 100.0,
                 };
                 let background = scene.image.background;
-                let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
+                let frame = shade_fast::tests::frame_of(&scene, None);
                 let width = scene.image.width as usize;
                 let mut caches = TileCaches {
                     flat: TriangleColorCache::new(),

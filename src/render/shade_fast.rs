@@ -1,7 +1,7 @@
 //! The common case of per-pixel shading, without the general path's branches per pixel.
 //!
 //! Most pixels of most scenes are Phong-shaded (interpolated normals, lit per pixel) with a plain
-//! Phong or Blinn-Phong material, lights without shadows, and no texture. For those, everything
+//! Phong or Blinn-Phong material and no texture. For those, everything
 //! that does not change from pixel to pixel is decided once per triangle ([`FastPhong::new`]
 //! returns `None` for anything else, and the general path in `shade` handles it), and the
 //! lighting loop is specialised per light kind and model.
@@ -25,6 +25,9 @@
 //!                                                  in the scalar order), else `powf` lane by lane
 //! lit     = reaches ∧ ¬(N·L ≤ 0 ∨ strength ≤ 0)    outside the cone `incidence` gives strength 0,
 //!                                                  so "does not reach" turns the same lanes away
+//! shadow  strength ·= S(p, N, L), lit ∧= ¬(strength ≤ 0)   S the map's PCF visibility, asked
+//!                                                  (lane by lane, scalar) only where lit, as the
+//!                                                  general path asks only lights facing the point
 //! ```
 //!
 //! `powf` has no lane-wise form with the scalar bits, so an exponent that is not a whole number
@@ -154,7 +157,7 @@ impl<'f> FastLighting<'f> {
         let ambient = material.ambient * self.frame.ambient_light;
         let mut diffuse = Vec3s::splat(Vec3::ZERO);
         let mut specular = Vec3s::splat(Vec3::ZERO);
-        for light in &self.frame.lights {
+        for (index, light) in self.frame.lights.iter().enumerate() {
             let (to_light, strength, reaches) = match light.kind {
                 ShadingLightKind::Directional { to_light } => {
                     (Vec3s::splat(to_light), Floats::splat(1.0), Mask::ALL)
@@ -187,11 +190,32 @@ impl<'f> FastLighting<'f> {
             };
             let n_dot_l = normal.dot(to_light);
             let unlit = n_dot_l.le(Floats::splat(0.0)).or(strength.le(Floats::splat(0.0)));
-            let lit = reaches.and(!unlit);
+            let mut lit = reaches.and(!unlit);
             if !lit.any() {
                 continue;
             }
-            let strength = strength * Floats::splat(1.0);
+            // The shadow term: the map's visibility where the light reaches a lane, asked only
+            // there, as the general path asks it only for lights that face the surface; then
+            // its `strength <= 0` test, which turns away the lanes in full shadow.
+            let visibility = match self.frame.shadows.get(index) {
+                Some(Some(map)) => {
+                    let (positions, normals, directions) =
+                        (position.to_array(), normal.to_array(), to_light.to_array());
+                    Floats(std::array::from_fn(|lane| {
+                        if lit.lane(lane) {
+                            map.visibility(positions[lane], normals[lane], directions[lane])
+                        } else {
+                            1.0
+                        }
+                    }))
+                }
+                _ => Floats::splat(1.0),
+            };
+            let strength = strength * visibility;
+            lit = lit.and(!strength.le(Floats::splat(0.0)));
+            if !lit.any() {
+                continue;
+            }
             let color = Vec3s::splat(light.color);
             let irradiance = color.scale(strength).scale(n_dot_l);
             diffuse = lit.select3(diffuse + Vec3s::splat(material.diffuse) * irradiance, diffuse);
@@ -211,7 +235,7 @@ impl<'f> FastLighting<'f> {
         (Vec3s::splat(ambient) + diffuse) + (specular + Vec3s::splat(material.emission))
     }
 
-    /// `illuminate_with_visibility` for a Phong or Blinn-Phong material without shadows, then
+    /// `illuminate_with_visibility` for a Phong or Blinn-Phong material, then
     /// `(ambient + diffuse) + (specular + emission)`. `SPECULAR` is [`Specular`] as a number so
     /// each model gets its own loop. Each light's direction and strength (attenuation, spot
     /// factor) come from the general path's own `incidence`.
@@ -221,7 +245,7 @@ impl<'f> FastLighting<'f> {
         let ambient = material.ambient * self.frame.ambient_light;
         let mut diffuse = Vec3::ZERO;
         let mut specular = Vec3::ZERO;
-        for light in &self.frame.lights {
+        for (index, light) in self.frame.lights.iter().enumerate() {
             let Some((to_light, strength)) = incidence(light, position) else {
                 continue;
             };
@@ -229,8 +253,14 @@ impl<'f> FastLighting<'f> {
             if n_dot_l <= 0.0 || strength <= 0.0 {
                 continue;
             }
-            // The general path multiplies by the shadow visibility here, which is 1.
-            let strength = strength * 1.0;
+            let visibility = match self.frame.shadows.get(index) {
+                Some(Some(map)) => map.visibility(position, normal, to_light),
+                _ => 1.0,
+            };
+            let strength = strength * visibility;
+            if strength <= 0.0 {
+                continue;
+            }
             let irradiance = light.color * strength * n_dot_l;
             diffuse += material.diffuse * irradiance;
             if SPECULAR != 0 {
@@ -383,12 +413,11 @@ impl<'f> PhongBatch<'f> {
 
 impl<'f> FastPhong<'f> {
     /// Whether any triangle of `frame` may take the fast path: no debug view, no vertex
-    /// attributes (tints, texture coordinates), no shadows. Every light kind is lit in lanes.
+    /// attributes (tints, texture coordinates). Every light kind, shadowed or not, is lit in
+    /// lanes.
     /// Asked once per tile.
     pub fn frame_allows(frame: &Frame) -> bool {
-        frame.debug_view.is_none()
-            && frame.vertex_attributes.is_empty()
-            && frame.shadows.iter().all(Option::is_none)
+        frame.debug_view.is_none() && frame.vertex_attributes.is_empty()
     }
 
     /// The fast path for `triangle` seen from the front or the back, or `None` when it needs the
@@ -436,7 +465,9 @@ pub(crate) mod tests {
     use crate::mesh::primitives;
     use crate::render::raster::SamplePattern;
     use crate::render::{RenderOptions, geometry::build_frame, render};
-    use crate::scene::{Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene};
+    use crate::scene::{
+        Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene, ShadowSettings,
+    };
 
     /// The lightings the fast path specialises: Phong, Blinn-Phong, and no specular term.
     const MODELS: [(LightingModel, Vec3); 3] = [
@@ -454,9 +485,54 @@ pub(crate) mod tests {
         /// one sphere: one with a whole exponent (squared lane-wise), one with a fractional
         /// exponent (`powf`).
         DirectionalAndSpots,
+        /// A directional light and a spot light that both cast shadows (3×3 PCF), the right
+        /// sphere shadowing the left one's side for each: points in full shadow, on the
+        /// filtered edge and in light.
+        Shadowed,
     }
 
-    pub(crate) const LIGHTS: [Lights; 2] = [Lights::DirectionalAndPoint, Lights::DirectionalAndSpots];
+    pub(crate) const LIGHTS: [Lights; 3] = [
+        Lights::DirectionalAndPoint,
+        Lights::DirectionalAndSpots,
+        Lights::Shadowed,
+    ];
+
+    /// The frame of `scene` with its shadow maps, as `render` builds it.
+    pub(crate) fn frame_of(scene: &Scene, view: Option<crate::render::DebugView>) -> Frame {
+        let shadows = crate::render::shadow::render_shadow_maps(scene, scene.camera.eye);
+        build_frame(scene, SamplePattern::SINGLE, view, shadows)
+    }
+
+    /// How many of `points` (position, side normal) each shadow-casting light of `frame` leaves
+    /// in full shadow, in part (the filtered edge) and in full light among those facing it,
+    /// asserting the first and last are at least `least` and the edge (a thin band, so few of
+    /// the sampled points) at least `least / 4`: a comparison over those points then covers
+    /// every branch of the shadow term.
+    fn assert_shadows_cross(frame: &Frame, points: &[(Vec3, Vec3)], least: usize) {
+        let mut count = 0;
+        for (light, map) in frame.lights.iter().zip(&frame.shadows) {
+            let Some(map) = map else { continue };
+            let (mut dark, mut edge, mut lit) = (0, 0, 0);
+            for &(position, normal) in points {
+                if let Some((to_light, strength)) = incidence(light, position)
+                    && normal.dot(to_light) > 0.0
+                    && strength > 0.0
+                {
+                    match map.visibility(position, normal, to_light) {
+                        v if v <= 0.0 => dark += 1,
+                        v if v >= 1.0 => lit += 1,
+                        _ => edge += 1,
+                    }
+                }
+            }
+            assert!(
+                dark >= least && edge >= least / 4 && lit >= least,
+                "{light:?}: {dark} in shadow, {edge} on the edge, {lit} lit"
+            );
+            count += 1;
+        }
+        assert_eq!(count, 2, "two shadow-casting lights");
+    }
 
     /// How many of `points` (position, side normal) each spot light of `frame` lights, and how
     /// many its cone leaves dark though they face it, asserting both are at least `least`: a
@@ -499,6 +575,12 @@ pub(crate) mod tests {
             .map(|raster| raster.triangle)
             .collect()
     }
+
+    const SHADOW: ShadowSettings = ShadowSettings {
+        resolution: 512,
+        bias: 1.0,
+        filter_radius: 1,
+    };
 
     pub(crate) fn scene(
         model: LightingModel,
@@ -544,14 +626,14 @@ pub(crate) mod tests {
                 },
             },
             ambient_light: Vec3::splat(0.5),
-            lights: vec![
-                Light::Directional {
-                    direction: Vec3::new(-1.0, 1.0, -1.0).normalize(),
-                    color: Vec3::new(1.0, 0.9, 0.8),
-                    shadow: None,
-                },
-                match lights {
-                    Lights::DirectionalAndPoint => Light::Point {
+            lights: match lights {
+                Lights::DirectionalAndPoint => vec![
+                    Light::Directional {
+                        direction: Vec3::new(-1.0, 1.0, -1.0).normalize(),
+                        color: Vec3::new(1.0, 0.9, 0.8),
+                        shadow: None,
+                    },
+                    Light::Point {
                         position: DVec3::new(1.0, -3.0, 2.0),
                         color: Vec3::ONE,
                         attenuation: Attenuation {
@@ -561,9 +643,16 @@ pub(crate) mod tests {
                         },
                         shadow: None,
                     },
+                ],
+                Lights::DirectionalAndSpots => vec![
+                    Light::Directional {
+                        direction: Vec3::new(-1.0, 1.0, -1.0).normalize(),
+                        color: Vec3::new(1.0, 0.9, 0.8),
+                        shadow: None,
+                    },
                     // Aimed at the left sphere's front from the right, 4 units away: the
                     // sphere spans 14° from the axis, the cone 9°.
-                    Lights::DirectionalAndSpots => Light::Spot {
+                    Light::Spot {
                         position: DVec3::new(1.0, -3.0, 2.0),
                         direction: Vec3::new(-2.2, 3.0, -1.8).normalize(),
                         color: Vec3::ONE,
@@ -576,26 +665,44 @@ pub(crate) mod tests {
                         },
                         shadow: None,
                     },
-                },
-            ]
-            .into_iter()
-            .chain((lights == Lights::DirectionalAndSpots).then_some(
-                // At the right sphere from below and the left.
-                Light::Spot {
-                    position: DVec3::new(-0.5, -3.5, -1.0),
-                    direction: Vec3::new(1.7, 3.5, 1.3).normalize(),
-                    color: Vec3::new(0.9, 1.0, 0.7),
-                    cutoff_degrees: 10.0,
-                    exponent: 7.5,
-                    attenuation: Attenuation {
-                        constant: 0.5,
-                        linear: 0.2,
-                        quadratic: 0.0,
+                    // At the right sphere from below and the left.
+                    Light::Spot {
+                        position: DVec3::new(-0.5, -3.5, -1.0),
+                        direction: Vec3::new(1.7, 3.5, 1.3).normalize(),
+                        color: Vec3::new(0.9, 1.0, 0.7),
+                        cutoff_degrees: 10.0,
+                        exponent: 7.5,
+                        attenuation: Attenuation {
+                            constant: 0.5,
+                            linear: 0.2,
+                            quadratic: 0.0,
+                        },
+                        shadow: None,
                     },
-                    shadow: None,
-                },
-            ))
-            .collect(),
+                ],
+                Lights::Shadowed => vec![
+                    // From the right and a little above: the right sphere's shadow falls on
+                    // the left one's right side.
+                    Light::Directional {
+                        direction: Vec3::new(-1.0, 0.15, -0.25).normalize(),
+                        color: Vec3::new(1.0, 0.9, 0.8),
+                        shadow: Some(SHADOW),
+                    },
+                    Light::Spot {
+                        position: DVec3::new(4.0, -1.5, 0.8),
+                        direction: Vec3::new(-5.2, 1.5, -0.8).normalize(),
+                        color: Vec3::new(0.9, 1.0, 0.7),
+                        cutoff_degrees: 25.0,
+                        exponent: 2.0,
+                        attenuation: Attenuation {
+                            constant: 1.0,
+                            linear: 0.1,
+                            quadratic: 0.0,
+                        },
+                        shadow: Some(SHADOW),
+                    },
+                ],
+            },
             objects: vec![object(-1.2), object(1.2)],
             textures: Vec::new(),
         }
@@ -608,7 +715,7 @@ pub(crate) mod tests {
         for ((model, specular), lights) in MODELS.into_iter().flat_map(|m| LIGHTS.map(|l| (m, l))) {
             for back_faces in [BackFaces::ReverseLit, BackFaces::Lit] {
                 let scene = scene(model, specular, back_faces, lights);
-                let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
+                let frame = frame_of(&scene, None);
                 let mut checked = 0;
                 let mut points = Vec::new();
                 for triangle in &frame_triangles(&frame) {
@@ -636,6 +743,9 @@ pub(crate) mod tests {
                     }
                 }
                 assert!(checked > 1000);
+                if lights == Lights::Shadowed {
+                    assert_shadows_cross(&frame, &points, 20);
+                }
                 if lights == Lights::DirectionalAndSpots {
                     assert_cones_cross(&frame, &points, 100);
                 }
@@ -654,7 +764,7 @@ pub(crate) mod tests {
             for object in &mut scene.objects {
                 object.material.as_mut().expect("a material").shininess = shininess;
             }
-            let mut frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
+            let mut frame = frame_of(&scene, None);
             for viewer in [
                 frame.viewer,
                 crate::render::frame::Viewer::Infinite { to_viewer: Vec3::Z },
@@ -699,7 +809,7 @@ pub(crate) mod tests {
         let models = [LightingModel::Phong, LightingModel::BlinnPhong];
         for (model, lights) in models.into_iter().flat_map(|m| LIGHTS.map(|l| (m, l))) {
             let scene = scene(model, Vec3::splat(0.7), BackFaces::ReverseLit, lights);
-            let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
+            let frame = frame_of(&scene, None);
             let weights = [
                 Vec3::new(0.2, 0.3, 0.5),
                 Vec3::splat(1.0 / 3.0),
@@ -740,7 +850,7 @@ pub(crate) mod tests {
             for object in &mut scene.objects {
                 object.shading = Shading::Gouraud;
             }
-            let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 3]);
+            let frame = frame_of(&scene, None);
             assert!(FastPhong::frame_allows(&frame));
             let mut lit = 0;
             let mut points = Vec::new();
