@@ -106,17 +106,9 @@ impl ShadowFace {
         let x = (((ndc.x + 1.0) * 0.5 * self.size as f32) as i64).clamp(0, size - 1);
         let y = (((1.0 - ndc.y) * 0.5 * self.size as f32) as i64).clamp(0, size - 1);
         let radius = i64::from(settings.filter_radius);
-        let mut lit = 0u32;
-        let mut total = 0u32;
-        for dy in -radius..=radius {
-            for dx in -radius..=radius {
-                let (tx, ty) = ((x + dx).clamp(0, size - 1), (y + dy).clamp(0, size - 1));
-                let occluder = self.depth[(ty * size + tx) as usize];
-                lit += u32::from(occluder <= ndc.z);
-                total += 1;
-            }
-        }
-        lit as f32 / total as f32
+        let side = 2 * radius + 1;
+        let lit = lit_texels(&self.depth, size, x, y, radius, ndc.z);
+        lit as f32 / (side * side) as u32 as f32
     }
 }
 
@@ -144,6 +136,35 @@ pub fn render_shadow_maps(scene: &Scene, frame_eye: DVec3) -> Vec<Option<Arc<Sha
 /// Any unit vector not parallel to `forward`, for a camera's `up`.
 fn up_for(forward: DVec3) -> DVec3 {
     if forward.y.abs() < 0.9 { DVec3::Y } else { DVec3::Z }
+}
+
+/// How many texels of the (2r+1)² block centred on texel `(x, y)` of a `size`² map do not hold a
+/// surface nearer the light than `depth` (reversed Z: nearer is greater); texels beyond the
+/// border repeat the nearest edge texel.
+fn lit_texels(map: &[f32], size: i64, x: i64, y: i64, radius: i64, depth: f32) -> u32 {
+    if x >= radius && y >= radius && x + radius < size && y + radius < size {
+        // The whole block inside the map (nearly every lookup): its rows as slices, no clamping
+        // per texel. The count is the same integer either way.
+        let side = (2 * radius + 1) as usize;
+        (y - radius..=y + radius)
+            .map(|row| {
+                let start = (row * size + x - radius) as usize;
+                map[start..start + side]
+                    .iter()
+                    .filter(|&&occluder| occluder <= depth)
+                    .count() as u32
+            })
+            .sum()
+    } else {
+        let mut lit = 0u32;
+        for dy in -radius..=radius {
+            for dx in -radius..=radius {
+                let (tx, ty) = ((x + dx).clamp(0, size - 1), (y + dy).clamp(0, size - 1));
+                lit += u32::from(map[(ty * size + tx) as usize] <= depth);
+            }
+        }
+        lit
+    }
 }
 
 /// The cameras (and map sizes) a light's shadow map is rendered from.
@@ -253,5 +274,42 @@ fn render_face(scene: &Scene, camera: &Camera, size: u32, frame_eye: DVec3) -> S
         perspective,
         origin: (camera.eye - frame_eye).as_vec3(),
         forward: setup.forward.as_vec3(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The block count, inside the map by rows and at its border by clamping, equals the
+    /// definition (every texel of the block, clamped to the edge) at every texel of a small map,
+    /// for every radius and depth.
+    #[test]
+    fn lit_texels_counts_the_clamped_block_everywhere() {
+        let size = 9i64;
+        // Depths in a fixed pseudo-random pattern, with ties at the compared depths.
+        let map: Vec<f32> = (0..size * size)
+            .map(|i| ((i * 37 + 11) % 17) as f32 / 16.0)
+            .collect();
+        for radius in 0..=3 {
+            for y in 0..size {
+                for x in 0..size {
+                    for depth in [0.0, 0.25, 0.5, 0.8125, 1.0] {
+                        let mut expected = 0;
+                        for dy in -radius..=radius {
+                            for dx in -radius..=radius {
+                                let (tx, ty) = ((x + dx).clamp(0, size - 1), (y + dy).clamp(0, size - 1));
+                                expected += u32::from(map[(ty * size + tx) as usize] <= depth);
+                            }
+                        }
+                        assert_eq!(
+                            lit_texels(&map, size, x, y, radius, depth),
+                            expected,
+                            "x {x}, y {y}, radius {radius}, depth {depth}"
+                        );
+                    }
+                }
+            }
+        }
     }
 }
