@@ -15,7 +15,9 @@ The feature scenes (S1 with one feature: a spot light, 4x MSAA, a shadow map, a 
 plane; the anchor's FEATURES.md) get a table of their own with each one's cost over plain S1 in the
 same run ("x plain S1"), for both renderers: for every mode, thread count and repeat, plain S1 runs
 (both renderers) before and after the feature scenes of that mode, and each feature's ratio is its
-frame over the mean of those two S1 frames; the table gives the medians over the repeats.
+frame over the mean of those two S1 frames; the table gives the medians over the repeats. The
+scenes with the ground plane also get their ratio to `s1_ground` of the same repeat ("x ground"):
+the same geometry and pixels, so that is the cost of the spot light or the shadow map alone.
 llvmpipe has no shadows in flat and gouraud, so the shadow scenes run in phong and blinn only.
 `--scenes` selects rows by anchor name (comma-separated shell patterns; `features` stands for every
 feature scene), e.g. `--scenes features` or `--scenes s1_two_spheres,s1_spot`.
@@ -44,17 +46,18 @@ SCENES = [
 ]
 MODES = ["flat", "gouraud", "phong", "blinn"]
 SHADED = ["phong", "blinn"]
-# (anchor JSON stem, our scene file, modes): S1 with one feature each (anchor FEATURES.md);
-# llvmpipe's frames are in the anchor's out/features/.
+# (anchor JSON stem, our scene file, modes, the scene it adds one feature to when that is not plain
+# S1): S1 with one feature each (anchor FEATURES.md); llvmpipe's frames are in the anchor's
+# out/features/.
 FEATURE_SCENES = [
-    ("s1_spot", "scenes/bench/spot.ron", MODES),
-    ("s1_spot_ground", "scenes/bench/spot-ground.ron", MODES),
-    ("s1_msaa4", "scenes/bench/msaa4.ron", MODES),
-    ("s1_ground", "scenes/bench/ground.ron", MODES),
-    ("s1_shadow", "scenes/bench/shadow.ron", SHADED),
-    ("s1_shadow2", "scenes/bench/shadow2.ron", SHADED),
-    ("s1_shadow_noplane", "scenes/bench/shadow-noplane.ron", SHADED),
-    ("s1_textured", "scenes/bench/textured.ron", MODES),
+    ("s1_spot", "scenes/bench/spot.ron", MODES, None),
+    ("s1_spot_ground", "scenes/bench/spot-ground.ron", MODES, "s1_ground"),
+    ("s1_msaa4", "scenes/bench/msaa4.ron", MODES, None),
+    ("s1_ground", "scenes/bench/ground.ron", MODES, None),
+    ("s1_shadow", "scenes/bench/shadow.ron", SHADED, "s1_ground"),
+    ("s1_shadow2", "scenes/bench/shadow2.ron", SHADED, "s1_ground"),
+    ("s1_shadow_noplane", "scenes/bench/shadow-noplane.ron", SHADED, None),
+    ("s1_textured", "scenes/bench/textured.ron", MODES, None),
 ]
 PLAIN_S1 = ("s1_two_spheres", "scenes/bench/two-spheres.ron")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -138,8 +141,14 @@ def compare_features(args, work):
     features = [f for f in FEATURE_SCENES if selected(f[0], args.scenes)]
     if not features:
         return
-    # (stem, mode, threads) -> {"ours": [ms], "theirs": [ms], "ours_x": [ratio], "theirs_x": [ratio], "info": json}
+    # (stem, mode, threads) -> {"ours": [ms], "theirs": [ms], "ours_x": [ratio], "theirs_x": [ratio],
+    #                           "ours_base": [ratio], "theirs_base": [ratio], "info": json}
     results = {}
+    bases = {f[0]: f[3] for f in features}
+
+    def row_of(key, info):
+        return results.setdefault(key, {"ours": [], "theirs": [], "ours_x": [], "theirs_x": [],
+                                        "ours_base": [], "theirs_base": [], "info": info})
 
     def pair(stem, scene, mode, threads):
         theirs = glref_median(work, stem, mode, threads, args.frames)
@@ -153,26 +162,31 @@ def compare_features(args, work):
         for threads in args.threads:
             for _ in range(args.repeats):
                 before = pair(*PLAIN_S1, mode, threads)
-                measured = [(stem, pair(stem, scene, mode, threads)) for stem, scene, _ in group]
+                measured = {stem: pair(stem, scene, mode, threads) for stem, scene, _, _ in group}
                 after = pair(*PLAIN_S1, mode, threads)
                 ours_s1 = (before[0] + after[0]) / 2
                 theirs_s1 = (before[1] + after[1]) / 2
-                row = results.setdefault((PLAIN_S1[0], mode, threads), {"ours": [], "theirs": [], "ours_x": [],
-                                                                        "theirs_x": [], "info": before[2]})
+                row = row_of((PLAIN_S1[0], mode, threads), before[2])
                 row["ours"] += [before[0], after[0]]
                 row["theirs"] += [before[1], after[1]]
-                for stem, (ours, theirs, info) in measured:
-                    row = results.setdefault((stem, mode, threads), {"ours": [], "theirs": [], "ours_x": [],
-                                                                     "theirs_x": [], "info": info})
+                for stem, (ours, theirs, info) in measured.items():
+                    row = row_of((stem, mode, threads), info)
                     row["ours"].append(ours)
                     row["theirs"].append(theirs)
                     row["ours_x"].append(ours / ours_s1)
                     row["theirs_x"].append(theirs / theirs_s1)
+                    if bases[stem] in measured:
+                        row["ours_base"].append(ours / measured[bases[stem]][0])
+                        row["theirs_base"].append(theirs / measured[bases[stem]][1])
                     print(f"{stem} {mode} {threads}: ours {ours:.1f} ms (x{ours / ours_s1:.2f} S1), "
                           f"llvmpipe {theirs:.1f} ms (x{theirs / theirs_s1:.2f} S1)", file=sys.stderr)
     print("\n| scene | triangles | mode | threads | lampshade ms | llvmpipe ms | ratio | lampshade × plain S1 | "
-          "llvmpipe × plain S1 | mean abs diff | max abs diff | pixels > 2/255 |")
-    print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "llvmpipe × plain S1 | lampshade × ground | llvmpipe × ground | mean abs diff | max abs diff | "
+          "pixels > 2/255 |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+
+    def ratio(values, empty):
+        return f"{statistics.median(values):.2f}" if values else empty
     for stem in [PLAIN_S1[0]] + [f[0] for f in features]:
         for mode in MODES:
             for threads in args.threads:
@@ -180,10 +194,10 @@ def compare_features(args, work):
                 if row is None:
                     continue
                 ours, theirs = statistics.median(row["ours"]), statistics.median(row["theirs"])
-                ours_x = f"{statistics.median(row['ours_x']):.2f}" if row["ours_x"] else "1"
-                theirs_x = f"{statistics.median(row['theirs_x']):.2f}" if row["theirs_x"] else "1"
                 print(f"| {stem} | {row['info']['triangles']:,} | {mode} | {threads} | {ours:.1f} | {theirs:.1f} | "
-                      f"{ours / theirs:.2f} | {ours_x} | {theirs_x} | {image_columns(row['info'])} |")
+                      f"{ours / theirs:.2f} | {ratio(row['ours_x'], '1')} | {ratio(row['theirs_x'], '1')} | "
+                      f"{ratio(row['ours_base'], '–')} | {ratio(row['theirs_base'], '–')} | "
+                      f"{image_columns(row['info'])} |")
 
 
 def scaling(args):
