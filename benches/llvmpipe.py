@@ -60,6 +60,8 @@ FEATURE_SCENES = [
     ("s1_textured", "scenes/bench/textured.ron", MODES, None),
 ]
 PLAIN_S1 = ("s1_two_spheres", "scenes/bench/two-spheres.ron")
+# CPU used by other processes during each llvmpipe run's timed frames (glref's `foreign_cores`).
+FOREIGN_CORES = []
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LAMPSHADE = os.path.join(ROOT, "target", "release", "lampshade")
 
@@ -86,7 +88,9 @@ def glref_median(work, stem, mode, threads, frames):
          "--frames", str(frames), "--warmup", "3", "--out", out, "--json", result],
         check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     with open(result) as lines:
-        return json.loads(lines.readlines()[-1])["median_ms"]
+        line = json.loads(lines.readlines()[-1])
+    FOREIGN_CORES.append(line.get("foreign_cores", float("nan")))
+    return line["median_ms"]
 
 
 def lampshade_bench(scene, modes, threads, frames, extra=()):
@@ -145,6 +149,8 @@ def compare_features(args, work):
     #                           "ours_base": [ratio], "theirs_base": [ratio], "info": json}
     results = {}
     bases = {f[0]: f[3] for f in features}
+    load_before = os.getloadavg()[0]
+    del FOREIGN_CORES[:]
 
     def row_of(key, info):
         return results.setdefault(key, {"ours": [], "theirs": [], "ours_x": [], "theirs_x": [],
@@ -198,6 +204,9 @@ def compare_features(args, work):
                       f"{ours / theirs:.2f} | {ratio(row['ours_x'], '1')} | {ratio(row['theirs_x'], '1')} | "
                       f"{ratio(row['ours_base'], '–')} | {ratio(row['theirs_base'], '–')} | "
                       f"{image_columns(row['info'])} |")
+    print(f"\nLoad average (1 min) {load_before:.2f} before the feature runs, {os.getloadavg()[0]:.2f} after; "
+          f"other processes used a median of {statistics.median(FOREIGN_CORES):.2f} cores "
+          f"(max {max(FOREIGN_CORES):.2f}) during llvmpipe's timed frames ({len(FOREIGN_CORES)} runs).")
 
 
 def scaling(args):
