@@ -2,7 +2,7 @@
 """lampshade against Mesa's llvmpipe on the anchor scenes, run interleaved on this machine.
 
     python3 benches/llvmpipe.py --anchors ../shared/anchors/llvmpipe [--repeats 3] [--frames 10]
-                                [--threads 2,1] [--scaling] > report.md
+                                [--threads 2,1] [--scenes PATTERNS] [--scaling] > report.md
 
 For every anchor scene, shading mode and thread count it runs llvmpipe's own harness (`glref`,
 built from the anchor folder's sources into a temporary folder; its Debian packages come from the
@@ -11,12 +11,24 @@ so both see the same machine load, and reports the median of the per-run medians
 the image difference of our frame against llvmpipe's. With `--scaling` it also measures frame time
 against triangle count (10^3 ... 10^7) and resolution (480p ... 4K), and peak memory per triangle.
 
+The feature scenes (S1 with one feature: a spot light, 4x MSAA, a shadow map, a texture, a ground
+plane; the anchor's FEATURES.md) get a table of their own with each one's cost over plain S1 in the
+same run ("x plain S1"), for both renderers: for every mode, thread count and repeat, plain S1 runs
+(both renderers) before and after the feature scenes of that mode, and each feature's ratio is its
+frame over the mean of those two S1 frames; the table gives the medians over the repeats. The
+scenes with the ground plane also get their ratio to `s1_ground` of the same repeat ("x ground"):
+the same geometry and pixels, so that is the cost of the spot light or the shadow map alone.
+llvmpipe has no shadows in flat and gouraud, so the shadow scenes run in phong and blinn only.
+`--scenes` selects rows by anchor name (comma-separated shell patterns; `features` stands for every
+feature scene), e.g. `--scenes features` or `--scenes s1_two_spheres,s1_spot`.
+
 This is a benchmark: it prints figures and asserts nothing. Absolute times drift between runs on
 shared machines (the anchor README measured 1.05-1.4x); the ratios of interleaved runs are what to
 compare. Needs a release build: `cargo build --release`.
 """
 
 import argparse
+import fnmatch
 import json
 import os
 import shutil
@@ -33,6 +45,23 @@ SCENES = [
     ("s3_overdraw", "scenes/bench/overdraw.ron"),
 ]
 MODES = ["flat", "gouraud", "phong", "blinn"]
+SHADED = ["phong", "blinn"]
+# (anchor JSON stem, our scene file, modes, the scene it adds one feature to when that is not plain
+# S1): S1 with one feature each (anchor FEATURES.md); llvmpipe's frames are in the anchor's
+# out/features/.
+FEATURE_SCENES = [
+    ("s1_spot", "scenes/bench/spot.ron", MODES, None),
+    ("s1_spot_ground", "scenes/bench/spot-ground.ron", MODES, "s1_ground"),
+    ("s1_msaa4", "scenes/bench/msaa4.ron", MODES, None),
+    ("s1_ground", "scenes/bench/ground.ron", MODES, None),
+    ("s1_shadow", "scenes/bench/shadow.ron", SHADED, "s1_ground"),
+    ("s1_shadow2", "scenes/bench/shadow2.ron", SHADED, "s1_ground"),
+    ("s1_shadow_noplane", "scenes/bench/shadow-noplane.ron", SHADED, None),
+    ("s1_textured", "scenes/bench/textured.ron", MODES, None),
+]
+PLAIN_S1 = ("s1_two_spheres", "scenes/bench/two-spheres.ron")
+# CPU used by other processes during each llvmpipe run's timed frames (glref's `foreign_cores`).
+FOREIGN_CORES = []
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LAMPSHADE = os.path.join(ROOT, "target", "release", "lampshade")
 
@@ -59,7 +88,9 @@ def glref_median(work, stem, mode, threads, frames):
          "--frames", str(frames), "--warmup", "3", "--out", out, "--json", result],
         check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     with open(result) as lines:
-        return json.loads(lines.readlines()[-1])["median_ms"]
+        line = json.loads(lines.readlines()[-1])
+    FOREIGN_CORES.append(line.get("foreign_cores", float("nan")))
+    return line["median_ms"]
 
 
 def lampshade_bench(scene, modes, threads, frames, extra=()):
@@ -69,11 +100,18 @@ def lampshade_bench(scene, modes, threads, frames, extra=()):
     return [json.loads(line) for line in output.splitlines() if line.startswith("{")]
 
 
-def compare(args):
-    work = build_glref(args.anchors)
+def selected(stem, patterns):
+    return patterns is None or any(
+        (pattern == "features" and stem in {f[0] for f in FEATURE_SCENES}) or fnmatch.fnmatch(stem, pattern)
+        for pattern in patterns)
+
+
+def compare(args, work):
     out_dir = os.path.join(args.anchors, "out")
     rows = []
     for stem, scene in SCENES:
+        if not selected(stem, args.scenes):
+            continue
         for mode in MODES:
             for threads in args.threads:
                 ours, theirs, ours_json = [], [], None
@@ -86,15 +124,89 @@ def compare(args):
                              statistics.median(theirs)))
                 print(f"{stem} {mode} {threads}: ours {statistics.median(ours):.1f} ms, "
                       f"llvmpipe {statistics.median(theirs):.1f} ms", file=sys.stderr)
+    if not rows:
+        return
     print("| scene | triangles | mode | threads | lampshade ms | llvmpipe ms | ratio | "
           "mean abs diff | max abs diff | pixels > 2/255 |")
     print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|")
     for stem, info, mode, threads, ours, theirs in rows:
         print(f"| {stem} | {info['triangles']:,} | {mode} | {threads} | {ours:.1f} | {theirs:.1f} | "
-              f"{ours / theirs:.2f} | {info.get('llvmpipe_mean_abs', float('nan')):.3f} | "
-              f"{info.get('llvmpipe_max_abs', '?')} | "
-              f"{100 * info.get('llvmpipe_share_over_2', float('nan')):.2f}% |")
-    shutil.rmtree(work, ignore_errors=True)
+              f"{ours / theirs:.2f} | {image_columns(info)} |")
+
+
+def image_columns(info):
+    return (f"{info.get('llvmpipe_mean_abs', float('nan')):.3f} | {info.get('llvmpipe_max_abs', '?')} | "
+            f"{100 * info.get('llvmpipe_share_over_2', float('nan')):.2f}%")
+
+
+def compare_features(args, work):
+    """The feature scenes, each mode's group bracketed by plain S1 runs (module documentation)."""
+    out_dir = os.path.join(args.anchors, "out", "features")
+    features = [f for f in FEATURE_SCENES if selected(f[0], args.scenes)]
+    if not features:
+        return
+    # (stem, mode, threads) -> {"ours": [ms], "theirs": [ms], "ours_x": [ratio], "theirs_x": [ratio],
+    #                           "ours_base": [ratio], "theirs_base": [ratio], "info": json}
+    results = {}
+    bases = {f[0]: f[3] for f in features}
+    load_before = os.getloadavg()[0]
+    del FOREIGN_CORES[:]
+
+    def row_of(key, info):
+        return results.setdefault(key, {"ours": [], "theirs": [], "ours_x": [], "theirs_x": [],
+                                        "ours_base": [], "theirs_base": [], "info": info})
+
+    def pair(stem, scene, mode, threads):
+        theirs = glref_median(work, stem, mode, threads, args.frames)
+        info = lampshade_bench(scene, [mode], threads, args.frames, ["--anchors", out_dir])[0]
+        return info["median_ms"], theirs, info
+
+    for mode in MODES:
+        group = [f for f in features if mode in f[2]]
+        if not group:
+            continue
+        for threads in args.threads:
+            for _ in range(args.repeats):
+                before = pair(*PLAIN_S1, mode, threads)
+                measured = {stem: pair(stem, scene, mode, threads) for stem, scene, _, _ in group}
+                after = pair(*PLAIN_S1, mode, threads)
+                ours_s1 = (before[0] + after[0]) / 2
+                theirs_s1 = (before[1] + after[1]) / 2
+                row = row_of((PLAIN_S1[0], mode, threads), before[2])
+                row["ours"] += [before[0], after[0]]
+                row["theirs"] += [before[1], after[1]]
+                for stem, (ours, theirs, info) in measured.items():
+                    row = row_of((stem, mode, threads), info)
+                    row["ours"].append(ours)
+                    row["theirs"].append(theirs)
+                    row["ours_x"].append(ours / ours_s1)
+                    row["theirs_x"].append(theirs / theirs_s1)
+                    if bases[stem] in measured:
+                        row["ours_base"].append(ours / measured[bases[stem]][0])
+                        row["theirs_base"].append(theirs / measured[bases[stem]][1])
+                    print(f"{stem} {mode} {threads}: ours {ours:.1f} ms (x{ours / ours_s1:.2f} S1), "
+                          f"llvmpipe {theirs:.1f} ms (x{theirs / theirs_s1:.2f} S1)", file=sys.stderr)
+    print("\n| scene | triangles | mode | threads | lampshade ms | llvmpipe ms | ratio | lampshade × plain S1 | "
+          "llvmpipe × plain S1 | lampshade × ground | llvmpipe × ground | mean abs diff | max abs diff | "
+          "pixels > 2/255 |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+
+    def ratio(values, empty):
+        return f"{statistics.median(values):.2f}" if values else empty
+    for stem in [PLAIN_S1[0]] + [f[0] for f in features]:
+        for mode in MODES:
+            for threads in args.threads:
+                row = results.get((stem, mode, threads))
+                if row is None:
+                    continue
+                ours, theirs = statistics.median(row["ours"]), statistics.median(row["theirs"])
+                print(f"| {stem} | {row['info']['triangles']:,} | {mode} | {threads} | {ours:.1f} | {theirs:.1f} | "
+                      f"{ours / theirs:.2f} | {ratio(row['ours_x'], '1')} | {ratio(row['theirs_x'], '1')} | "
+                      f"{ratio(row['ours_base'], '–')} | {ratio(row['theirs_base'], '–')} | "
+                      f"{image_columns(row['info'])} |")
+    print(f"\nLoad average (1 min) {load_before:.2f} before the feature runs, {os.getloadavg()[0]:.2f} after; "
+          f"other processes used a median of {statistics.median(FOREIGN_CORES):.2f} cores "
+          f"(max {max(FOREIGN_CORES):.2f}) during llvmpipe's timed frames ({len(FOREIGN_CORES)} runs).")
 
 
 def scaling(args):
@@ -134,13 +246,19 @@ def main():
     parser.add_argument("--threads", default="2,1", help="comma-separated thread counts")
     parser.add_argument("--scaling", action="store_true", help="also the triangle-count and resolution sweeps")
     parser.add_argument("--no-compare", action="store_true", help="skip the llvmpipe comparison")
+    parser.add_argument("--scenes", help="comma-separated anchor names or shell patterns to compare "
+                        "(`features`: every feature scene); default: all")
     args = parser.parse_args()
     args.threads = [int(t) for t in args.threads.split(",")]
+    args.scenes = args.scenes.split(",") if args.scenes else None
     args.anchors = os.path.abspath(args.anchors)
     if not os.path.exists(LAMPSHADE):
         sys.exit("build lampshade first: cargo build --release")
     if not args.no_compare:
-        compare(args)
+        work = build_glref(args.anchors)
+        compare(args, work)
+        compare_features(args, work)
+        shutil.rmtree(work, ignore_errors=True)
     if args.scaling:
         scaling(args)
 
