@@ -128,7 +128,7 @@ struct ShadingPoints {
 }
 
 /// A triangle as seen by one pixel's samples.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 struct ShadingPoint {
     /// The triangle, numbered within the tile.
     local: u32,
@@ -356,57 +356,70 @@ fn shade_multisampled<'f>(
         offset_sum.0.div_euclid(samples as i64),
         offset_sum.1.div_euclid(samples as i64),
     );
-    points.clear();
-    pixel_start.clear();
+    // The buffers only grow: every entry up to `point_count` is written below before it is
+    // read, so they are not cleared (clearing showed as a memset per tile).
+    if points.len() < pixel_count * samples {
+        points.resize(pixel_count * samples, ShadingPoint::default());
+    }
+    pixel_start.resize(pixel_count + 1, 0);
     triangle_start.clear();
     triangle_start.resize(count + 2, 0);
+    let mut point_count = 0;
     // Distinct triangles at the current pixel: triangle, samples covered, sum of their offsets.
     let mut seen: Vec<(u32, u32, i64, i64)> = Vec::with_capacity(samples);
-    for (slot, ids) in visibility.triangle.chunks_exact(samples).enumerate() {
-        pixel_start.push(points.len() as u32);
-        let centre = (
-            pixel_centre(rect.x0 + (slot % tile_width) as u32),
-            pixel_centre(rect.y0 + (slot / tile_width) as u32),
-        );
-        let first = ids[0];
-        if first != NO_TRIANGLE && ids.iter().all(|&id| id == first) {
-            points.push(ShadingPoint {
-                local: first,
-                count: samples as u32,
-                at: (centre.0 + whole_pixel.0, centre.1 + whole_pixel.1),
-            });
-            triangle_start[first as usize + 2] += 1;
-            continue;
-        }
-        seen.clear();
-        for (&id, &(ox, oy)) in ids.iter().zip(pattern.offsets()) {
-            if id == NO_TRIANGLE {
+    let rows = visibility.triangle.chunks_exact(samples * tile_width);
+    for ((row, row_ids), row_starts) in rows.enumerate().zip(pixel_start.chunks_exact_mut(tile_width)) {
+        let centre_y = pixel_centre(rect.y0 + row as u32);
+        for ((column, ids), start) in row_ids.chunks_exact(samples).enumerate().zip(row_starts) {
+            *start = point_count as u32;
+            let first = ids[0];
+            if ids.iter().all(|&id| id == first) {
+                if first != NO_TRIANGLE {
+                    points[point_count] = ShadingPoint {
+                        local: first,
+                        count: samples as u32,
+                        at: (
+                            pixel_centre(rect.x0 + column as u32) + whole_pixel.0,
+                            centre_y + whole_pixel.1,
+                        ),
+                    };
+                    point_count += 1;
+                    triangle_start[first as usize + 2] += 1;
+                }
                 continue;
             }
-            match seen.iter_mut().find(|entry| entry.0 == id) {
-                Some(entry) => {
-                    entry.1 += 1;
-                    entry.2 += i64::from(ox);
-                    entry.3 += i64::from(oy);
+            seen.clear();
+            for (&id, &(ox, oy)) in ids.iter().zip(pattern.offsets()) {
+                if id == NO_TRIANGLE {
+                    continue;
                 }
-                None => seen.push((id, 1, i64::from(ox), i64::from(oy))),
+                match seen.iter_mut().find(|entry| entry.0 == id) {
+                    Some(entry) => {
+                        entry.1 += 1;
+                        entry.2 += i64::from(ox);
+                        entry.3 += i64::from(oy);
+                    }
+                    None => seen.push((id, 1, i64::from(ox), i64::from(oy))),
+                }
+            }
+            let centre_x = pixel_centre(rect.x0 + column as u32);
+            for &(local, covered, offset_x, offset_y) in &seen {
+                let n = i64::from(covered);
+                points[point_count] = ShadingPoint {
+                    local,
+                    count: covered,
+                    at: (
+                        centre_x + offset_x.div_euclid(n),
+                        centre_y + offset_y.div_euclid(n),
+                    ),
+                };
+                point_count += 1;
+                triangle_start[local as usize + 2] += 1;
             }
         }
-        for &(local, covered, offset_x, offset_y) in &seen {
-            let n = i64::from(covered);
-            points.push(ShadingPoint {
-                local,
-                count: covered,
-                at: (
-                    centre.0 + offset_x.div_euclid(n),
-                    centre.1 + offset_y.div_euclid(n),
-                ),
-            });
-            triangle_start[local as usize + 2] += 1;
-        }
     }
-    pixel_start.push(points.len() as u32);
-    debug_assert_eq!(pixel_start.len(), pixel_count + 1);
+    pixel_start[pixel_count] = point_count as u32;
+    let points = &points[..point_count];
 
     // Group the points by triangle (a counting sort: `triangle_start[t + 2]` counted
     // triangle `t`'s points; after the prefix sums `triangle_start[t + 1]` is where they go,
@@ -414,8 +427,9 @@ fn shade_multisampled<'f>(
     for local in 2..count + 2 {
         triangle_start[local] += triangle_start[local - 1];
     }
-    by_triangle.clear();
-    by_triangle.resize(points.len(), 0);
+    if by_triangle.len() < points.len() {
+        by_triangle.resize(points.len(), 0);
+    }
     for (index, point) in points.iter().enumerate() {
         let next = &mut triangle_start[point.local as usize + 1];
         by_triangle[*next as usize] = index as u32;
@@ -424,8 +438,9 @@ fn shade_multisampled<'f>(
     triangle_start.truncate(count + 1);
 
     // Shade every point, triangle by triangle, in the order they were rasterized.
-    colors.clear();
-    colors.resize(points.len(), Vec3::ZERO);
+    if colors.len() < points.len() {
+        colors.resize(points.len(), Vec3::ZERO);
+    }
     flat.clear();
     flat_waiting.clear();
     let phong_allowed = FastPhong::frame_allows(frame);
