@@ -364,60 +364,14 @@ fn shade_multisampled<'f>(
     pixel_start.resize(pixel_count + 1, 0);
     triangle_start.clear();
     triangle_start.resize(count + 2, 0);
-    let mut point_count = 0;
-    // Distinct triangles at the current pixel: triangle, samples covered, sum of their offsets.
-    let mut seen: Vec<(u32, u32, i64, i64)> = Vec::with_capacity(samples);
-    let rows = visibility.triangle.chunks_exact(samples * tile_width);
-    for ((row, row_ids), row_starts) in rows.enumerate().zip(pixel_start.chunks_exact_mut(tile_width)) {
-        let centre_y = pixel_centre(rect.y0 + row as u32);
-        for ((column, ids), start) in row_ids.chunks_exact(samples).enumerate().zip(row_starts) {
-            *start = point_count as u32;
-            let first = ids[0];
-            if ids.iter().all(|&id| id == first) {
-                if first != NO_TRIANGLE {
-                    points[point_count] = ShadingPoint {
-                        local: first,
-                        count: samples as u32,
-                        at: (
-                            pixel_centre(rect.x0 + column as u32) + whole_pixel.0,
-                            centre_y + whole_pixel.1,
-                        ),
-                    };
-                    point_count += 1;
-                    triangle_start[first as usize + 2] += 1;
-                }
-                continue;
-            }
-            seen.clear();
-            for (&id, &(ox, oy)) in ids.iter().zip(pattern.offsets()) {
-                if id == NO_TRIANGLE {
-                    continue;
-                }
-                match seen.iter_mut().find(|entry| entry.0 == id) {
-                    Some(entry) => {
-                        entry.1 += 1;
-                        entry.2 += i64::from(ox);
-                        entry.3 += i64::from(oy);
-                    }
-                    None => seen.push((id, 1, i64::from(ox), i64::from(oy))),
-                }
-            }
-            let centre_x = pixel_centre(rect.x0 + column as u32);
-            for &(local, covered, offset_x, offset_y) in &seen {
-                let n = i64::from(covered);
-                points[point_count] = ShadingPoint {
-                    local,
-                    count: covered,
-                    at: (
-                        centre_x + offset_x.div_euclid(n),
-                        centre_y + offset_y.div_euclid(n),
-                    ),
-                };
-                point_count += 1;
-                triangle_start[local as usize + 2] += 1;
-            }
-        }
-    }
+    let find = match samples {
+        2 => find_points::<2>,
+        4 => find_points::<4>,
+        8 => find_points::<8>,
+        16 => find_points::<16>,
+        _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
+    };
+    let point_count = find(visibility, whole_pixel, points, pixel_start, triangle_start);
     pixel_start[pixel_count] = point_count as u32;
     let points = &points[..point_count];
 
@@ -526,6 +480,80 @@ fn shade_multisampled<'f>(
         }
     }
     points.len()
+}
+
+/// The first pass of [`shade_multisampled`] for `S` samples per pixel (a constant, so that the
+/// comparisons of a pixel's samples unroll): each pixel's points into `points` from its entry
+/// of `pixel_start` on, each triangle's count of points into `triangle_start[t + 2]`, and
+/// `whole_pixel` where a pixel's samples all show one triangle. Returns the number of points.
+fn find_points<const S: usize>(
+    visibility: &Visibility,
+    whole_pixel: (i64, i64),
+    points: &mut [ShadingPoint],
+    pixel_start: &mut [u32],
+    triangle_start: &mut [u32],
+) -> usize {
+    let rect = visibility.rect;
+    let tile_width = rect.width() as usize;
+    let offsets = visibility.pattern.offsets();
+    let mut point_count = 0;
+    // Distinct triangles at the current pixel: triangle, samples covered, sum of their offsets.
+    let mut seen = [(0u32, 0u32, 0i64, 0i64); S];
+    let rows = visibility.triangle.chunks_exact(S * tile_width);
+    for ((row, row_ids), row_starts) in rows.enumerate().zip(pixel_start.chunks_exact_mut(tile_width)) {
+        let centre_y = pixel_centre(rect.y0 + row as u32);
+        for ((column, ids), start) in row_ids.as_chunks::<S>().0.iter().enumerate().zip(row_starts) {
+            *start = point_count as u32;
+            let first = ids[0];
+            if ids.iter().all(|&id| id == first) {
+                if first != NO_TRIANGLE {
+                    points[point_count] = ShadingPoint {
+                        local: first,
+                        count: S as u32,
+                        at: (
+                            pixel_centre(rect.x0 + column as u32) + whole_pixel.0,
+                            centre_y + whole_pixel.1,
+                        ),
+                    };
+                    point_count += 1;
+                    triangle_start[first as usize + 2] += 1;
+                }
+                continue;
+            }
+            let mut distinct = 0;
+            for (&id, &(ox, oy)) in ids.iter().zip(offsets) {
+                if id == NO_TRIANGLE {
+                    continue;
+                }
+                match seen[..distinct].iter_mut().find(|entry| entry.0 == id) {
+                    Some(entry) => {
+                        entry.1 += 1;
+                        entry.2 += i64::from(ox);
+                        entry.3 += i64::from(oy);
+                    }
+                    None => {
+                        seen[distinct] = (id, 1, i64::from(ox), i64::from(oy));
+                        distinct += 1;
+                    }
+                }
+            }
+            let centre_x = pixel_centre(rect.x0 + column as u32);
+            for &(local, covered, offset_x, offset_y) in &seen[..distinct] {
+                let n = i64::from(covered);
+                points[point_count] = ShadingPoint {
+                    local,
+                    count: covered,
+                    at: (
+                        centre_x + offset_x.div_euclid(n),
+                        centre_y + offset_y.div_euclid(n),
+                    ),
+                };
+                point_count += 1;
+                triangle_start[local as usize + 2] += 1;
+            }
+        }
+    }
+    point_count
 }
 
 /// [`shade_tile`] with one sample at each pixel centre: the general loop with `seen` holding one
