@@ -106,6 +106,36 @@ pub struct TileScratch<'f> {
     gouraud: Vec<GouraudPlane>,
     /// Triangles whose colours wait in `flat`: (triangle, index in the batch).
     flat_waiting: Vec<(u32, u16)>,
+    /// With several samples per pixel: what the tile's pixels shade, and their colours.
+    points: ShadingPoints,
+}
+
+/// A multisampled tile's shading points: one per distinct triangle per covered pixel, in pixel
+/// order and, within a pixel, in the order of the triangles' first samples (the order the
+/// resolve adds them in).
+#[derive(Default)]
+struct ShadingPoints {
+    points: Vec<ShadingPoint>,
+    /// Per pixel of the tile (row-major), its first point; one more entry ends the last.
+    pixel_start: Vec<u32>,
+    /// The points grouped by triangle (each triangle's in pixel order), so that each
+    /// triangle's shader is chosen once and runs over all its points.
+    by_triangle: Vec<u32>,
+    /// Per triangle of the tile, its first entry in `by_triangle`; one more entry ends the last.
+    triangle_start: Vec<u32>,
+    /// Per point, its shaded colour.
+    colors: Vec<Vec3>,
+}
+
+/// A triangle as seen by one pixel's samples.
+#[derive(Clone, Copy, Default)]
+struct ShadingPoint {
+    /// The triangle, numbered within the tile.
+    local: u32,
+    /// How many of the pixel's samples it covers.
+    count: u32,
+    /// Where it is shaded, in 1/256 pixel: the mean of its covered samples' positions.
+    at: (i64, i64),
 }
 
 /// How the last pass over a tile's pixels colours the pixels that show a triangle.
@@ -267,77 +297,263 @@ pub fn shade_tile<'f>(
     target: &mut TileTarget,
     scratch: &mut TileScratch<'f>,
 ) -> usize {
-    let rect = visibility.rect;
-    let pattern = visibility.pattern;
-    let samples = pattern.len();
-    let pixel_count = (rect.width() * rect.height()) as usize;
-    let stride = target.stride;
-    let tile_width = rect.width() as usize;
-    let mut shaded = 0;
     let mut caches = TileCaches {
         flat: TriangleColorCache::new(),
         back: TriangleColorCache::new(),
         flat_waiting: TriangleColorCache::new(),
     };
-    if samples == 1 {
-        return shade_single_sample(frame, visibility, background, target, scratch, &mut caches);
+    if visibility.pattern.len() == 1 {
+        shade_single_sample(frame, visibility, background, target, scratch, &mut caches)
+    } else {
+        shade_multisampled(frame, visibility, background, target, scratch, &mut caches)
     }
-    for row in 0..rect.height() as usize {
-        let start = row * stride + rect.x0 as usize;
-        target.color[start..start + tile_width].fill(background);
-        target.covered[start..start + tile_width].fill(false);
+}
+
+/// [`shade_tile`] with several samples per pixel, in three passes. The first finds each pixel's
+/// distinct triangles and where each is shaded: the mean of the offsets of the samples it
+/// covers, rounded down to 1/256 pixel. The second shades those points triangle by triangle
+/// through the shaders one sample per pixel uses ([`TriangleShader`]: fills, Gouraud planes,
+/// Phong lanes, and the general [`shade_sample`] only where a single sample takes it too), so
+/// each point has the bits `shade_sample` gives there. The last resolves each pixel: its
+/// points' colours weighted by their sample counts and added in the order of their first
+/// samples, the background for the samples nothing covers, over the sample count.
+fn shade_multisampled<'f>(
+    frame: &'f Frame,
+    visibility: &Visibility,
+    background: Vec3,
+    target: &mut TileTarget,
+    scratch: &mut TileScratch<'f>,
+    caches: &mut TileCaches,
+) -> usize {
+    let rect = visibility.rect;
+    let pattern = visibility.pattern;
+    let samples = pattern.len();
+    let pixel_count = (rect.width() * rect.height()) as usize;
+    let tile_width = rect.width() as usize;
+    let stride = target.stride;
+    let count = visibility.raster_ids.len();
+    let TileScratch {
+        flat,
+        flat_waiting,
+        points: tile,
+        ..
+    } = scratch;
+    let ShadingPoints {
+        points,
+        pixel_start,
+        by_triangle,
+        triangle_start,
+        colors,
+    } = tile;
+
+    // Each pixel's points. Most pixels of a mesh lie inside one triangle: all their samples
+    // show it, shaded at the mean of the whole pattern, with no search.
+    let offset_sum = pattern
+        .offsets()
+        .iter()
+        .fold((0, 0), |(x, y), &(ox, oy)| (x + i64::from(ox), y + i64::from(oy)));
+    let whole_pixel = (
+        offset_sum.0.div_euclid(samples as i64),
+        offset_sum.1.div_euclid(samples as i64),
+    );
+    // The buffers only grow: every entry up to `point_count` is written below before it is
+    // read, so they are not cleared (clearing showed as a memset per tile).
+    if points.len() < pixel_count * samples {
+        points.resize(pixel_count * samples, ShadingPoint::default());
     }
-    // The tile's pixel `slot` (row-major within the tile) in the band.
-    let at_slot = |slot: usize| (slot / tile_width) * stride + rect.x0 as usize + slot % tile_width;
-    // Distinct triangles at the current pixel: triangle, samples covered, sum of their offsets.
-    let mut seen: Vec<(u32, u32, i64, i64)> = Vec::with_capacity(samples);
-    let depth_view = frame.debug_view == Some(DebugView::Depth);
-    for slot in 0..pixel_count {
-        let ids = &visibility.triangle[slot * samples..(slot + 1) * samples];
-        if ids.iter().all(|&id| id == NO_TRIANGLE) {
+    pixel_start.resize(pixel_count + 1, 0);
+    triangle_start.clear();
+    triangle_start.resize(count + 2, 0);
+    let find = match samples {
+        2 => find_points::<2>,
+        4 => find_points::<4>,
+        8 => find_points::<8>,
+        16 => find_points::<16>,
+        _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
+    };
+    let point_count = find(visibility, whole_pixel, points, pixel_start, triangle_start);
+    pixel_start[pixel_count] = point_count as u32;
+    let points = &points[..point_count];
+
+    // Group the points by triangle (a counting sort: `triangle_start[t + 2]` counted
+    // triangle `t`'s points; after the prefix sums `triangle_start[t + 1]` is where they go,
+    // and after the scatter it is where they end).
+    for local in 2..count + 2 {
+        triangle_start[local] += triangle_start[local - 1];
+    }
+    if by_triangle.len() < points.len() {
+        by_triangle.resize(points.len(), 0);
+    }
+    for (index, point) in points.iter().enumerate() {
+        let next = &mut triangle_start[point.local as usize + 1];
+        by_triangle[*next as usize] = index as u32;
+        *next += 1;
+    }
+    triangle_start.truncate(count + 1);
+
+    // Shade every point, triangle by triangle, in the order they were rasterized.
+    if colors.len() < points.len() {
+        colors.resize(points.len(), Vec3::ZERO);
+    }
+    flat.clear();
+    flat_waiting.clear();
+    let phong_allowed = FastPhong::frame_allows(frame);
+    let mut phong = PhongBatch::default();
+    for local in 0..count {
+        let mine = &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize];
+        if mine.is_empty() {
             continue;
         }
-        seen.clear();
-        for (&id, &(ox, oy)) in ids.iter().zip(pattern.offsets()) {
-            if id == NO_TRIANGLE {
-                continue;
-            }
-            match seen.iter_mut().find(|entry| entry.0 == id) {
-                Some(entry) => {
-                    entry.1 += 1;
-                    entry.2 += i64::from(ox);
-                    entry.3 += i64::from(oy);
+        let id = visibility.raster_id(local as u32);
+        let raster = frame.raster_triangle(id);
+        let point_at = |index: u32| points[index as usize].at;
+        match TriangleShader::new(frame, raster, phong_allowed, caches, flat) {
+            TriangleShader::Solid(color) => {
+                for &index in mine {
+                    colors[index as usize] = color;
                 }
-                None => seen.push((id, 1, i64::from(ox), i64::from(oy))),
+            }
+            TriangleShader::FlatWaiting(batch_index) => flat_waiting.push((local as u32, batch_index)),
+            TriangleShader::Gouraud(vertex_colors) => {
+                let interpolated = GouraudColors::new(raster, &frame.corner_weights(id), vertex_colors);
+                for &index in mine {
+                    let (x, y) = point_at(index);
+                    colors[index as usize] = interpolated.at(edge_values(raster, x, y));
+                }
+            }
+            TriangleShader::Phong(fast) => {
+                let corners = frame.corner_weights(id);
+                for &index in mine {
+                    let weights = source_weights(raster, &corners, point_at(index));
+                    phong.push(&fast, weights, index as usize, colors);
+                }
+            }
+            TriangleShader::General => {
+                let corners = frame.corner_weights(id);
+                for &index in mine {
+                    colors[index as usize] = shade_sample(frame, raster, &corners, point_at(index), caches);
+                }
             }
         }
-        let px = rect.x0 + slot as u32 % rect.width();
-        let py = rect.y0 + slot as u32 / rect.width();
-        let (centre_x, centre_y) = (pixel_centre(px), pixel_centre(py));
+    }
+    phong.flush(colors);
+    flat.light(frame);
+    for &(local, batch_index) in flat_waiting.iter() {
+        let color = flat.colors[usize::from(batch_index)];
+        let local = local as usize;
+        for &index in &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize] {
+            colors[index as usize] = color;
+        }
+    }
+
+    // The resolve, in the order of operations of one pixel at a time.
+    let resolve = |first: usize, last: usize| {
         let mut sum = Vec3::ZERO;
         let mut covered_samples = 0;
-        shaded += seen.len();
-        for &(local, count, offset_x, offset_y) in &seen {
-            let id = visibility.raster_id(local);
-            let n = i64::from(count);
-            let at = (
-                centre_x + offset_x.div_euclid(n),
-                centre_y + offset_y.div_euclid(n),
-            );
-            let corners = frame.corner_weights(id);
-            let color = shade_sample(frame, frame.raster_triangle(id), &corners, at, &mut caches);
-            sum += color * count as f32;
-            covered_samples += count;
+        for (point, &color) in points[first..last].iter().zip(&colors[first..last]) {
+            sum += color * point.count as f32;
+            covered_samples += point.count;
         }
-        target.color[at_slot(slot)] = if depth_view {
-            // Distances are averaged over covered samples only: the background has none.
-            sum / covered_samples as f32
-        } else {
-            (sum + background * (samples as u32 - covered_samples) as f32) / samples as f32
-        };
-        target.covered[at_slot(slot)] = true;
+        (sum, covered_samples)
+    };
+    let depth_view = frame.debug_view == Some(DebugView::Depth);
+    for row in 0..rect.height() as usize {
+        let row_start = row * stride + rect.x0 as usize;
+        let starts = &pixel_start[row * tile_width..=(row + 1) * tile_width];
+        let pixels = target.color[row_start..row_start + tile_width]
+            .iter_mut()
+            .zip(&mut target.covered[row_start..row_start + tile_width]);
+        for ((color, covered), start) in pixels.zip(starts.windows(2)) {
+            let (first, last) = (start[0] as usize, start[1] as usize);
+            *covered = first != last;
+            *color = if first == last {
+                background
+            } else {
+                let (sum, covered_samples) = resolve(first, last);
+                if depth_view {
+                    // Distances are averaged over covered samples only: the background has none.
+                    sum / covered_samples as f32
+                } else {
+                    (sum + background * (samples as u32 - covered_samples) as f32) / samples as f32
+                }
+            };
+        }
     }
-    shaded
+    points.len()
+}
+
+/// The first pass of [`shade_multisampled`] for `S` samples per pixel (a constant, so that the
+/// comparisons of a pixel's samples unroll): each pixel's points into `points` from its entry
+/// of `pixel_start` on, each triangle's count of points into `triangle_start[t + 2]`, and
+/// `whole_pixel` where a pixel's samples all show one triangle. Returns the number of points.
+fn find_points<const S: usize>(
+    visibility: &Visibility,
+    whole_pixel: (i64, i64),
+    points: &mut [ShadingPoint],
+    pixel_start: &mut [u32],
+    triangle_start: &mut [u32],
+) -> usize {
+    let rect = visibility.rect;
+    let tile_width = rect.width() as usize;
+    let offsets = visibility.pattern.offsets();
+    let mut point_count = 0;
+    // Distinct triangles at the current pixel: triangle, samples covered, sum of their offsets.
+    let mut seen = [(0u32, 0u32, 0i64, 0i64); S];
+    let rows = visibility.triangle.chunks_exact(S * tile_width);
+    for ((row, row_ids), row_starts) in rows.enumerate().zip(pixel_start.chunks_exact_mut(tile_width)) {
+        let centre_y = pixel_centre(rect.y0 + row as u32);
+        for ((column, ids), start) in row_ids.as_chunks::<S>().0.iter().enumerate().zip(row_starts) {
+            *start = point_count as u32;
+            let first = ids[0];
+            if ids.iter().all(|&id| id == first) {
+                if first != NO_TRIANGLE {
+                    points[point_count] = ShadingPoint {
+                        local: first,
+                        count: S as u32,
+                        at: (
+                            pixel_centre(rect.x0 + column as u32) + whole_pixel.0,
+                            centre_y + whole_pixel.1,
+                        ),
+                    };
+                    point_count += 1;
+                    triangle_start[first as usize + 2] += 1;
+                }
+                continue;
+            }
+            let mut distinct = 0;
+            for (&id, &(ox, oy)) in ids.iter().zip(offsets) {
+                if id == NO_TRIANGLE {
+                    continue;
+                }
+                match seen[..distinct].iter_mut().find(|entry| entry.0 == id) {
+                    Some(entry) => {
+                        entry.1 += 1;
+                        entry.2 += i64::from(ox);
+                        entry.3 += i64::from(oy);
+                    }
+                    None => {
+                        seen[distinct] = (id, 1, i64::from(ox), i64::from(oy));
+                        distinct += 1;
+                    }
+                }
+            }
+            let centre_x = pixel_centre(rect.x0 + column as u32);
+            for &(local, covered, offset_x, offset_y) in &seen[..distinct] {
+                let n = i64::from(covered);
+                points[point_count] = ShadingPoint {
+                    local,
+                    count: covered,
+                    at: (
+                        centre_x + offset_x.div_euclid(n),
+                        centre_y + offset_y.div_euclid(n),
+                    ),
+                };
+                point_count += 1;
+                triangle_start[local as usize + 2] += 1;
+            }
+        }
+    }
+    point_count
 }
 
 /// [`shade_tile`] with one sample at each pixel centre: the general loop with `seen` holding one
@@ -379,6 +595,7 @@ fn shade_single_sample<'f>(
         sources,
         gouraud,
         flat_waiting,
+        points: _,
     } = scratch;
     flat.clear();
     flat_waiting.clear();
@@ -1058,6 +1275,177 @@ mod tests {
                     empty_tiles > 0 && covered_pixels > 2000,
                     "{empty_tiles} empty tiles, {covered_pixels} pixels"
                 );
+            }
+        }
+    }
+
+    /// A multisampled pixel as the general path resolves it: each distinct triangle among its
+    /// samples shaded by `shade_sample` at the mean offset of the samples it covers (rounded
+    /// down to 1/256 pixel), weighted by their count and added in the order of their first
+    /// samples, with the background for the rest; `None` where no sample is covered.
+    fn general_multisampled_pixel(
+        frame: &Frame,
+        visibility: &Visibility,
+        slot: usize,
+        background: Vec3,
+        caches: &mut TileCaches,
+    ) -> Option<(Vec3, usize)> {
+        let (rect, pattern) = (visibility.rect, visibility.pattern);
+        let samples = pattern.len();
+        let ids = &visibility.triangle[slot * samples..(slot + 1) * samples];
+        let mut seen: Vec<(u32, i64, i64, i64)> = Vec::new();
+        for (&id, &(ox, oy)) in ids.iter().zip(pattern.offsets()) {
+            if id == NO_TRIANGLE {
+                continue;
+            }
+            match seen.iter_mut().find(|entry| entry.0 == id) {
+                Some(entry) => *entry = (id, entry.1 + 1, entry.2 + i64::from(ox), entry.3 + i64::from(oy)),
+                None => seen.push((id, 1, i64::from(ox), i64::from(oy))),
+            }
+        }
+        if seen.is_empty() {
+            return None;
+        }
+        let px = rect.x0 + slot as u32 % rect.width();
+        let py = rect.y0 + slot as u32 / rect.width();
+        let (mut sum, mut covered) = (Vec3::ZERO, 0);
+        for &(local, n, sum_x, sum_y) in &seen {
+            let id = visibility.raster_id(local);
+            let at = (
+                pixel_centre(px) + sum_x.div_euclid(n),
+                pixel_centre(py) + sum_y.div_euclid(n),
+            );
+            let color = shade_sample(
+                frame,
+                frame.raster_triangle(id),
+                &frame.corner_weights(id),
+                at,
+                caches,
+            );
+            sum += color * n as f32;
+            covered += n;
+        }
+        let color = if frame.debug_view == Some(DebugView::Depth) {
+            sum / covered as f32
+        } else {
+            (sum + background * (samples as i64 - covered) as f32) / samples as f32
+        };
+        Some((color, seen.len()))
+    }
+
+    /// Multisampled tiles as `shade_tile` writes them (each pixel's triangles through the
+    /// per-triangle shaders, then resolved) against the general path pixel by pixel, at 2, 4,
+    /// 8 and 16 samples: the same bits everywhere, for every shading mode, both lighting
+    /// models, the back-face modes and spot lights, and the depth view (whose mean leaves the
+    /// background out). The spheres are small on the screen, so that many pixels lie on an
+    /// edge between triangles, or between a triangle and the background.
+    #[test]
+    fn multisampled_tiles_equal_the_general_path_bit_for_bit() {
+        use Shading::{Constant, Flat, Gouraud, Phong};
+        let cases = [
+            (
+                Flat,
+                Gouraud,
+                LightingModel::BlinnPhong,
+                BackFaces::ReverseLit,
+                None,
+            ),
+            (Phong, Flat, LightingModel::Phong, BackFaces::Lit, None),
+            (
+                Phong,
+                Phong,
+                LightingModel::BlinnPhong,
+                BackFaces::ReverseLit,
+                None,
+            ),
+            (Gouraud, Phong, LightingModel::Phong, BackFaces::Unlit, None),
+            (Constant, Gouraud, LightingModel::BlinnPhong, BackFaces::Lit, None),
+            (
+                Gouraud,
+                Flat,
+                LightingModel::BlinnPhong,
+                BackFaces::ReverseLit,
+                Some(DebugView::Depth),
+            ),
+        ];
+        for samples in [2, 4, 8, 16] {
+            let pattern = SamplePattern::new(samples).expect("a sample count");
+            for (first, second, model, back_faces, view) in cases {
+                for lights in shade_fast::tests::LIGHTS {
+                    let mut scene = shade_fast::tests::scene(model, Vec3::splat(0.5), back_faces, lights);
+                    scene.objects[0].shading = first;
+                    scene.objects[1].shading = second;
+                    scene.image.width = 130;
+                    scene.image.height = 70;
+                    scene.image.background = Vec3::new(0.25, 0.5, 0.75);
+                    // Cut the spheres open so that back faces are seen too.
+                    scene.camera.projection = crate::scene::Projection::Perspective {
+                        fov_y_degrees: 40.0,
+                        near: 4.9,
+                        far: 100.0,
+                    };
+                    let background = scene.image.background;
+                    let frame = build_frame(&scene, pattern, view, vec![None; 3]);
+                    let width = scene.image.width as usize;
+                    let mut caches = TileCaches {
+                        flat: TriangleColorCache::new(),
+                        back: TriangleColorCache::new(),
+                        flat_waiting: TriangleColorCache::new(),
+                    };
+                    let mut scratch = TileScratch::default();
+                    let (mut edge_pixels, mut back_pixels, mut covered_pixels) = (0, 0, 0);
+                    for tile in 0..frame.tiles.count() {
+                        let rect = frame.tiles.rect(tile);
+                        let visibility = rasterize_tile(rect, pattern, &frame.raster, tile);
+                        // NaN and `true` everywhere: a pixel the tile does not write is caught.
+                        let band = rect.height() as usize * width;
+                        let (mut color, mut covered) = (vec![Vec3::NAN; band], vec![true; band]);
+                        let mut target = TileTarget {
+                            color: &mut color,
+                            covered: &mut covered,
+                            stride: width,
+                        };
+                        let shaded = shade_tile(&frame, &visibility, background, &mut target, &mut scratch);
+                        let mut expected_shaded = 0;
+                        for slot in 0..(rect.width() * rect.height()) as usize {
+                            let px = rect.x0 + slot as u32 % rect.width();
+                            let py = rect.y0 + slot as u32 / rect.width();
+                            let offset = (py - rect.y0) as usize * width + px as usize;
+                            let ids = &visibility.triangle[slot * samples as usize..][..samples as usize];
+                            let general = general_multisampled_pixel(
+                                &frame,
+                                &visibility,
+                                slot,
+                                background,
+                                &mut caches,
+                            );
+                            let expected = general.map_or(background, |(color, _)| color);
+                            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                            assert_eq!(
+                                bits(color[offset]),
+                                bits(expected),
+                                "{samples} samples {first:?}/{second:?} {model:?} {back_faces:?} {view:?} \
+                                 {lights:?} at {px}, {py}: {} against {expected}",
+                                color[offset]
+                            );
+                            assert_eq!(covered[offset], general.is_some());
+                            let distinct = general.map_or(0, |(_, distinct)| distinct);
+                            expected_shaded += distinct;
+                            covered_pixels += usize::from(general.is_some());
+                            edge_pixels +=
+                                usize::from(distinct > 1 || ids.contains(&NO_TRIANGLE) && distinct > 0);
+                            back_pixels += usize::from(ids.iter().any(|&id| {
+                                id != NO_TRIANGLE
+                                    && frame.raster_triangle(visibility.raster_id(id)).back_facing
+                            }));
+                        }
+                        assert_eq!(shaded, expected_shaded);
+                    }
+                    assert!(
+                        covered_pixels > 1000 && edge_pixels > 500 && back_pixels > 10,
+                        "{samples} samples: {covered_pixels} pixels, {edge_pixels} on edges, {back_pixels} back"
+                    );
+                }
             }
         }
     }
