@@ -1385,7 +1385,8 @@ mod tests {
                         far: 100.0,
                     };
                     let background = scene.image.background;
-                    let frame = build_frame(&scene, pattern, view, vec![None; 3]);
+                    let shadows = crate::render::shadow::render_shadow_maps(&scene, scene.camera.eye);
+                    let frame = crate::render::geometry::build_frame(&scene, pattern, view, shadows);
                     let width = scene.image.width as usize;
                     let mut caches = TileCaches {
                         flat: TriangleColorCache::new(),
