@@ -309,17 +309,7 @@ fn encode_image<W: Write + std::io::Seek>(
         source,
     };
     match format {
-        OutputFormat::Png => {
-            let image = to_rgb8_encoded(framebuffer, encoding);
-            png_encoder(writer, compression)
-                .write_image(
-                    image.as_raw(),
-                    image.width(),
-                    image.height(),
-                    image::ExtendedColorType::Rgb8,
-                )
-                .map_err(encode_error)
-        }
+        OutputFormat::Png => encode_png(writer, path, &to_rgb8_encoded(framebuffer, encoding), compression),
         OutputFormat::Exr | OutputFormat::Hdr => {
             let floats: Vec<f32> = framebuffer.color.iter().flat_map(|c| c.to_array()).collect();
             let image = image::Rgb32FImage::from_raw(framebuffer.width, framebuffer.height, floats)
@@ -336,12 +326,28 @@ fn encode_image<W: Write + std::io::Seek>(
     }
 }
 
-fn png_encoder<W: Write>(writer: W, compression: PngCompression) -> PngEncoder<W> {
+/// Encodes `image` as PNG into `writer`; `path` names the destination in errors.
+fn encode_png<W: Write>(
+    writer: W,
+    path: &Path,
+    image: &RgbImage,
+    compression: PngCompression,
+) -> Result<(), OutputError> {
     let compression = match compression {
         PngCompression::Fast => CompressionType::Fast,
         PngCompression::Best => CompressionType::Best,
     };
     PngEncoder::new_with_quality(writer, compression, FilterType::Adaptive)
+        .write_image(
+            image.as_raw(),
+            image.width(),
+            image.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|source| OutputError::Encode {
+            path: path.to_path_buf(),
+            source,
+        })
 }
 
 /// Writes `framebuffer` to `path` in `format`, atomically. PNG uses `encoding`; the float
@@ -368,19 +374,7 @@ pub enum PngCompression {
 
 /// Encodes `image` as PNG and puts it at `path` atomically.
 pub fn write_png(path: &Path, image: &RgbImage, compression: PngCompression) -> Result<(), OutputError> {
-    write_atomically(path, |writer| {
-        png_encoder(writer, compression)
-            .write_image(
-                image.as_raw(),
-                image.width(),
-                image.height(),
-                image::ExtendedColorType::Rgb8,
-            )
-            .map_err(|source| OutputError::Encode {
-                path: path.to_path_buf(),
-                source,
-            })
-    })
+    write_atomically(path, |writer| encode_png(writer, path, image, compression))
 }
 
 /// Held shared by every write in progress, exclusively by an exit on Ctrl-C.
