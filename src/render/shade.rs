@@ -1085,6 +1085,29 @@ mod tests {
     use super::*;
     use crate::render::raster::{SamplePattern, rasterize_tile};
     use crate::render::{DebugView, shade_fast};
+
+    /// The fast path's two-sphere scene, shaded `shading`, `size` pixels, on a coloured
+    /// background, with the near plane cutting the spheres open so that back faces are seen too.
+    fn cut_open_scene(
+        model: LightingModel,
+        back_faces: BackFaces,
+        lights: shade_fast::tests::Lights,
+        shading: [Shading; 2],
+        (width, height): (u32, u32),
+    ) -> crate::scene::Scene {
+        let mut scene = shade_fast::tests::scene(model, Vec3::splat(0.5), back_faces, lights);
+        scene.objects[0].shading = shading[0];
+        scene.objects[1].shading = shading[1];
+        scene.image.width = width;
+        scene.image.height = height;
+        scene.image.background = Vec3::new(0.25, 0.5, 0.75);
+        scene.camera.projection = crate::scene::Projection::Perspective {
+            fov_y_degrees: 40.0,
+            near: 4.9,
+            far: 100.0,
+        };
+        scene
+    }
     use crate::scene::{BackFaces, LightingModel};
 
     /// Every visible pixel, shaded by the per-run shaders and by the general `shade_sample`:
@@ -1209,19 +1232,13 @@ mod tests {
                 .into_iter()
                 .flat_map(|b| shade_fast::tests::LIGHTS.map(|l| (b, l)))
             {
-                let mut scene =
-                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces, lights);
-                scene.objects[0].shading = first;
-                scene.objects[1].shading = second;
-                scene.image.width = 260;
-                scene.image.height = 140;
-                scene.image.background = Vec3::new(0.25, 0.5, 0.75);
-                // Cut the spheres open so that back faces are seen too.
-                scene.camera.projection = crate::scene::Projection::Perspective {
-                    fov_y_degrees: 40.0,
-                    near: 4.9,
-                    far: 100.0,
-                };
+                let scene = cut_open_scene(
+                    LightingModel::BlinnPhong,
+                    back_faces,
+                    lights,
+                    [first, second],
+                    (260, 140),
+                );
                 let background = scene.image.background;
                 let frame = shade_fast::tests::frame_of(&scene, None);
                 let width = scene.image.width as usize;
@@ -1372,21 +1389,9 @@ mod tests {
             let pattern = SamplePattern::new(samples).expect("a sample count");
             for (first, second, model, back_faces, view) in cases {
                 for lights in shade_fast::tests::LIGHTS {
-                    let mut scene = shade_fast::tests::scene(model, Vec3::splat(0.5), back_faces, lights);
-                    scene.objects[0].shading = first;
-                    scene.objects[1].shading = second;
-                    scene.image.width = 130;
-                    scene.image.height = 70;
-                    scene.image.background = Vec3::new(0.25, 0.5, 0.75);
-                    // Cut the spheres open so that back faces are seen too.
-                    scene.camera.projection = crate::scene::Projection::Perspective {
-                        fov_y_degrees: 40.0,
-                        near: 4.9,
-                        far: 100.0,
-                    };
+                    let scene = cut_open_scene(model, back_faces, lights, [first, second], (130, 70));
                     let background = scene.image.background;
-                    let shadows = crate::render::shadow::render_shadow_maps(&scene, scene.camera.eye);
-                    let frame = crate::render::geometry::build_frame(&scene, pattern, view, shadows);
+                    let frame = shade_fast::tests::frame_sampled(&scene, pattern, view);
                     let width = scene.image.width as usize;
                     let mut caches = TileCaches {
                         flat: TriangleColorCache::new(),

@@ -499,8 +499,17 @@ pub(crate) mod tests {
 
     /// The frame of `scene` with its shadow maps, as `render` builds it.
     pub(crate) fn frame_of(scene: &Scene, view: Option<crate::render::DebugView>) -> Frame {
+        frame_sampled(scene, SamplePattern::SINGLE, view)
+    }
+
+    /// [`frame_of`] with `pattern`'s samples per pixel.
+    pub(crate) fn frame_sampled(
+        scene: &Scene,
+        pattern: SamplePattern,
+        view: Option<crate::render::DebugView>,
+    ) -> Frame {
         let shadows = crate::render::shadow::render_shadow_maps(scene, scene.camera.eye);
-        build_frame(scene, SamplePattern::SINGLE, view, shadows)
+        build_frame(scene, pattern, view, shadows)
     }
 
     /// How many of `points` (position, side normal) each shadow-casting light of `frame` leaves
