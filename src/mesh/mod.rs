@@ -19,6 +19,7 @@
 //!   `textures`, and reads a UV set the mesh has (uv_set 0 only when `uvs` is non-empty, 1
 //!   only when `uvs1` is); a material with a normal map comes with `tangents`.
 
+pub mod closed;
 pub mod gltf;
 pub mod normals;
 pub mod obj;
@@ -63,7 +64,8 @@ pub struct Mesh {
     pub textures: Vec<Arc<Texture>>,
     /// The surface is known to be closed (it bounds a volume, every front face seen from
     /// outside): seen from outside its bounds, its back faces are always hidden behind its
-    /// front faces. Set by the primitives that are; false for mesh files (unknown).
+    /// front faces. Set by the primitives that are, and for mesh files by [`closed::is_closed`]
+    /// when they are loaded.
     pub closed: bool,
 }
 

@@ -20,7 +20,7 @@ use glam::{DMat4, DQuat, DVec3, EulerRot, Vec3};
 use crate::diag::{Diagnostic, Schema, SourceId, Sources, from_ron_error};
 use crate::mesh::{
     ImportedCamera, ImportedLight, ImportedProjection, LoadedMesh, Mesh, MeshError, MeshOptions,
-    gltf::load_gltf, obj::load_obj, primitives, tangents::compute_tangents,
+    closed::is_closed, gltf::load_gltf, obj::load_obj, primitives, tangents::compute_tangents,
 };
 use crate::render::raster::SamplePattern;
 use crate::ron_path;
@@ -1436,13 +1436,15 @@ impl Loader<'_> {
                 };
                 match loaded {
                     Ok(LoadedMesh {
-                        mesh,
+                        mut mesh,
                         files_read,
                         warnings,
                         lights,
                         cameras,
                         crease_angle_used,
                     }) => {
+                        // Once per file: whether its back faces may be culled (render::geometry).
+                        mesh.closed = is_closed(&mesh.positions, &mesh.triangles);
                         let mut stamped: Vec<PathBuf> = files_read.clone();
                         if !stamped.iter().any(|f| f == path) {
                             stamped.push(path.to_path_buf());

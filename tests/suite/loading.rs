@@ -300,3 +300,64 @@ fn an_empty_scene_file_says_so_and_shows_a_scene() {
         assert!(!rendered.contains("Scene`"), "{rendered}");
     }
 }
+
+/// A scene with one object of mesh file `mesh` (relative to the repository), seen from outside,
+/// lit from two sides, with its back faces lit (so that a back face drawn would show).
+fn mesh_scene(mesh: &str, eye: &str) -> Scene {
+    let text = format!(
+        r#"Scene(
+            image: (width: 480, height: 360),
+            camera: Perspective(eye: {eye}, target: (0, 0, 0), fov: 40),
+            lights: [Directional(direction: (-1, -1, -1)), Directional(direction: (1, 0.5, 1), color: (0.4, 0.4, 0.4))],
+            objects: [(mesh: Obj("{}"), shading: Phong, back_faces: Lit, material: "brass")],
+        )"#,
+        repo().join(mesh).display()
+    );
+    match load_scene_from_str(Path::new("closed.ron"), &text, &LoadOptions::default()) {
+        Ok(loaded) => loaded.scene,
+        Err(error) => panic!(
+            "{}",
+            lampshade::diag::render_diagnostics(&error.diagnostics, &error.sources, false)
+        ),
+    }
+}
+
+#[test]
+fn closed_mesh_files_are_found_and_culling_their_back_faces_changes_no_pixel() {
+    // Spot (the cow) is one closed, outward-wound surface; the teapot has a hole at the spout
+    // and a lid apart; the Cornell box is open boxes.
+    let spot = mesh_scene("assets/obj/spot/spot_triangulated.obj", "(2.2, 1.2, 3.0)");
+    assert!(spot.objects[0].mesh.closed, "spot is closed");
+    for open in [
+        "assets/obj/teapot/teapot.obj",
+        "assets/obj/cornell-box/CornellBox-Original.obj",
+    ] {
+        let scene = mesh_scene(open, "(0, 3, 9)");
+        assert!(!scene.objects[0].mesh.closed, "{open} is open");
+    }
+
+    let (culled, culled_stats) = render(&spot, &RenderOptions::default());
+    let mut drawn_whole = spot.clone();
+    let mut mesh = (*drawn_whole.objects[0].mesh).clone();
+    mesh.closed = false;
+    drawn_whole.objects[0].mesh = std::sync::Arc::new(mesh);
+    let (whole, whole_stats) = render(&drawn_whole, &RenderOptions::default());
+    assert!(
+        culled_stats.raster_triangles * 10 < whole_stats.raster_triangles * 7,
+        "back faces are culled: {} raster triangles against {}",
+        culled_stats.raster_triangles,
+        whole_stats.raster_triangles
+    );
+    assert!(
+        culled.covered.iter().filter(|&&c| c).count() > 20_000,
+        "spot fills the frame"
+    );
+    assert_eq!(culled.covered, whole.covered);
+    let differing = culled
+        .color
+        .iter()
+        .zip(&whole.color)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert_eq!(differing, 0, "pixels changed by culling");
+}

@@ -1,0 +1,233 @@
+//! Whether a mesh file's surface is closed, so that its back faces may be culled.
+//!
+//! A surface bounds a volume, with every front face seen from outside, when
+//! - every edge is shared by exactly two triangles that run along it in opposite directions
+//!   (consistent winding; no border, no fin of three or more triangles), and
+//! - each connected piece encloses a positive signed volume (its counter-clockwise sides face
+//!   outwards; an inside-out piece has its front faces inside).
+//!
+//! Vertices are compared by position, not by index: loaders split a vertex wherever its normal or
+//! texture coordinates change (a UV seam, a hard edge), which leaves the surface closed but its
+//! indices apart. Triangles whose corners share a position have no area and bound nothing; they
+//! are left out. Several closed pieces together are closed too: a ray from outside all of them
+//! meets each piece's front face before its back faces, whatever the pieces do to each other.
+//!
+//! The primitives know that they are closed; mesh files are tested once at load
+//! (`Mesh::closed`), and the geometry stage then skips their back faces when the eye cannot be
+//! inside or the near plane cut them open (`render::geometry`).
+
+use glam::Vec3;
+use rayon::slice::ParallelSliceMut;
+
+/// Whether the surface of `triangles` over `positions` is closed and faces outwards (module
+/// documentation). An empty surface is not closed; an index past the positions, or a position
+/// that is not finite, makes it open. Sorting, not hashing: a million triangles take tens of
+/// milliseconds on two cores.
+pub fn is_closed(positions: &[Vec3], triangles: &[[u32; 3]]) -> bool {
+    let Some(corners) = welded_corners(positions, triangles) else {
+        return false;
+    };
+    // Every directed edge `from → to` as a key, with its triangle; and the same edges reversed.
+    // The surface is closed when no key repeats (no two triangles run the same way along an
+    // edge, no fin) and the reversed keys are the same set: each edge's other triangle runs the
+    // other way. Sorted, the two lists then match entry for entry, each pairing an edge's
+    // triangle with its neighbour across it.
+    let edge_key = |from: u32, to: u32| (u64::from(from) << 32) | u64::from(to);
+    let mut edges = Vec::with_capacity(triangles.len() * 3);
+    let mut reversed = Vec::with_capacity(triangles.len() * 3);
+    for (triangle, corners) in corners.iter().enumerate() {
+        let Some([a, b, c]) = *corners else {
+            continue;
+        };
+        for (from, to) in [(a, b), (b, c), (c, a)] {
+            edges.push((edge_key(from, to), triangle as u32));
+            reversed.push((edge_key(to, from), triangle as u32));
+        }
+    }
+    if edges.is_empty() {
+        return false;
+    }
+    edges.par_sort_unstable();
+    reversed.par_sort_unstable();
+    if edges.windows(2).any(|pair| pair[0].0 == pair[1].0) {
+        return false;
+    }
+    let mut pieces = Pieces::new(triangles.len());
+    for (&(key, triangle), &(reversed_key, neighbour)) in edges.iter().zip(&reversed) {
+        if key != reversed_key {
+            return false; // a border edge
+        }
+        pieces.join(triangle as usize, neighbour as usize);
+    }
+    // Six times each piece's signed volume: the sum of `p_a · (p_b × p_c)` over its triangles,
+    // added in triangle order into its piece's root (the piece's first triangle).
+    let mut volumes = vec![0.0f64; triangles.len()];
+    for (triangle, vertices) in triangles.iter().enumerate() {
+        if corners[triangle].is_some() {
+            let [pa, pb, pc] = vertices.map(|v| positions[v as usize].as_dvec3());
+            volumes[pieces.root(triangle)] += pa.dot(pb.cross(pc));
+        }
+    }
+    (0..triangles.len())
+        .filter(|&triangle| corners[triangle].is_some() && pieces.root(triangle) == triangle)
+        .all(|root| volumes[root] > 0.0)
+}
+
+/// Per triangle, its corners as position ids (equal positions, equal ids), or `None` when two
+/// corners are one position. `None` for the whole when an index is out of range or a position is
+/// not finite.
+fn welded_corners(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<Vec<Option<[u32; 3]>>> {
+    if positions.iter().any(|p| !p.is_finite()) {
+        return None;
+    }
+    // +0.0 for −0.0, so that the two zeros are one position.
+    let key = |p: Vec3| (p + Vec3::ZERO).to_array().map(f32::to_bits);
+    let mut by_position: Vec<u32> = (0..positions.len() as u32).collect();
+    by_position.par_sort_unstable_by_key(|&v| (key(positions[v as usize]), v));
+    let mut id_of_index = vec![0u32; positions.len()];
+    let mut id = 0;
+    for (rank, pair) in by_position.iter().enumerate() {
+        if rank > 0 && key(positions[*pair as usize]) != key(positions[by_position[rank - 1] as usize]) {
+            id += 1;
+        }
+        id_of_index[*pair as usize] = id;
+    }
+    triangles
+        .iter()
+        .map(|triangle| {
+            let [a, b, c] = triangle.map(|v| id_of_index.get(v as usize).copied());
+            let [a, b, c] = [a?, b?, c?];
+            Some((a != b && b != c && c != a).then_some([a, b, c]))
+        })
+        .collect()
+}
+
+/// Connected pieces of triangles (union-find with path halving): a piece's root is its first
+/// triangle.
+struct Pieces {
+    parent: Vec<usize>,
+}
+
+impl Pieces {
+    fn new(count: usize) -> Self {
+        Pieces {
+            parent: (0..count).collect(),
+        }
+    }
+
+    fn root(&mut self, mut item: usize) -> usize {
+        while self.parent[item] != item {
+            self.parent[item] = self.parent[self.parent[item]];
+            item = self.parent[item];
+        }
+        item
+    }
+
+    fn join(&mut self, a: usize, b: usize) {
+        let (a, b) = (self.root(a), self.root(b));
+        if a != b {
+            self.parent[a.max(b)] = a.min(b);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit cube's eight corners and twelve counter-clockwise (outward) triangles.
+    fn cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let positions = (0..8)
+            .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32))
+            .collect();
+        let quads = [
+            [0, 2, 3, 1], // z = 0, facing −z
+            [4, 5, 7, 6], // z = 1
+            [0, 1, 5, 4], // y = 0
+            [2, 6, 7, 3], // y = 1
+            [0, 4, 6, 2], // x = 0
+            [1, 3, 7, 5], // x = 1
+        ];
+        let triangles = quads
+            .iter()
+            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
+            .collect();
+        (positions, triangles)
+    }
+
+    fn inside_out(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+        triangles.iter().map(|&[a, b, c]| [a, c, b]).collect()
+    }
+
+    #[test]
+    fn a_cube_is_closed_and_inside_out_it_is_not() {
+        let (positions, triangles) = cube();
+        assert!(is_closed(&positions, &triangles));
+        assert!(!is_closed(&positions, &inside_out(&triangles)));
+    }
+
+    #[test]
+    fn a_missing_face_a_flipped_face_or_a_fin_opens_it() {
+        let (positions, triangles) = cube();
+        assert!(!is_closed(&positions, &triangles[..10]), "one face missing");
+        let mut flipped = triangles.clone();
+        flipped[3] = [flipped[3][0], flipped[3][2], flipped[3][1]];
+        assert!(
+            !is_closed(&positions, &flipped),
+            "one triangle wound the other way"
+        );
+        let mut fin = positions.clone();
+        fin.push(Vec3::new(0.5, 0.5, 3.0));
+        let mut with_fin = triangles.clone();
+        with_fin.push([4, 5, 8]);
+        assert!(!is_closed(&fin, &with_fin), "a third triangle on an edge");
+    }
+
+    #[test]
+    fn vertices_split_at_seams_are_welded_by_position() {
+        // Every triangle gets its own three vertices, as a loader does at hard edges.
+        let (positions, triangles) = cube();
+        let split_positions: Vec<Vec3> = triangles
+            .iter()
+            .flat_map(|t| t.map(|v| positions[v as usize]))
+            .collect();
+        let split_triangles: Vec<[u32; 3]> = (0..triangles.len() as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect();
+        assert!(is_closed(&split_positions, &split_triangles));
+        // −0.0 and +0.0 are one position.
+        let mut signed_zeros = split_positions.clone();
+        signed_zeros[0].x = -0.0;
+        assert!(is_closed(&signed_zeros, &split_triangles));
+    }
+
+    #[test]
+    fn separate_closed_pieces_are_closed_unless_one_is_inside_out() {
+        let (positions, triangles) = cube();
+        let mut two = positions.clone();
+        two.extend(positions.iter().map(|p| *p + Vec3::new(3.0, 0.0, 0.0)));
+        let shifted = |t: &[[u32; 3]]| t.iter().map(|f| f.map(|v| v + 8)).collect::<Vec<_>>();
+        let both = [triangles.clone(), shifted(&triangles)].concat();
+        assert!(is_closed(&two, &both));
+        let one_inverted = [triangles.clone(), shifted(&inside_out(&triangles))].concat();
+        assert!(!is_closed(&two, &one_inverted));
+    }
+
+    #[test]
+    fn degenerate_triangles_are_ignored_and_bad_input_is_open() {
+        let (positions, mut triangles) = cube();
+        triangles.push([0, 0, 1]);
+        assert!(
+            is_closed(&positions, &triangles),
+            "a zero-area triangle bounds nothing"
+        );
+        assert!(
+            !is_closed(&positions, &[[0, 1, 99]]),
+            "an index past the positions"
+        );
+        let mut not_finite = positions.clone();
+        not_finite[0].x = f32::NAN;
+        assert!(!is_closed(&not_finite, &triangles));
+        assert!(!is_closed(&[], &[]));
+    }
+}
