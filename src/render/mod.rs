@@ -5,7 +5,8 @@
 //!   transform · project · per-vertex lighting (Gouraud)        once per vertex
 //!   facing · clip · snap · setup · bin into tiles               per triangle, per chunk
 //!     └─► RasterChunk list: raster triangles and their tile bins, in submission order
-//! tiles    bands of tile rows in parallel, each band's tiles in order, into the band's rows:
+//! tiles    bands of tile rows taken from a queue by every core, the most work first; each
+//!          band's tiles in order, into the band's rows:
 //!   raster   fixed-point edge functions, top-left rule, depth test → visibility buffer
 //!   shade    each visible pixel once: flat / Gouraud / Phong, written into the frame
 //! ```
@@ -28,12 +29,11 @@ pub mod shade;
 pub mod shade_fast;
 pub mod shadow;
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use crate::scene::Scene;
 
@@ -211,7 +211,7 @@ fn render_frame(
     let geometry_time = started.elapsed();
 
     // Each band of tile rows is rendered straight into its own slice of the frame, tile after
-    // tile; bands run in parallel. No tile image is kept and nothing is copied afterwards.
+    // tile. No tile image is kept and nothing is copied afterwards.
     let started = Instant::now();
     let (width, height) = (tiles.width, tiles.height);
     let pixel_count = width as usize * height as usize;
@@ -230,47 +230,65 @@ fn render_frame(
     // how a bug is reported (exit code 101, nothing written; tests/suite/robustness.rs).
     #[cfg(debug_assertions)]
     let simulate_panic = std::env::var_os("LAMPSHADE_SIMULATE_PANIC").is_some();
-    let band_results: Vec<(Duration, Duration, usize)> = framebuffer
+    let bands: Vec<Mutex<Option<BandTarget>>> = framebuffer
         .color
-        .par_chunks_mut(band)
-        .zip(framebuffer.covered.par_chunks_mut(band))
-        .enumerate()
-        .map(|(tile_row, (color, covered))| {
+        .chunks_mut(band)
+        .zip(framebuffer.covered.chunks_mut(band))
+        .map(|(color, covered)| Mutex::new(Some((color, covered))))
+        .collect();
+    let queue = BandQueue::new(&frame, bands.len());
+    let band_results: Vec<Mutex<BandTimes>> = bands.iter().map(|_| Mutex::default()).collect();
+    // Every worker takes the next band from the queue until it is empty; a band's pixels do not
+    // depend on which worker renders it, so the image is the same for any thread count and any
+    // timing.
+    rayon::broadcast(|_| {
+        let mut scratch = shade::TileScratch::default();
+        let mut visibility = raster::Visibility::new();
+        while let Some(tile_row) = queue.next() {
             #[cfg(debug_assertions)]
             if simulate_panic {
                 panic!("simulated bug in band {tile_row} (LAMPSHADE_SIMULATE_PANIC)");
             }
+            let Some((color, covered)) = lock(&bands[tile_row]).take() else {
+                continue; // the queue hands out each band once
+            };
             let mut target = shade::TileTarget {
                 color,
                 covered,
                 stride: width as usize,
             };
-            let (mut raster_time, mut shade_time, mut shaded) = (Duration::ZERO, Duration::ZERO, 0);
-            let mut scratch = shade::TileScratch::default();
-            let mut visibility = raster::Visibility::new();
+            let mut times = BandTimes::default();
             for column in 0..tiles.columns as usize {
                 let index = tile_row * tiles.columns as usize + column;
                 let raster_started = Instant::now();
                 visibility.rasterize(tiles.rect(index), pattern, &frame.raster, index);
                 let shade_started = Instant::now();
-                shaded += shade::shade_tile(
+                times.shaded += shade::shade_tile(
                     &frame,
                     &visibility,
                     scene.image.background,
                     &mut target,
                     &mut scratch,
                 );
-                raster_time += shade_started - raster_started;
-                shade_time += shade_started.elapsed();
+                times.raster += shade_started - raster_started;
+                times.shade += shade_started.elapsed();
                 progress.tile_done();
             }
-            (raster_time, shade_time, shaded)
+            *lock(&band_results[tile_row]) = times;
+        }
+    });
+    let band_results: Vec<BandTimes> = band_results
+        .into_iter()
+        .map(|times| {
+            times
+                .into_inner()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
         })
         .collect();
     let resolve_started = Instant::now();
-    let raster_thread_time = band_results.iter().map(|band| band.0).sum();
-    let shade_thread_time = band_results.iter().map(|band| band.1).sum();
-    let shaded_pixels = band_results.iter().map(|band| band.2).sum();
+    let raster_thread_time = band_results.iter().map(|band| band.raster).sum();
+    let shade_thread_time = band_results.iter().map(|band| band.shade).sum();
+    let shaded_pixels = band_results.iter().map(|band| band.shaded).sum();
     if options.debug_view == Some(DebugView::Depth) {
         normalize_depth(framebuffer);
     }
@@ -286,6 +304,63 @@ fn render_frame(
         threads: rayon::current_num_threads(),
     };
     (stats, frame)
+}
+
+/// One band of tile rows of the frame: its colour and coverage rows.
+type BandTarget<'a> = (&'a mut [Vec3], &'a mut [bool]);
+
+/// What rendering one band took, summed over its tiles.
+#[derive(Debug, Default, Clone, Copy)]
+struct BandTimes {
+    raster: Duration,
+    shade: Duration,
+    shaded: usize,
+}
+
+/// The bands of a frame in the order workers take them: the most work first (longest
+/// processing time first), so that the last bands taken are short and no core waits long for
+/// another to finish. A band's work is estimated from its bins: the triangles binned into its
+/// tiles, plus a tile's worth for each tile (clearing and resolving cost something even when
+/// empty). Ties keep the top-to-bottom order, so the order depends only on the frame.
+struct BandQueue {
+    order: Vec<usize>,
+    next: AtomicUsize,
+}
+
+impl BandQueue {
+    fn new(frame: &frame::Frame, bands: usize) -> Self {
+        let columns = frame.tiles.columns as usize;
+        let per_tile_floor = 16;
+        let work = |band: usize| -> usize {
+            (band * columns..(band + 1) * columns)
+                .map(|tile| {
+                    per_tile_floor
+                        + frame
+                            .raster
+                            .iter()
+                            .map(|chunk| chunk.tile_triangles(tile).len())
+                            .sum::<usize>()
+                })
+                .sum()
+        };
+        let mut order: Vec<usize> = (0..bands).collect();
+        order.sort_by_cached_key(|&band| std::cmp::Reverse(work(band)));
+        BandQueue {
+            order,
+            next: AtomicUsize::new(0),
+        }
+    }
+
+    /// The next band to render, `None` once every band has been handed out.
+    fn next(&self) -> Option<usize> {
+        self.order.get(self.next.fetch_add(1, Ordering::Relaxed)).copied()
+    }
+}
+
+/// The value behind `mutex`, whether or not a worker panicked holding it (the panic is
+/// re-raised by `rayon::broadcast` anyway).
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 /// The depth view's shader wrote view distances; map them so the nearest covered pixel is white
