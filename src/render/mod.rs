@@ -115,6 +115,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderSta
 #[derive(Default)]
 pub struct Renderer {
     spare: geometry::SpareBuffers,
+    shadow_buffers: shadow::ShadowBuffers,
     framebuffer: FrameBuffer,
     progress: Arc<RenderProgress>,
 }
@@ -182,13 +183,15 @@ impl Renderer {
     }
 
     fn render_in_current_pool(&mut self, scene: &Scene, options: &RenderOptions) -> RenderStats {
-        let (stats, frame) = render_frame(
+        let (stats, mut frame) = render_frame(
             scene,
             options,
             &mut self.spare,
+            &mut self.shadow_buffers,
             &mut self.framebuffer,
             &self.progress,
         );
+        self.shadow_buffers.keep(std::mem::take(&mut frame.shadows));
         self.spare.keep(frame);
         stats
     }
@@ -198,13 +201,14 @@ fn render_frame(
     scene: &Scene,
     options: &RenderOptions,
     spare: &mut geometry::SpareBuffers,
+    shadow_buffers: &mut shadow::ShadowBuffers,
     framebuffer: &mut FrameBuffer,
     progress: &RenderProgress,
 ) -> (RenderStats, frame::Frame) {
     let started = Instant::now();
     progress.start_geometry();
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
-    let shadows = shadow::render_shadow_maps(scene, scene.camera.eye);
+    let shadows = shadow::render_shadow_maps(scene, scene.camera.eye, shadow_buffers);
     let frame = geometry::build_frame_in(scene, pattern, options.debug_view, shadows, spare);
     let tiles = frame.tiles;
     // Binning is done by the geometry stage's chunks, in parallel with the rest of their work.

@@ -683,37 +683,115 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
 }
 
 /// The depth test of one triangle at every pixel centre of the tile: [`for_each_covered_sample`]
-/// with one sample, written for the common case. The fill rule's bias is folded into the edge
-/// values (`E − min_inside ≥ 0`), so the inside test is one sign check of their bitwise or.
-/// Depth is computed from the unbiased values, exactly as the general loop does.
+/// with one sample, written for the common case (see [`depth_test_single_sample`]).
 fn rasterize_single_sample(triangle: &RasterTriangle, id: u32, visibility: &mut Visibility) {
     let rect = visibility.rect;
+    let rows = RowLayout {
+        stride: rect.width() as usize,
+        x_origin: rect.x0,
+    };
+    depth_test_single_sample::<true>(
+        triangle,
+        rect,
+        rows,
+        &mut visibility.depth,
+        &mut visibility.triangle,
+        id,
+    );
+}
+
+/// Rasterizes tile `tile` (the pixels `rect`) of a depth-only frame straight into `depth`, the
+/// image's rows from `rect.y0` on, `stride` apart (a band of a shadow map): the nearest depth
+/// at every pixel centre, as [`Visibility::rasterize`] finds it with one sample, and nothing
+/// else (no triangle numbers, no buffer of the tile's own). What the rect held before is
+/// replaced.
+pub fn rasterize_depth_only(
+    rect: PixelRect,
+    chunks: &[RasterChunk],
+    tile: usize,
+    depth: &mut [f32],
+    stride: usize,
+) {
+    debug_assert!(rect.width() <= TILE_SIZE);
+    let (x0, width) = (rect.x0 as usize, rect.width() as usize);
+    for row in 0..rect.height() as usize {
+        depth[row * stride + x0..row * stride + x0 + width].fill(f32::NEG_INFINITY);
+    }
+    let rows = RowLayout { stride, x_origin: 0 };
+    for chunk in chunks {
+        for &index in chunk.tile_triangles(tile) {
+            let triangle = &chunk.triangles[index as usize];
+            depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
+        }
+    }
+}
+
+/// Where the pixels of a rect lie in a depth buffer: pixel `(px, py)` at
+/// `(py − rect.y0)·stride + px − x_origin`.
+#[derive(Debug, Clone, Copy)]
+struct RowLayout {
+    stride: usize,
+    x_origin: u32,
+}
+
+/// The depth test of one triangle at every pixel centre of `rect`: [`for_each_covered_sample`]
+/// with one sample, written for the common case, into `depth` laid out as `rows` says; with
+/// `IDS`, the winning pixels of `ids` (laid out alike) get `id`, else `ids` is not touched. The
+/// fill rule's bias is folded into the edge values (`E − min_inside ≥ 0`), so the inside test is
+/// one sign check of their bitwise or. Depth is computed from the unbiased values, exactly as
+/// the general loop does.
+#[inline(always)]
+fn depth_test_single_sample<const IDS: bool>(
+    triangle: &RasterTriangle,
+    rect: PixelRect,
+    rows: RowLayout,
+    depth: &mut [f32],
+    ids: &mut [u32],
+    id: u32,
+) {
     let Some(area) = triangle.bounds.intersect(&rect) else {
         return;
     };
     let mut edges = triangle_edges(triangle, area.x0, area.y0);
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
-    let tile_width = rect.width() as usize;
     let columns = (area.x1 - area.x0) as usize;
+    let [m0, m1, m2] = edges.map(|e| e.min_inside);
+    // The depth where the edge values put a pixel centre inside the triangle.
+    let covered_depth = |[e0, e1, e2]: [i64; 3]| {
+        let inside = ((e0 - m0) | (e1 - m1) | (e2 - m2)) >= 0;
+        // Computed only inside: most pixels of a bounding box are outside.
+        if inside {
+            Some((e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area)
+        } else {
+            None
+        }
+    };
+    let steps = edges.map(|e| e.step_x);
     for py in area.y0..area.y1 {
-        let row = (py - rect.y0) as usize * tile_width + (area.x0 - rect.x0) as usize;
-        let depths = &mut visibility.depth[row..row + columns];
-        let ids = &mut visibility.triangle[row..row + columns];
-        let [mut e0, mut e1, mut e2] = edges.map(|e| e.row_start);
-        for (depth_slot, id_slot) in depths.iter_mut().zip(ids.iter_mut()) {
-            let inside =
-                ((e0 - edges[0].min_inside) | (e1 - edges[1].min_inside) | (e2 - edges[2].min_inside)) >= 0;
-            if inside {
-                let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
-                if depth > *depth_slot {
+        let row = (py - rect.y0) as usize * rows.stride + (area.x0 - rows.x_origin) as usize;
+        let depths = &mut depth[row..row + columns];
+        let mut e = edges.map(|e| e.row_start);
+        if IDS {
+            let ids = &mut ids[row..row + columns];
+            for (depth_slot, id_slot) in depths.iter_mut().zip(ids.iter_mut()) {
+                if let Some(depth) = covered_depth(e)
+                    && depth > *depth_slot
+                {
                     *depth_slot = depth;
                     *id_slot = id;
                 }
+                e = [e[0] + steps[0], e[1] + steps[1], e[2] + steps[2]];
             }
-            e0 += edges[0].step_x;
-            e1 += edges[1].step_x;
-            e2 += edges[2].step_x;
+        } else {
+            for depth_slot in depths.iter_mut() {
+                if let Some(depth) = covered_depth(e)
+                    && depth > *depth_slot
+                {
+                    *depth_slot = depth;
+                }
+                e = [e[0] + steps[0], e[1] + steps[1], e[2] + steps[2]];
+            }
         }
         for edge in &mut edges {
             edge.row_start += edge.step_y;
@@ -960,6 +1038,56 @@ mod tests {
         .unwrap();
         let [e0, e1, e2] = edge_values(&t, 3 * 256 + 128, 3 * 256 + 128);
         assert!(((e0 + e1 + e2) as f32 * t.inv_area - 1.0).abs() < 1e-6);
+    }
+
+    /// The depth-only rasterizer (shadow maps) against the visibility buffer's depths, bit for
+    /// bit, on every tile of a lit frame (back faces culled, near-plane clipped) and of a
+    /// depth-only frame (nothing culled), written into a buffer whose stale values it must
+    /// replace.
+    #[test]
+    fn depth_only_rasterizer_equals_the_visibility_buffers_depths() {
+        use crate::render::geometry::{SpareBuffers, build_depth_frame, build_frame};
+        use crate::render::shade_fast;
+        use crate::scene::{BackFaces, LightingModel};
+        let mut scene = shade_fast::tests::scene(
+            LightingModel::Phong,
+            Vec3::splat(0.5),
+            BackFaces::ReverseLit,
+            shade_fast::tests::LIGHTS[0],
+        );
+        scene.camera.projection = crate::scene::Projection::Perspective {
+            fov_y_degrees: 40.0,
+            near: 4.9,
+            far: 100.0,
+        };
+        let lit = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 2]);
+        let depth_only = build_depth_frame(&scene, &scene.camera, 130, &mut SpareBuffers::default());
+        for frame in [lit, depth_only] {
+            let grid = frame.tiles;
+            let stride = grid.width as usize;
+            let mut depth = vec![f32::NAN; stride * grid.height as usize];
+            let mut covered = 0;
+            for (tile_row, band) in depth.chunks_mut(TILE_SIZE as usize * stride).enumerate() {
+                for column in 0..grid.columns as usize {
+                    let tile = tile_row * grid.columns as usize + column;
+                    rasterize_depth_only(grid.rect(tile), &frame.raster, tile, band, stride);
+                }
+            }
+            for tile in 0..grid.count() {
+                let rect = grid.rect(tile);
+                let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+                for y in rect.y0..rect.y1 {
+                    for x in rect.x0..rect.x1 {
+                        let expected =
+                            visibility.depth[((y - rect.y0) * rect.width() + x - rect.x0) as usize];
+                        let found = depth[y as usize * stride + x as usize];
+                        assert_eq!(found.to_bits(), expected.to_bits(), "pixel ({x}, {y})");
+                        covered += usize::from(expected > f32::NEG_INFINITY);
+                    }
+                }
+            }
+            assert!(covered > 1500, "{covered} pixels covered");
+        }
     }
 
     /// The multisample depth test specialised per sample count against the general coverage
