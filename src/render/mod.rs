@@ -86,7 +86,11 @@ pub struct RenderStats {
     /// Triangles that reached the rasterizer (after culling, clipping and dropping zero-area ones;
     /// a clipped triangle may count more than once).
     pub raster_triangles: usize,
-    /// Shadow maps, then transform, lighting per vertex, clipping, setup and binning (wall time).
+    /// Rendering the shadow maps (wall time).
+    pub shadow_maps: Duration,
+    /// Shadow-map faces rendered (six per point light).
+    pub shadow_faces: usize,
+    /// Transform, lighting per vertex, clipping, setup and binning (wall time).
     pub geometry: Duration,
     /// Rasterizing and shading every tile, and stitching them (wall time).
     pub raster_shade: Duration,
@@ -209,6 +213,9 @@ fn render_frame(
     progress.start_geometry();
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
     let shadows = shadow::render_shadow_maps(scene, scene.camera.eye, shadow_buffers);
+    let shadow_time = started.elapsed();
+    let shadow_faces = shadows.iter().flatten().map(|map| map.face_count()).sum();
+    let started = Instant::now();
     let frame = geometry::build_frame_in(scene, pattern, options.debug_view, shadows, spare);
     let tiles = frame.tiles;
     // Binning is done by the geometry stage's chunks, in parallel with the rest of their work.
@@ -281,6 +288,8 @@ fn render_frame(
     let stats = RenderStats {
         triangles: scene.triangle_count(),
         raster_triangles: frame.raster_triangle_count(),
+        shadow_maps: shadow_time,
+        shadow_faces,
         geometry: geometry_time,
         raster_shade: started.elapsed(),
         raster_thread_time,

@@ -71,6 +71,11 @@ impl ShadowMap {
         }
     }
 
+    /// How many faces the map has: one, or six for a cube.
+    pub fn face_count(&self) -> usize {
+        self.faces.len()
+    }
+
     /// [`ShadowMap::visibility`] of eight points at once, where `wanted` holds (1 elsewhere):
     /// each lane has the bits of the one-point call. The projection into the light's view, the
     /// normal offset and the tests that the point is in the map are computed lane-wise; the
