@@ -705,6 +705,14 @@ fn rasterize_single_sample(triangle: &RasterTriangle, id: u32, visibility: &mut 
 /// at every pixel centre, as [`Visibility::rasterize`] finds it with one sample, and nothing
 /// else (no triangle numbers, no buffer of the tile's own). What the rect held before is
 /// replaced.
+///
+/// Only depth is kept, so the order of the triangles does not matter: the nearest of a set is
+/// the same value whatever the order (the one exception, `+0` against `−0` at the far plane,
+/// cannot happen in a shadow map, whose far plane lies beyond the scene). Front faces go first;
+/// then each back face is rasterized only if some block of texels it touches may still hold
+/// something farther than its nearest possible depth ([`depth_bound`]). Seen from a light, a
+/// closed mesh's back faces lie behind its front faces except along its outline, so most of
+/// them are skipped, and the depths are those of rasterizing every triangle in order.
 pub fn rasterize_depth_only(
     rect: PixelRect,
     chunks: &[RasterChunk],
@@ -718,11 +726,82 @@ pub fn rasterize_depth_only(
         depth[row * stride + x0..row * stride + x0 + width].fill(f32::NEG_INFINITY);
     }
     let rows = RowLayout { stride, x_origin: 0 };
+    let mut back_faces = false;
     for chunk in chunks {
         for &index in chunk.tile_triangles(tile) {
             let triangle = &chunk.triangles[index as usize];
-            depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
+            if triangle.back_facing {
+                back_faces = true;
+            } else {
+                depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
+            }
         }
+    }
+    if !back_faces {
+        return;
+    }
+    let farthest = FarthestInBlocks::of(rect, depth, stride);
+    for chunk in chunks {
+        for &index in chunk.tile_triangles(tile) {
+            let triangle = &chunk.triangles[index as usize];
+            if triangle.back_facing && farthest.may_be_nearer(triangle, rect) {
+                depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
+            }
+        }
+    }
+}
+
+/// A bound on the depth a triangle can write: no interpolated depth exceeds it. The depth at a
+/// covered centre is `((e₀·d₀ + e₁·d₁) + e₂·d₂)·(1/A)` with integer `eᵢ ≥ 0` summing to `A`,
+/// so exactly it is at most `max dᵢ`; each of the eight roundings on the way (the three
+/// conversions, two products, two sums, the reciprocal and the last product) adds at most a
+/// relative 2⁻²⁴ of `max |dᵢ|`, under 2⁻²⁰ in all.
+#[inline]
+fn depth_bound(triangle: &RasterTriangle) -> f32 {
+    let [d0, d1, d2] = triangle.depth;
+    let nearest = d0.max(d1).max(d2);
+    let magnitude = d0.abs().max(d1.abs()).max(d2.abs());
+    nearest + magnitude * (1.0 / (1 << 20) as f32)
+}
+
+/// Texels per side of the blocks of [`FarthestInBlocks`].
+const DEPTH_BLOCK: u32 = 8;
+/// Blocks per side of a tile.
+const TILE_BLOCKS: usize = (TILE_SIZE / DEPTH_BLOCK) as usize;
+
+/// The farthest depth in each 8×8 block of a tile's texels.
+struct FarthestInBlocks {
+    farthest: [f32; TILE_BLOCKS * TILE_BLOCKS],
+}
+
+impl FarthestInBlocks {
+    fn of(rect: PixelRect, depth: &[f32], stride: usize) -> Self {
+        let mut farthest = [f32::INFINITY; TILE_BLOCKS * TILE_BLOCKS];
+        for row in 0..rect.height() as usize {
+            let texels = &depth[row * stride + rect.x0 as usize..][..rect.width() as usize];
+            let blocks = &mut farthest[row / DEPTH_BLOCK as usize * TILE_BLOCKS..][..TILE_BLOCKS];
+            for (block, texels) in blocks.iter_mut().zip(texels.chunks(DEPTH_BLOCK as usize)) {
+                // `<` and not `f32::min`, so that the loop vectorises (no NaN is stored).
+                *block = texels.iter().fold(*block, |least, &d| if d < least { d } else { least });
+            }
+        }
+        FarthestInBlocks { farthest }
+    }
+
+    /// Whether `triangle` may be nearer than what some texel of the blocks it touches holds
+    /// (if not, its depth test fails everywhere and it changes nothing).
+    #[inline]
+    fn may_be_nearer(&self, triangle: &RasterTriangle, rect: PixelRect) -> bool {
+        let Some(area) = triangle.bounds.intersect(&rect) else {
+            return false;
+        };
+        let bound = depth_bound(triangle);
+        let (bx0, bx1) = ((area.x0 - rect.x0) / DEPTH_BLOCK, (area.x1 - 1 - rect.x0) / DEPTH_BLOCK);
+        let (by0, by1) = ((area.y0 - rect.y0) / DEPTH_BLOCK, (area.y1 - 1 - rect.y0) / DEPTH_BLOCK);
+        (by0..=by1).any(|by| {
+            let row = &self.farthest[by as usize * TILE_BLOCKS..][..TILE_BLOCKS];
+            row[bx0 as usize..=bx1 as usize].iter().any(|&farthest| !(farthest >= bound))
+        })
     }
 }
 
