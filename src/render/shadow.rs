@@ -247,13 +247,14 @@ impl ShadowFace {
         let (half, scale) = (Floats::splat(0.5), Floats::splat(self.size as f32));
         let columns = ((ndc.x + one) * half) * scale;
         let rows = ((one - ndc.y) * half) * scale;
-        let size = i64::from(self.size);
+        // Every lane at once, without a branch: converted to `i32` rather than `i64` (both
+        // saturate, and clamping to the map leaves the same texel), so that it vectorises.
+        let last = self.size as i32 - 1;
+        let x = columns.0.map(|column| (column as i32).clamp(0, last));
+        let y = rows.0.map(|row| (row as i32).clamp(0, last));
         let texels = std::array::from_fn(|lane| {
             if looked_up.lane(lane) {
-                (
-                    (columns.0[lane] as i64).clamp(0, size - 1),
-                    (rows.0[lane] as i64).clamp(0, size - 1),
-                )
+                (i64::from(x[lane]), i64::from(y[lane]))
             } else {
                 (0, 0)
             }
