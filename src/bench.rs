@@ -2,8 +2,8 @@
 //!
 //! Each scene is loaded once; then for every mode and thread count it is rendered `warmup`
 //! times untimed and `frames` times timed, in one process, as a GL benchmark times frames in a
-//! warm context. A frame is `render::render`: geometry, binning, rasterizing, shading and the
-//! resolve into a linear-light frame buffer; loading and encoding are not part of it (the
+//! warm context. A frame is `render::render`: shadow maps, geometry, binning, rasterizing,
+//! shading and the resolve into a linear-light frame buffer; loading and encoding are not part of it (the
 //! one-shot `render` command reports those). Binning is part of the geometry stage (each chunk
 //! of triangles bins its own). Times are medians and minimums over the frames;
 //! the stage times are medians too, with rasterizing and shading given as thread time summed
@@ -197,11 +197,12 @@ pub fn run(args: &BenchArgs) -> i32 {
                 args.warmup,
             );
             outln!(
-                "  {:<8} {:>3} {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>7} {:>8} {:>8} {:>5}{}",
+                "  {:<8} {:>3} {:>9} {:>9} | {:>7} {:>8} {:>8} {:>8} {:>8} | {:>7} {:>8} {:>8} {:>5}{}",
                 "mode",
                 "thr",
                 "median",
                 "min",
+                "shadows",
                 "geometry",
                 "raster*",
                 "shade*",
@@ -339,6 +340,8 @@ fn report(
             "frames": measurement.frames.len(),
             "median_ms": ms(median),
             "min_ms": ms(measurement.min()),
+            "shadow_maps_ms": ms(measurement.stage(|s| s.shadow_maps)),
+            "shadow_faces": stats.shadow_faces,
             "geometry_ms": ms(measurement.stage(|s| s.geometry)),
             "raster_thread_ms": ms(measurement.stage(|s| s.raster_thread_time)),
             "shade_thread_ms": ms(measurement.stage(|s| s.shade_thread_time)),
@@ -358,11 +361,12 @@ fn report(
         outln!("{line}");
     } else {
         let mut row = format!(
-            "  {:<8} {:>3} {:>6.2} ms {:>6.2} ms | {:>8.2} {:>8.2} {:>8.2} {:>8.2} | {:>7.1} {:>8.1} {:>8} {:>5}",
+            "  {:<8} {:>3} {:>6.2} ms {:>6.2} ms | {:>7.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} | {:>7.1} {:>8.1} {:>8} {:>5}",
             mode.name(),
             stats.threads,
             ms(median),
             ms(measurement.min()),
+            ms(measurement.stage(|s| s.shadow_maps)),
             ms(measurement.stage(|s| s.geometry)),
             ms(measurement.stage(|s| s.raster_thread_time)),
             ms(measurement.stage(|s| s.shade_thread_time)),

@@ -19,7 +19,7 @@ use crate::diag::render_diagnostics;
 use crate::output::{self, Destination, Encoding, OutputFormat, PngCompression};
 use crate::pipeline::{BuildCache, RenderedScene, render_scene_file};
 use crate::progress::{BarClearer, RenderBar};
-use crate::render::{DebugView, RenderOptions};
+use crate::render::{DebugView, RenderOptions, RenderStats};
 use crate::scene::access::FileAccess;
 use crate::scene::limits::parse_memory_size;
 use crate::scene::load::{LoadError, LoadOptions};
@@ -602,13 +602,14 @@ fn render_one(
     let encode_time = started.elapsed();
     if !quiet {
         let summary = format!(
-            "{} → {}: {} triangles, {}×{} px | load {}, geometry {}, raster+shade {}, encode {} ({} threads)",
+            "{} → {}: {} triangles, {}×{} px | load {}, {}geometry {}, raster+shade {}, encode {} ({} threads)",
             scene_path.display(),
             target.name(),
             thousands(stats.triangles),
             framebuffer.width,
             framebuffer.height,
             milliseconds(load_time),
+            shadow_maps_part(&stats),
             milliseconds(stats.geometry),
             milliseconds(stats.raster_shade),
             milliseconds(encode_time),
@@ -652,6 +653,15 @@ fn suggested_output(scene: &Path) -> PathBuf {
 
 fn milliseconds(duration: Duration) -> String {
     format!("{:.1} ms", duration.as_secs_f64() * 1000.0)
+}
+
+/// `shadow maps 12.3 ms, ` when the frame rendered any, for the summary lines.
+pub fn shadow_maps_part(stats: &RenderStats) -> String {
+    if stats.shadow_faces == 0 {
+        String::new()
+    } else {
+        format!("shadow maps {}, ", milliseconds(stats.shadow_maps))
+    }
 }
 
 /// `129600` → `129,600`.

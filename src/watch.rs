@@ -47,7 +47,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{self, Sender};
 use std::time::{Duration, Instant};
 
-use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, thousands, use_color};
+use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, shadow_maps_part, thousands, use_color};
 use crate::diag::render_diagnostics;
 use crate::output::{self, Destination, OutputError, OutputFormat, PngCompression};
 use crate::pipeline::{BuildCache, RenderedScene, render_scene_file};
@@ -387,7 +387,7 @@ impl WatchSession {
             Trigger::Changes(_) => "change",
         };
         outln!(
-            "#{} {} → {}: {} triangles, {}×{} px | load {}, geometry {}, raster+shade {}, encode {} | {since} to image {}",
+            "#{} {} → {}: {} triangles, {}×{} px | load {}, {}geometry {}, raster+shade {}, encode {} | {since} to image {}",
             self.builds,
             trigger.describe(),
             self.output.display(),
@@ -395,6 +395,7 @@ impl WatchSession {
             framebuffer.width,
             framebuffer.height,
             milliseconds(*load_time),
+            shadow_maps_part(stats),
             milliseconds(stats.geometry),
             milliseconds(stats.raster_shade),
             milliseconds(written.encode_time),
@@ -403,7 +404,11 @@ impl WatchSession {
         if let Some(preview) = &self.preview {
             match std::fs::read(&self.output) {
                 Ok(png) => {
-                    let render_time = *load_time + stats.geometry + stats.raster_shade + written.encode_time;
+                    let render_time = *load_time
+                        + stats.shadow_maps
+                        + stats.geometry
+                        + stats.raster_shade
+                        + written.encode_time;
                     let summary = format!(
                         "#{} · {} triangles · {}×{} px · rendered in {} · {since} to image {}",
                         self.builds,

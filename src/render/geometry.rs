@@ -112,8 +112,9 @@ fn overwritable<T: Default + Clone>(mut vector: Vec<T>, count: usize) -> Vec<T> 
 }
 
 /// The scene's geometry as `camera` sees it on a `size`×`size` image, for depth only: nothing is
-/// lit and no face is culled (a shadow map needs every surface that can block light).
-pub fn build_depth_frame(scene: &Scene, camera: &Camera, size: u32) -> Frame {
+/// lit and no face is culled (a shadow map needs every surface that can block light). Built in
+/// the arrays of `spare`; give the frame back with [`SpareBuffers::keep`] when done.
+pub fn build_depth_frame(scene: &Scene, camera: &Camera, size: u32, spare: &mut SpareBuffers) -> Frame {
     build(
         scene,
         camera,
@@ -123,7 +124,7 @@ pub fn build_depth_frame(scene: &Scene, camera: &Camera, size: u32) -> Frame {
         None,
         Vec::new(),
         false,
-        &mut SpareBuffers::default(),
+        spare,
     )
 }
 
@@ -143,10 +144,14 @@ fn build(
     let camera = CameraSetup::new(camera, width as f64 / height as f64);
     let vertex_count: usize = scene.objects.iter().map(|o| o.mesh.positions.len()).sum();
     let needs_colors = lit && scene.objects.iter().any(|o| o.shading == Shading::Gouraud);
-    let needs_attributes = scene.objects.iter().any(|o| {
-        let mesh = &o.mesh;
-        !mesh.uvs.is_empty() || !mesh.uvs1.is_empty() || !mesh.colors.is_empty() || !mesh.tangents.is_empty()
-    });
+    let needs_attributes = lit
+        && scene.objects.iter().any(|o| {
+            let mesh = &o.mesh;
+            !mesh.uvs.is_empty()
+                || !mesh.uvs1.is_empty()
+                || !mesh.colors.is_empty()
+                || !mesh.tangents.is_empty()
+        });
     let mut frame = Frame {
         vertices: overwritable(std::mem::take(&mut spare.vertices), vertex_count),
         vertex_colors: if needs_colors {

@@ -86,7 +86,11 @@ pub struct RenderStats {
     /// Triangles that reached the rasterizer (after culling, clipping and dropping zero-area ones;
     /// a clipped triangle may count more than once).
     pub raster_triangles: usize,
-    /// Shadow maps, then transform, lighting per vertex, clipping, setup and binning (wall time).
+    /// Rendering the shadow maps (wall time).
+    pub shadow_maps: Duration,
+    /// Shadow-map faces rendered (six per point light).
+    pub shadow_faces: usize,
+    /// Transform, lighting per vertex, clipping, setup and binning (wall time).
     pub geometry: Duration,
     /// Rasterizing and shading every tile, and stitching them (wall time).
     pub raster_shade: Duration,
@@ -115,6 +119,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> (FrameBuffer, RenderSta
 #[derive(Default)]
 pub struct Renderer {
     spare: geometry::SpareBuffers,
+    shadow_buffers: shadow::ShadowBuffers,
     framebuffer: FrameBuffer,
     progress: Arc<RenderProgress>,
 }
@@ -182,13 +187,15 @@ impl Renderer {
     }
 
     fn render_in_current_pool(&mut self, scene: &Scene, options: &RenderOptions) -> RenderStats {
-        let (stats, frame) = render_frame(
+        let (stats, mut frame) = render_frame(
             scene,
             options,
             &mut self.spare,
+            &mut self.shadow_buffers,
             &mut self.framebuffer,
             &self.progress,
         );
+        self.shadow_buffers.keep(std::mem::take(&mut frame.shadows));
         self.spare.keep(frame);
         stats
     }
@@ -198,13 +205,17 @@ fn render_frame(
     scene: &Scene,
     options: &RenderOptions,
     spare: &mut geometry::SpareBuffers,
+    shadow_buffers: &mut shadow::ShadowBuffers,
     framebuffer: &mut FrameBuffer,
     progress: &RenderProgress,
 ) -> (RenderStats, frame::Frame) {
     let started = Instant::now();
     progress.start_geometry();
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
-    let shadows = shadow::render_shadow_maps(scene, scene.camera.eye);
+    let shadows = shadow::render_shadow_maps(scene, scene.camera.eye, shadow_buffers);
+    let shadow_time = started.elapsed();
+    let shadow_faces = shadows.iter().flatten().map(|map| map.face_count()).sum();
+    let started = Instant::now();
     let frame = geometry::build_frame_in(scene, pattern, options.debug_view, shadows, spare);
     let tiles = frame.tiles;
     // Binning is done by the geometry stage's chunks, in parallel with the rest of their work.
@@ -295,6 +306,8 @@ fn render_frame(
     let stats = RenderStats {
         triangles: scene.triangle_count(),
         raster_triangles: frame.raster_triangle_count(),
+        shadow_maps: shadow_time,
+        shadow_faces,
         geometry: geometry_time,
         raster_shade: started.elapsed(),
         raster_thread_time,

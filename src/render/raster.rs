@@ -683,37 +683,194 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
 }
 
 /// The depth test of one triangle at every pixel centre of the tile: [`for_each_covered_sample`]
-/// with one sample, written for the common case. The fill rule's bias is folded into the edge
-/// values (`E − min_inside ≥ 0`), so the inside test is one sign check of their bitwise or.
-/// Depth is computed from the unbiased values, exactly as the general loop does.
+/// with one sample, written for the common case (see [`depth_test_single_sample`]).
 fn rasterize_single_sample(triangle: &RasterTriangle, id: u32, visibility: &mut Visibility) {
     let rect = visibility.rect;
+    let rows = RowLayout {
+        stride: rect.width() as usize,
+        x_origin: rect.x0,
+    };
+    depth_test_single_sample::<true>(
+        triangle,
+        rect,
+        rows,
+        &mut visibility.depth,
+        &mut visibility.triangle,
+        id,
+    );
+}
+
+/// Rasterizes tile `tile` (the pixels `rect`) of a depth-only frame straight into `depth`, the
+/// image's rows from `rect.y0` on, `stride` apart (a band of a shadow map): the nearest depth
+/// at every pixel centre, as [`Visibility::rasterize`] finds it with one sample, and nothing
+/// else (no triangle numbers, no buffer of the tile's own). What the rect held before is
+/// replaced.
+///
+/// Only depth is kept, so the order of the triangles does not matter: the nearest of a set is
+/// the same value whatever the order (the one exception, `+0` against `−0` at the far plane,
+/// cannot happen in a shadow map, whose far plane lies beyond the scene). Front faces go first;
+/// then each back face is rasterized only if some block of texels it touches may still hold
+/// something farther than its nearest possible depth ([`depth_bound`]). Seen from a light, a
+/// closed mesh's back faces lie behind its front faces except along its outline, so most of
+/// them are skipped, and the depths are those of rasterizing every triangle in order.
+pub fn rasterize_depth_only(
+    rect: PixelRect,
+    chunks: &[RasterChunk],
+    tile: usize,
+    depth: &mut [f32],
+    stride: usize,
+) {
+    debug_assert!(rect.width() <= TILE_SIZE);
+    let (x0, width) = (rect.x0 as usize, rect.width() as usize);
+    for row in 0..rect.height() as usize {
+        depth[row * stride + x0..row * stride + x0 + width].fill(f32::NEG_INFINITY);
+    }
+    let rows = RowLayout { stride, x_origin: 0 };
+    let mut back_faces = false;
+    for chunk in chunks {
+        for &index in chunk.tile_triangles(tile) {
+            let triangle = &chunk.triangles[index as usize];
+            if triangle.back_facing {
+                back_faces = true;
+            } else {
+                depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
+            }
+        }
+    }
+    if !back_faces {
+        return;
+    }
+    let farthest = FarthestInBlocks::of(rect, depth, stride);
+    for chunk in chunks {
+        for &index in chunk.tile_triangles(tile) {
+            let triangle = &chunk.triangles[index as usize];
+            if triangle.back_facing && farthest.may_be_nearer(triangle, rect) {
+                depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
+            }
+        }
+    }
+}
+
+/// A bound on the depth a triangle can write: no interpolated depth exceeds it. The depth at a
+/// covered centre is `((e₀·d₀ + e₁·d₁) + e₂·d₂)·(1/A)` with integer `eᵢ ≥ 0` summing to `A`,
+/// so exactly it is at most `max dᵢ`; each of the eight roundings on the way (the three
+/// conversions, two products, two sums, the reciprocal and the last product) adds at most a
+/// relative 2⁻²⁴ of `max |dᵢ|`, under 2⁻²⁰ in all.
+#[inline]
+fn depth_bound(triangle: &RasterTriangle) -> f32 {
+    let [d0, d1, d2] = triangle.depth;
+    let nearest = d0.max(d1).max(d2);
+    let magnitude = d0.abs().max(d1.abs()).max(d2.abs());
+    nearest + magnitude * (1.0 / (1 << 20) as f32)
+}
+
+/// Texels per side of the blocks of [`FarthestInBlocks`].
+const DEPTH_BLOCK: u32 = 8;
+/// Blocks per side of a tile.
+const TILE_BLOCKS: usize = (TILE_SIZE / DEPTH_BLOCK) as usize;
+
+/// The farthest depth in each 8×8 block of a tile's texels.
+struct FarthestInBlocks {
+    farthest: [f32; TILE_BLOCKS * TILE_BLOCKS],
+}
+
+impl FarthestInBlocks {
+    fn of(rect: PixelRect, depth: &[f32], stride: usize) -> Self {
+        let mut farthest = [f32::INFINITY; TILE_BLOCKS * TILE_BLOCKS];
+        for row in 0..rect.height() as usize {
+            let texels = &depth[row * stride + rect.x0 as usize..][..rect.width() as usize];
+            let blocks = &mut farthest[row / DEPTH_BLOCK as usize * TILE_BLOCKS..][..TILE_BLOCKS];
+            for (block, texels) in blocks.iter_mut().zip(texels.chunks(DEPTH_BLOCK as usize)) {
+                // `<` and not `f32::min`, so that the loop vectorises (no NaN is stored).
+                *block = texels.iter().fold(*block, |least, &d| if d < least { d } else { least });
+            }
+        }
+        FarthestInBlocks { farthest }
+    }
+
+    /// Whether `triangle` may be nearer than what some texel of the blocks it touches holds
+    /// (if not, its depth test fails everywhere and it changes nothing).
+    #[inline]
+    fn may_be_nearer(&self, triangle: &RasterTriangle, rect: PixelRect) -> bool {
+        let Some(area) = triangle.bounds.intersect(&rect) else {
+            return false;
+        };
+        let bound = depth_bound(triangle);
+        let (bx0, bx1) = ((area.x0 - rect.x0) / DEPTH_BLOCK, (area.x1 - 1 - rect.x0) / DEPTH_BLOCK);
+        let (by0, by1) = ((area.y0 - rect.y0) / DEPTH_BLOCK, (area.y1 - 1 - rect.y0) / DEPTH_BLOCK);
+        (by0..=by1).any(|by| {
+            let row = &self.farthest[by as usize * TILE_BLOCKS..][..TILE_BLOCKS];
+            row[bx0 as usize..=bx1 as usize].iter().any(|&farthest| !(farthest >= bound))
+        })
+    }
+}
+
+/// Where the pixels of a rect lie in a depth buffer: pixel `(px, py)` at
+/// `(py − rect.y0)·stride + px − x_origin`.
+#[derive(Debug, Clone, Copy)]
+struct RowLayout {
+    stride: usize,
+    x_origin: u32,
+}
+
+/// The depth test of one triangle at every pixel centre of `rect`: [`for_each_covered_sample`]
+/// with one sample, written for the common case, into `depth` laid out as `rows` says; with
+/// `IDS`, the winning pixels of `ids` (laid out alike) get `id`, else `ids` is not touched. The
+/// fill rule's bias is folded into the edge values (`E − min_inside ≥ 0`), so the inside test is
+/// one sign check of their bitwise or. Depth is computed from the unbiased values, exactly as
+/// the general loop does.
+#[inline(always)]
+fn depth_test_single_sample<const IDS: bool>(
+    triangle: &RasterTriangle,
+    rect: PixelRect,
+    rows: RowLayout,
+    depth: &mut [f32],
+    ids: &mut [u32],
+    id: u32,
+) {
     let Some(area) = triangle.bounds.intersect(&rect) else {
         return;
     };
     let mut edges = triangle_edges(triangle, area.x0, area.y0);
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
-    let tile_width = rect.width() as usize;
     let columns = (area.x1 - area.x0) as usize;
+    let [m0, m1, m2] = edges.map(|e| e.min_inside);
+    // The depth where the edge values put a pixel centre inside the triangle.
+    let covered_depth = |[e0, e1, e2]: [i64; 3]| {
+        let inside = ((e0 - m0) | (e1 - m1) | (e2 - m2)) >= 0;
+        // Computed only inside: most pixels of a bounding box are outside.
+        if inside {
+            Some((e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area)
+        } else {
+            None
+        }
+    };
+    let steps = edges.map(|e| e.step_x);
     for py in area.y0..area.y1 {
-        let row = (py - rect.y0) as usize * tile_width + (area.x0 - rect.x0) as usize;
-        let depths = &mut visibility.depth[row..row + columns];
-        let ids = &mut visibility.triangle[row..row + columns];
-        let [mut e0, mut e1, mut e2] = edges.map(|e| e.row_start);
-        for (depth_slot, id_slot) in depths.iter_mut().zip(ids.iter_mut()) {
-            let inside =
-                ((e0 - edges[0].min_inside) | (e1 - edges[1].min_inside) | (e2 - edges[2].min_inside)) >= 0;
-            if inside {
-                let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
-                if depth > *depth_slot {
+        let row = (py - rect.y0) as usize * rows.stride + (area.x0 - rows.x_origin) as usize;
+        let depths = &mut depth[row..row + columns];
+        let mut e = edges.map(|e| e.row_start);
+        if IDS {
+            let ids = &mut ids[row..row + columns];
+            for (depth_slot, id_slot) in depths.iter_mut().zip(ids.iter_mut()) {
+                if let Some(depth) = covered_depth(e)
+                    && depth > *depth_slot
+                {
                     *depth_slot = depth;
                     *id_slot = id;
                 }
+                e = [e[0] + steps[0], e[1] + steps[1], e[2] + steps[2]];
             }
-            e0 += edges[0].step_x;
-            e1 += edges[1].step_x;
-            e2 += edges[2].step_x;
+        } else {
+            for depth_slot in depths.iter_mut() {
+                if let Some(depth) = covered_depth(e)
+                    && depth > *depth_slot
+                {
+                    *depth_slot = depth;
+                }
+                e = [e[0] + steps[0], e[1] + steps[1], e[2] + steps[2]];
+            }
         }
         for edge in &mut edges {
             edge.row_start += edge.step_y;
@@ -960,6 +1117,56 @@ mod tests {
         .unwrap();
         let [e0, e1, e2] = edge_values(&t, 3 * 256 + 128, 3 * 256 + 128);
         assert!(((e0 + e1 + e2) as f32 * t.inv_area - 1.0).abs() < 1e-6);
+    }
+
+    /// The depth-only rasterizer (shadow maps) against the visibility buffer's depths, bit for
+    /// bit, on every tile of a lit frame (back faces culled, near-plane clipped) and of a
+    /// depth-only frame (nothing culled), written into a buffer whose stale values it must
+    /// replace.
+    #[test]
+    fn depth_only_rasterizer_equals_the_visibility_buffers_depths() {
+        use crate::render::geometry::{SpareBuffers, build_depth_frame, build_frame};
+        use crate::render::shade_fast;
+        use crate::scene::{BackFaces, LightingModel};
+        let mut scene = shade_fast::tests::scene(
+            LightingModel::Phong,
+            Vec3::splat(0.5),
+            BackFaces::ReverseLit,
+            shade_fast::tests::LIGHTS[0],
+        );
+        scene.camera.projection = crate::scene::Projection::Perspective {
+            fov_y_degrees: 40.0,
+            near: 4.9,
+            far: 100.0,
+        };
+        let lit = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 2]);
+        let depth_only = build_depth_frame(&scene, &scene.camera, 130, &mut SpareBuffers::default());
+        for frame in [lit, depth_only] {
+            let grid = frame.tiles;
+            let stride = grid.width as usize;
+            let mut depth = vec![f32::NAN; stride * grid.height as usize];
+            let mut covered = 0;
+            for (tile_row, band) in depth.chunks_mut(TILE_SIZE as usize * stride).enumerate() {
+                for column in 0..grid.columns as usize {
+                    let tile = tile_row * grid.columns as usize + column;
+                    rasterize_depth_only(grid.rect(tile), &frame.raster, tile, band, stride);
+                }
+            }
+            for tile in 0..grid.count() {
+                let rect = grid.rect(tile);
+                let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+                for y in rect.y0..rect.y1 {
+                    for x in rect.x0..rect.x1 {
+                        let expected =
+                            visibility.depth[((y - rect.y0) * rect.width() + x - rect.x0) as usize];
+                        let found = depth[y as usize * stride + x as usize];
+                        assert_eq!(found.to_bits(), expected.to_bits(), "pixel ({x}, {y})");
+                        covered += usize::from(expected > f32::NEG_INFINITY);
+                    }
+                }
+            }
+            assert!(covered > 1500, "{covered} pixels covered");
+        }
     }
 
     /// The multisample depth test specialised per sample count against the general coverage

@@ -25,9 +25,10 @@
 //!                                                  in the scalar order), else `powf` lane by lane
 //! lit     = reaches ∧ ¬(N·L ≤ 0 ∨ strength ≤ 0)    outside the cone `incidence` gives strength 0,
 //!                                                  so "does not reach" turns the same lanes away
-//! shadow  strength ·= S(p, N, L), lit ∧= ¬(strength ≤ 0)   S the map's PCF visibility, asked
-//!                                                  (lane by lane, scalar) only where lit, as the
-//!                                                  general path asks only lights facing the point
+//! shadow  strength ·= S(p, N, L), lit ∧= ¬(strength ≤ 0)   S the map's PCF visibility in
+//!                                                  lanes (`shadow_visibility_lanes`), looked up only
+//!                                                  where lit, as the general path asks only lights
+//!                                                  facing the point
 //! ```
 //!
 //! `powf` has no lane-wise form with the scalar bits, so an exponent that is not a whole number
@@ -43,6 +44,7 @@ use crate::lighting::{
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::shade::renormalize_or_else;
+use crate::render::shadow::shadow_visibility_lanes;
 use crate::scene::{
     Attenuation, BackFaces, LightingComponent, LightingModel, Material, NormalInterpolation, Shading,
 };
@@ -197,21 +199,8 @@ impl<'f> FastLighting<'f> {
             // The shadow term: the map's visibility where the light reaches a lane, asked only
             // there, as the general path asks it only for lights that face the surface; then
             // its `strength <= 0` test, which turns away the lanes in full shadow.
-            let visibility = match self.frame.shadows.get(index) {
-                Some(Some(map)) => {
-                    let (positions, normals, directions) =
-                        (position.to_array(), normal.to_array(), to_light.to_array());
-                    Floats(std::array::from_fn(|lane| {
-                        if lit.lane(lane) {
-                            map.visibility(positions[lane], normals[lane], directions[lane])
-                        } else {
-                            1.0
-                        }
-                    }))
-                }
-                _ => Floats::splat(1.0),
-            };
-            let strength = strength * visibility;
+            let map = self.frame.shadows.get(index).and_then(Option::as_deref);
+            let strength = strength * shadow_visibility_lanes(map, position, normal, to_light, lit);
             lit = lit.and(!strength.le(Floats::splat(0.0)));
             if !lit.any() {
                 continue;
@@ -508,7 +497,8 @@ pub(crate) mod tests {
         pattern: SamplePattern,
         view: Option<crate::render::DebugView>,
     ) -> Frame {
-        let shadows = crate::render::shadow::render_shadow_maps(scene, scene.camera.eye);
+        let shadows =
+            crate::render::shadow::render_shadow_maps(scene, scene.camera.eye, &mut Default::default());
         build_frame(scene, pattern, view, shadows)
     }
 

@@ -26,8 +26,9 @@ use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
 use rayon::prelude::*;
 
 use crate::render::TILE_SIZE;
-use crate::render::geometry::{CameraSetup, build_depth_frame};
-use crate::render::raster::{SamplePattern, Visibility};
+use crate::render::geometry::{CameraSetup, SpareBuffers, build_depth_frame};
+use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
+use crate::render::raster::rasterize_depth_only;
 use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
 
 /// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
@@ -64,26 +65,93 @@ impl ShadowMap {
     /// The share of the light that reaches `position` (eye-relative), whose shading normal is
     /// `normal`, from the direction `to_light`: 1 lit, 0 in shadow.
     pub fn visibility(&self, position: Vec3, normal: Vec3, to_light: Vec3) -> f32 {
-        let face = if self.faces.len() == 1 {
-            &self.faces[0]
-        } else {
-            // The cube face whose axis is closest to the direction from the light to the point.
-            let direction = -to_light;
-            let Some(face) = self
-                .faces
-                .iter()
-                .max_by(|a, b| a.forward.dot(direction).total_cmp(&b.forward.dot(direction)))
-            else {
-                return 1.0;
-            };
-            face
-        };
-        face.visibility(position, normal, &self.settings)
+        match self.face_towards(to_light) {
+            Some(face) => self.faces[face].visibility(position, normal, &self.settings),
+            None => 1.0,
+        }
+    }
+
+    /// How many faces the map has: one, or six for a cube.
+    pub fn face_count(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// [`ShadowMap::visibility`] of eight points at once, where `wanted` holds (1 elsewhere):
+    /// each lane has the bits of the one-point call. The projection into the light's view, the
+    /// normal offset and the tests that the point is in the map are computed lane-wise; the
+    /// (2r+1)² depth compares, which read texels wherever each point falls, lane after lane.
+    pub fn visibility_lanes(&self, position: Vec3s, normal: Vec3s, to_light: Vec3s, wanted: Mask) -> Floats {
+        if let [face] = self.faces.as_slice() {
+            return face.visibility_lanes(position, normal, &self.settings, wanted);
+        }
+        // A cube: each lane's face picked as the one-point call picks it, then the lanes of each
+        // face that some lane looks at, together.
+        let directions = to_light.to_array();
+        let faces: [Option<usize>; LANES] = std::array::from_fn(|lane| {
+            wanted
+                .lane(lane)
+                .then(|| self.face_towards(directions[lane]))
+                .flatten()
+        });
+        let mut visibility = Floats::splat(1.0);
+        for (index, face) in self.faces.iter().enumerate() {
+            let on_face = Mask::from_bools(faces.map(|f| f == Some(index)));
+            if on_face.any() {
+                let seen = face.visibility_lanes(position, normal, &self.settings, on_face);
+                visibility = on_face.select(seen, visibility);
+            }
+        }
+        visibility
+    }
+
+    /// The face that holds what the light sees in the direction opposite to `to_light`: the only
+    /// one, or the cube face whose axis is closest to that direction.
+    #[inline]
+    fn face_towards(&self, to_light: Vec3) -> Option<usize> {
+        if self.faces.len() == 1 {
+            return Some(0);
+        }
+        let direction = -to_light;
+        self.faces
+            .iter()
+            .enumerate()
+            .max_by(|(_, a), (_, b)| a.forward.dot(direction).total_cmp(&b.forward.dot(direction)))
+            .map(|(index, _)| index)
+    }
+}
+
+/// The visibility of eight points from a light with shadow map `map`
+/// ([`ShadowMap::visibility_lanes`] where `wanted` holds, 1 elsewhere), or 1 everywhere for a
+/// light without one.
+#[inline]
+pub fn shadow_visibility_lanes(
+    map: Option<&ShadowMap>,
+    position: Vec3s,
+    normal: Vec3s,
+    to_light: Vec3s,
+    wanted: Mask,
+) -> Floats {
+    match map {
+        Some(map) => map.visibility_lanes(position, normal, to_light, wanted),
+        None => Floats::splat(1.0),
     }
 }
 
 impl ShadowFace {
     fn visibility(&self, position: Vec3, normal: Vec3, settings: &ShadowSettings) -> f32 {
+        let Some((x, y, depth)) = self.lookup(position, normal, settings) else {
+            return 1.0;
+        };
+        let radius = i64::from(settings.filter_radius);
+        let side = 2 * radius + 1;
+        let lit = lit_texels(&self.depth, i64::from(self.size), x, y, radius, depth);
+        lit as f32 / (side * side) as u32 as f32
+    }
+
+    /// Where the point at `position` with the shading normal `normal` is compared with the map:
+    /// its texel (column, row) and its depth; `None` outside the face (lit).
+    #[inline]
+    fn lookup(&self, position: Vec3, normal: Vec3, settings: &ShadowSettings) -> Option<(i64, i64, f32)> {
         let texel = if self.perspective {
             self.texel_size * (position - self.origin).dot(self.forward).max(0.0)
         } else {
@@ -96,25 +164,145 @@ impl ShadowFace {
         let offset = position + normal * ((settings.bias + reach) * texel);
         let clip = self.clip_from_frame * offset.extend(1.0);
         if clip.w.is_nan() || clip.w <= 0.0 {
-            return 1.0;
+            return None;
         }
         let ndc = clip.xyz() / clip.w;
         if !ndc.is_finite() || ndc.x.abs() > 1.0 || ndc.y.abs() > 1.0 || ndc.z > 1.0 {
-            return 1.0;
+            return None;
         }
         let size = self.size as i64;
         let x = (((ndc.x + 1.0) * 0.5 * self.size as f32) as i64).clamp(0, size - 1);
         let y = (((1.0 - ndc.y) * 0.5 * self.size as f32) as i64).clamp(0, size - 1);
+        Some((x, y, ndc.z))
+    }
+
+    /// [`ShadowFace::visibility`] lane by lane where `wanted` holds (1 elsewhere).
+    fn visibility_lanes(
+        &self,
+        position: Vec3s,
+        normal: Vec3s,
+        settings: &ShadowSettings,
+        wanted: Mask,
+    ) -> Floats {
+        let one = Floats::splat(1.0);
+        let (looked_up, texels, depth) = self.lookup_lanes(position, normal, settings, wanted);
+        if !looked_up.any() {
+            return one;
+        }
         let radius = i64::from(settings.filter_radius);
         let side = 2 * radius + 1;
-        let lit = lit_texels(&self.depth, size, x, y, radius, ndc.z);
-        lit as f32 / (side * side) as u32 as f32
+        let lit = Floats(std::array::from_fn(|lane| {
+            if !looked_up.lane(lane) {
+                return 0.0;
+            }
+            let (x, y) = texels[lane];
+            lit_texels(&self.depth, i64::from(self.size), x, y, radius, depth.0[lane]) as f32
+        }));
+        looked_up.select(lit / Floats::splat((side * side) as u32 as f32), one)
+    }
+
+    /// [`ShadowFace::lookup`] of eight points, where `wanted` holds: the lanes looked up, their
+    /// texels (`(0, 0)` in the others) and depths. The same operations in the same order, glam's
+    /// `Mat4 * Vec4` being `((x_axis·x + y_axis·y) + z_axis·z) + w_axis·w`, each `None` a mask.
+    #[inline]
+    fn lookup_lanes(
+        &self,
+        position: Vec3s,
+        normal: Vec3s,
+        settings: &ShadowSettings,
+        wanted: Mask,
+    ) -> (Mask, [(i64, i64); LANES], Floats) {
+        let texel = if self.perspective {
+            let along = (position - Vec3s::splat(self.origin)).dot(Vec3s::splat(self.forward));
+            Floats::splat(self.texel_size) * along.max(Floats::splat(0.0))
+        } else {
+            Floats::splat(self.texel_size)
+        };
+        let reach = settings.filter_radius as f32 + 0.5;
+        let offset = position + normal.scale(Floats::splat(settings.bias + reach) * texel);
+        let matrix = &self.clip_from_frame;
+        let row = |axis: usize| {
+            let column = |c: glam::Vec4| Floats::splat(c[axis]);
+            ((column(matrix.x_axis) * offset.x + column(matrix.y_axis) * offset.y)
+                + column(matrix.z_axis) * offset.z)
+                + Floats::splat(matrix.w_axis[axis] * 1.0)
+        };
+        let (x, y, z, w) = (row(0), row(1), row(2), row(3));
+        // `w > 0` is false for NaN: the scalar test's `is_nan() || <= 0`, negated.
+        let in_front = w.gt(Floats::splat(0.0));
+        let ndc = Vec3s { x, y, z }.divide(w);
+        let (one, minus_one) = (Floats::splat(1.0), Floats::splat(-1.0));
+        // For finite values `|v| > 1` is `v > 1 ∨ v < −1`.
+        let inside = ndc
+            .x
+            .is_finite()
+            .and(ndc.y.is_finite())
+            .and(ndc.z.is_finite())
+            .and(ndc.x.le(one))
+            .and(minus_one.le(ndc.x))
+            .and(ndc.y.le(one))
+            .and(minus_one.le(ndc.y))
+            .and(!ndc.z.gt(one));
+        let looked_up = wanted.and(in_front).and(inside);
+        let (half, scale) = (Floats::splat(0.5), Floats::splat(self.size as f32));
+        let columns = ((ndc.x + one) * half) * scale;
+        let rows = ((one - ndc.y) * half) * scale;
+        // Every lane at once, without a branch: converted to `i32` rather than `i64` (both
+        // saturate, and clamping to the map leaves the same texel), so that it vectorises.
+        let last = self.size as i32 - 1;
+        let x = columns.0.map(|column| (column as i32).clamp(0, last));
+        let y = rows.0.map(|row| (row as i32).clamp(0, last));
+        let texels = std::array::from_fn(|lane| {
+            if looked_up.lane(lane) {
+                (i64::from(x[lane]), i64::from(y[lane]))
+            } else {
+                (0, 0)
+            }
+        });
+        (looked_up, texels, ndc.z)
+    }
+}
+
+/// The arrays of the last frame's shadow maps and of their depth-only frames, to render the next
+/// frame's maps in (see `geometry::SpareBuffers`): a stream of frames then allocates nothing
+/// big for its maps after the first. Which arrays are reused changes no texel: every texel of a
+/// map is written by its tile.
+#[derive(Default)]
+pub struct ShadowBuffers {
+    geometry: SpareBuffers,
+    texels: Vec<Vec<f32>>,
+}
+
+impl ShadowBuffers {
+    /// Keeps the texel arrays of `maps` (those no one else holds) for the next frame.
+    pub fn keep(&mut self, maps: Vec<Option<Arc<ShadowMap>>>) {
+        for map in maps.into_iter().flatten() {
+            if let Ok(map) = Arc::try_unwrap(map) {
+                self.texels.extend(map.faces.into_iter().map(|face| face.depth));
+            }
+        }
+    }
+
+    /// A texel array of `count` elements, whose values are to be overwritten.
+    fn texels(&mut self, count: usize) -> Vec<f32> {
+        match self.texels.pop() {
+            Some(mut texels) => {
+                texels.resize(count, 0.0);
+                texels
+            }
+            // Zeroed pages from the allocator, not a fill.
+            None => vec![0.0; count],
+        }
     }
 }
 
 /// Renders the shadow map of every light that casts shadows (`None` for the others), in the
-/// eye-relative space of a frame whose eye is `frame_eye`.
-pub fn render_shadow_maps(scene: &Scene, frame_eye: DVec3) -> Vec<Option<Arc<ShadowMap>>> {
+/// eye-relative space of a frame whose eye is `frame_eye`, in the arrays of `buffers`.
+pub fn render_shadow_maps(
+    scene: &Scene,
+    frame_eye: DVec3,
+    buffers: &mut ShadowBuffers,
+) -> Vec<Option<Arc<ShadowMap>>> {
     // The bounds read every vertex of the scene: computed on the first light that casts a
     // shadow, and never for a scene without shadows.
     let mut bounds = None;
@@ -126,7 +314,7 @@ pub fn render_shadow_maps(scene: &Scene, frame_eye: DVec3) -> Vec<Option<Arc<Sha
             let bounds = *bounds.get_or_insert_with(|| bounding_sphere(&scene.objects));
             let faces = light_views(light, bounds, settings.resolution)
                 .into_iter()
-                .map(|(camera, size)| render_face(scene, &camera, size, frame_eye))
+                .map(|(camera, size)| render_face(scene, &camera, size, frame_eye, buffers))
                 .collect();
             Some(Arc::new(ShadowMap { faces, settings }))
         })
@@ -141,20 +329,31 @@ fn up_for(forward: DVec3) -> DVec3 {
 /// How many texels of the (2r+1)² block centred on texel `(x, y)` of a `size`² map do not hold a
 /// surface nearer the light than `depth` (reversed Z: nearer is greater); texels beyond the
 /// border repeat the nearest edge texel.
+#[inline(always)]
 fn lit_texels(map: &[f32], size: i64, x: i64, y: i64, radius: i64, depth: f32) -> u32 {
     if x >= radius && y >= radius && x + radius < size && y + radius < size {
         // The whole block inside the map (nearly every lookup): its rows as slices, no clamping
-        // per texel. The count is the same integer either way.
-        let side = (2 * radius + 1) as usize;
-        (y - radius..=y + radius)
-            .map(|row| {
-                let start = (row * size + x - radius) as usize;
-                map[start..start + side]
-                    .iter()
-                    .filter(|&&occluder| occluder <= depth)
-                    .count() as u32
-            })
-            .sum()
+        // per texel, and for the common radii rows of a known length. The count is the same
+        // integer either way.
+        let first = ((y - radius) * size + x - radius) as usize;
+        let stride = size as usize;
+        match radius {
+            1 => lit_in_block::<3>(map, first, stride, depth),
+            2 => lit_in_block::<5>(map, first, stride, depth),
+            _ => {
+                let side = (2 * radius + 1) as usize;
+                (0..side)
+                    .map(|row| {
+                        let start = first + row * stride;
+                        let texels = &map[start..start + side];
+                        texels
+                            .iter()
+                            .map(|&occluder| u32::from(occluder <= depth))
+                            .sum::<u32>()
+                    })
+                    .sum()
+            }
+        }
     } else {
         let mut lit = 0u32;
         for dy in -radius..=radius {
@@ -165,6 +364,23 @@ fn lit_texels(map: &[f32], size: i64, x: i64, y: i64, radius: i64, depth: f32) -
         }
         lit
     }
+}
+
+/// [`lit_texels`] of a `SIDE`² block wholly inside the map whose first texel is `map[first]`,
+/// its rows `stride` apart: each row one bounds check, its texels compared unrolled.
+#[inline(always)]
+fn lit_in_block<const SIDE: usize>(map: &[f32], first: usize, stride: usize, depth: f32) -> u32 {
+    let mut lit = 0;
+    for row in 0..SIDE {
+        let start = first + row * stride;
+        let texels: &[f32; SIDE] = map[start..start + SIDE]
+            .try_into()
+            .expect("a slice of SIDE texels");
+        for &occluder in texels {
+            lit += u32::from(occluder <= depth);
+        }
+    }
+    lit
 }
 
 /// The cameras (and map sizes) a light's shadow map is rendered from.
@@ -232,31 +448,30 @@ fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32) -> Vec<(C
 }
 
 /// Renders one face's depth, and its mapping from the frame's eye-relative space.
-fn render_face(scene: &Scene, camera: &Camera, size: u32, frame_eye: DVec3) -> ShadowFace {
-    let frame = build_depth_frame(scene, camera, size);
+fn render_face(
+    scene: &Scene,
+    camera: &Camera,
+    size: u32,
+    frame_eye: DVec3,
+    buffers: &mut ShadowBuffers,
+) -> ShadowFace {
+    let frame = build_depth_frame(scene, camera, size, &mut buffers.geometry);
     let grid = frame.tiles;
-    // As the image's tiles are: bands of tile rows in parallel, each band's tiles in order
-    // through one visibility buffer, each tile's depths copied straight into the band's rows. No
-    // tile's buffer outlives it, so rendering a map needs the map and a tile per thread.
+    // As the image's tiles are: bands of tile rows in parallel, each band's tiles in order,
+    // each tile rasterized straight into the band's rows (depth only: no triangle numbers, no
+    // tile buffer, nothing copied). Every texel is written by its tile.
     let side = size as usize;
-    let mut depth = vec![f32::NEG_INFINITY; side * side];
+    let mut depth = buffers.texels(side * side);
     depth
         .par_chunks_mut(TILE_SIZE as usize * side)
         .enumerate()
         .for_each(|(tile_row, band)| {
-            let mut visibility = Visibility::new();
             for column in 0..grid.columns as usize {
                 let index = tile_row * grid.columns as usize + column;
-                let rect = grid.rect(index);
-                visibility.rasterize(rect, SamplePattern::SINGLE, &frame.raster, index);
-                let width = rect.width() as usize;
-                for row in 0..rect.height() as usize {
-                    let start = row * side + rect.x0 as usize;
-                    band[start..start + width]
-                        .copy_from_slice(&visibility.depth[row * width..(row + 1) * width]);
-                }
+                rasterize_depth_only(grid.rect(index), &frame.raster, index, band, side);
             }
         });
+    buffers.geometry.keep(frame);
     let setup = CameraSetup::new(camera, 1.0);
     let clip_from_frame = setup.clip_from_world * DMat4::from_translation(frame_eye - camera.eye);
     let (texel_size, perspective) = match camera.projection {
@@ -280,6 +495,181 @@ fn render_face(scene: &Scene, camera: &Camera, size: u32, frame_eye: DVec3) -> S
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A shadow-casting light of each kind and map shape: directional (orthographic), a narrow
+    /// spot (one perspective face), a wide spot and a point light (six cube faces); filters of
+    /// radius 0, 1 and 2.
+    fn shadowed_lights() -> Vec<Light> {
+        use crate::scene::Attenuation;
+        let settings = |filter_radius| {
+            Some(ShadowSettings {
+                resolution: 128,
+                bias: 1.0,
+                filter_radius,
+            })
+        };
+        vec![
+            Light::Directional {
+                direction: Vec3::new(-1.0, 0.15, -0.25).normalize(),
+                color: Vec3::ONE,
+                shadow: settings(1),
+            },
+            Light::Spot {
+                position: DVec3::new(4.0, -1.5, 0.8),
+                direction: Vec3::new(-5.2, 1.5, -0.8).normalize(),
+                color: Vec3::ONE,
+                cutoff_degrees: 25.0,
+                exponent: 2.0,
+                attenuation: Attenuation::NONE,
+                shadow: settings(2),
+            },
+            Light::Spot {
+                position: DVec3::new(0.3, -0.4, 2.5),
+                direction: Vec3::new(0.0, 0.1, -1.0).normalize(),
+                color: Vec3::ONE,
+                cutoff_degrees: 75.0,
+                exponent: 2.0,
+                attenuation: Attenuation::NONE,
+                shadow: settings(0),
+            },
+            Light::Point {
+                position: DVec3::new(0.1, -2.0, 0.4),
+                color: Vec3::ONE,
+                attenuation: Attenuation::NONE,
+                shadow: settings(1),
+            },
+        ]
+    }
+
+    /// Eight points at once against the one-point lookup, bit for bit, for every kind of light
+    /// and map: points on the surfaces (with their normals, reversed, zero, and grazing the
+    /// light), points all around and behind the light, points that fall on the map's border
+    /// texels and just outside it, and lanes left out.
+    #[test]
+    fn lookups_in_lanes_equal_the_one_point_lookup_bit_for_bit() {
+        use crate::render::shade_fast::tests::{LIGHTS, scene};
+        use crate::scene::{BackFaces, LightingModel};
+        let mut scene = scene(LightingModel::Phong, Vec3::ONE, BackFaces::Lit, LIGHTS[0]);
+        scene.lights = shadowed_lights();
+        let eye = scene.camera.eye;
+        let maps = render_shadow_maps(&scene, eye, &mut ShadowBuffers::default());
+        let frame = crate::render::geometry::build_frame(
+            &scene,
+            crate::render::raster::SamplePattern::SINGLE,
+            None,
+            maps.clone(),
+        );
+        // A fixed pseudo-random sequence in [0, 1).
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for (light, map) in frame.lights.iter().zip(&maps) {
+            let map = map.as_deref().expect("a shadow map");
+            let to_light_from = |position: Vec3| match light.kind {
+                crate::lighting::ShadingLightKind::Directional { to_light } => to_light,
+                crate::lighting::ShadingLightKind::Point { position: at, .. }
+                | crate::lighting::ShadingLightKind::Spot { position: at, .. } => {
+                    (at - position).normalize_or_zero()
+                }
+            };
+            // (position, normal) pairs.
+            let mut points: Vec<(Vec3, Vec3)> = Vec::new();
+            for (n, vertex) in frame.vertices.iter().enumerate() {
+                let to_light = to_light_from(vertex.position);
+                let grazing = (vertex.normal - to_light * vertex.normal.dot(to_light)).normalize_or_zero();
+                let normal = match n % 4 {
+                    0 => vertex.normal,
+                    1 => -vertex.normal,
+                    2 => grazing,
+                    _ => Vec3::ZERO,
+                };
+                points.push((vertex.position, normal));
+            }
+            for _ in 0..2000 {
+                let position =
+                    Vec3::new(random(), random(), random()) * 16.0 - Vec3::splat(8.0) - eye.as_vec3();
+                let normal = Vec3::new(random(), random(), random()) * 2.0 - Vec3::ONE;
+                points.push((position, normal.normalize_or_zero()));
+            }
+            // Around each face's border: unprojected from just inside, on and just outside the
+            // edges of its clip space (with no normal, so no offset moves them).
+            for face in &map.faces {
+                let frame_from_clip = face.clip_from_frame.inverse();
+                for _ in 0..400 {
+                    let edge = [1.0 - 1e-4, 1.0, 1.0 + 1e-4, 1.0 - 0.5 / face.size as f32]
+                        [(random() * 4.0) as usize];
+                    let along = random() * 2.0 - 1.0;
+                    let side = if random() < 0.5 { -edge } else { edge };
+                    let (x, y) = if random() < 0.5 {
+                        (side, along)
+                    } else {
+                        (along, side)
+                    };
+                    let clip = frame_from_clip * glam::Vec4::new(x, y, random(), 1.0);
+                    points.push((clip.truncate() / clip.w, Vec3::ZERO));
+                }
+            }
+            let mut outcomes = [0usize; 3]; // dark, partly lit, lit
+            let mut looked_up_count = 0;
+            for (group, lanes) in points.chunks_exact(LANES).enumerate() {
+                let positions: [Vec3; LANES] = std::array::from_fn(|i| lanes[i].0);
+                let normals: [Vec3; LANES] = std::array::from_fn(|i| lanes[i].1);
+                let to_light: [Vec3; LANES] = std::array::from_fn(|i| to_light_from(positions[i]));
+                let wanted = Mask::from_bools(std::array::from_fn(|i| (group + i) % 11 != 0));
+                let lanes = map.visibility_lanes(
+                    Vec3s::from_array(&positions),
+                    Vec3s::from_array(&normals),
+                    Vec3s::from_array(&to_light),
+                    wanted,
+                );
+                if let [face] = map.faces.as_slice() {
+                    let (looked_up, texels, depths) = face.lookup_lanes(
+                        Vec3s::from_array(&positions),
+                        Vec3s::from_array(&normals),
+                        &map.settings,
+                        wanted,
+                    );
+                    for i in 0..LANES {
+                        let one = face.lookup(positions[i], normals[i], &map.settings);
+                        let lane = looked_up.lane(i).then(|| (texels[i], depths.0[i].to_bits()));
+                        let expected = one
+                            .filter(|_| wanted.lane(i))
+                            .map(|(x, y, depth)| ((x, y), depth.to_bits()));
+                        assert_eq!(lane, expected, "{light:?}: lookup {i} of group {group}");
+                        looked_up_count += usize::from(lane.is_some());
+                    }
+                }
+                for i in 0..LANES {
+                    let expected = if wanted.lane(i) {
+                        map.visibility(positions[i], normals[i], to_light[i])
+                    } else {
+                        1.0
+                    };
+                    assert_eq!(
+                        lanes.0[i].to_bits(),
+                        expected.to_bits(),
+                        "{light:?}: point {i} of group {group}, {:?}",
+                        (positions[i], normals[i])
+                    );
+                    outcomes[usize::from(expected > 0.0) + usize::from(expected >= 1.0)] += 1;
+                }
+            }
+            assert!(
+                map.faces.len() > 1 || looked_up_count > 1000,
+                "{looked_up_count} lookups"
+            );
+            // A filter of radius 0 has no partial shade.
+            let partial_least = if map.settings.filter_radius == 0 { 0 } else { 20 };
+            assert!(
+                outcomes[0] > 20 && outcomes[1] >= partial_least && outcomes[2] > 20,
+                "{light:?}: dark, partly lit, lit: {outcomes:?}"
+            );
+        }
+    }
 
     /// The block count, inside the map by rows and at its border by clamping, equals the
     /// definition (every texel of the block, clamped to the edge) at every texel of a small map,
