@@ -22,6 +22,7 @@
 pub mod gltf;
 pub mod normals;
 pub mod obj;
+mod obj_parse;
 pub mod primitives;
 pub mod tangents;
 

@@ -48,8 +48,11 @@
 //! 5. [`FALLBACK_NORMAL`] (+Z), for positions touched only by degenerate triangles.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+use std::ops::Range;
 
 use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
 
 use super::Mesh;
 
@@ -69,6 +72,58 @@ pub const CREASE_COSINE_TOLERANCE: f32 = 1e-6;
 /// Above this many corners at one position, exact per-corner crease tests (quadratic in the
 /// corner count) give way to greedy clustering.
 const MAX_CORNERS_FOR_EXACT_CREASE: usize = 128;
+
+/// A hash map keyed by small arrays of whole numbers (bits of positions and normals,
+/// indices), hashed with [`WordHasher`].
+type WordMap<K, V> = HashMap<K, V, BuildHasherDefault<WordHasher>>;
+
+fn word_map<K, V>(capacity: usize) -> WordMap<K, V> {
+    HashMap::with_capacity_and_hasher(capacity, BuildHasherDefault::default())
+}
+
+/// A hasher for keys made of a few machine words: each word is mixed in with a multiplication,
+/// and the result goes through MurmurHash3's finaliser so that every bit of every word reaches
+/// the low bits the table indexes by (positions on a grid have long runs of zero bits). Much
+/// cheaper than the standard SipHash for these keys, which were a fifth of the time spent on
+/// normals; SipHash's defence against crafted collisions buys nothing when the worst a crafted
+/// mesh file can do is load slowly.
+#[derive(Debug, Default, Clone, Copy)]
+struct WordHasher(u64);
+
+impl WordHasher {
+    fn add(&mut self, word: u64) {
+        self.0 = (self.0.rotate_left(23) ^ word).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
+
+impl Hasher for WordHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        let mut words = bytes.chunks_exact(8);
+        for word in &mut words {
+            self.add(u64::from_le_bytes(word.try_into().unwrap_or_default()));
+        }
+        let mut last = [0u8; 8];
+        last[..words.remainder().len()].copy_from_slice(words.remainder());
+        self.add(u64::from_le_bytes(last));
+    }
+
+    fn write_u32(&mut self, word: u32) {
+        self.add(u64::from(word));
+    }
+
+    fn write_usize(&mut self, word: usize) {
+        self.add(word as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        let mut hash = self.0;
+        hash ^= hash >> 33;
+        hash = hash.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
+        hash ^= hash >> 33;
+        hash = hash.wrapping_mul(0xC4CE_B9FE_1A85_EC53);
+        hash ^ (hash >> 33)
+    }
+}
 
 /// The unit normal of the triangle `(a, b, c)`, front side counter-clockwise:
 /// `normalize((b − a) × (c − a))`. The zero vector when the triangle is degenerate (zero
@@ -251,7 +306,7 @@ struct PositionGroups {
 
 impl PositionGroups {
     fn new(positions: &[Vec3]) -> Self {
-        let mut group_by_bits: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+        let mut group_by_bits: WordMap<[u32; 3], u32> = word_map(positions.len());
         let group_of_vertex = positions
             .iter()
             .map(|&position| {
@@ -290,7 +345,15 @@ pub(super) fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
     u.cross(v).length().atan2(u.dot(v))
 }
 
+/// Below this many triangles (or corners) the per-triangle and per-position passes run on the
+/// calling thread: rayon's task set-up would cost more than the work.
+const PARALLEL_THRESHOLD: usize = 4096;
+
 /// The normal of every triangle corner (`3 · triangle + k`), per the module documentation.
+///
+/// Each triangle's face normal and angles, and each position's corner normals, depend on
+/// nothing else, so both passes run in parallel with the serial arithmetic (the sums over a
+/// position's corners are added in corner order, as before).
 fn corner_normals(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
@@ -298,9 +361,7 @@ fn corner_normals(
     crease_angle_degrees: f32,
 ) -> Vec<Vec3> {
     let corner_count = triangles.len() * 3;
-    let mut face_of_corner = Vec::with_capacity(corner_count);
-    let mut weight_of_corner = Vec::with_capacity(corner_count);
-    for triangle in triangles {
+    let face_and_angles = |triangle: &[u32; 3]| {
         let [a, b, c] = triangle.map(|vertex| positions[vertex as usize]);
         let face = face_normal(a, b, c);
         let angles = if face == Vec3::ZERO {
@@ -312,11 +373,14 @@ fn corner_normals(
                 interior_angle(c, a, b),
             ]
         };
-        for angle in angles {
-            face_of_corner.push(face);
-            weight_of_corner.push(angle);
-        }
-    }
+        (face, angles)
+    };
+    let faces: Vec<(Vec3, [f32; 3])> = if triangles.len() < PARALLEL_THRESHOLD {
+        triangles.iter().map(face_and_angles).collect()
+    } else {
+        triangles.par_iter().map(face_and_angles).collect()
+    };
+    let corners = CornerFaces { faces: &faces };
 
     // Counting sort of the corners by position group: the corners of group g are
     // corners_by_group[group_start[g]..group_start[g + 1]], in corner order.
@@ -336,64 +400,107 @@ fn corner_normals(
         *slot += 1;
     }
 
+    // The normals in the sorted order, computed in blocks of whole groups (about equal
+    // numbers of corners each), then put back in corner order.
     let crease_cosine = crease_angle_degrees.clamp(0.0, 180.0).to_radians().cos() - CREASE_COSINE_TOLERANCE;
-    let mut normals = vec![Vec3::ZERO; corner_count];
-    let mut crease_sums = Vec::new();
-    for group in 0..groups.group_count {
-        let corners = &corners_by_group[group_start[group]..group_start[group + 1]];
-        crease_sums.clear();
-        if corners.len() <= MAX_CORNERS_FOR_EXACT_CREASE {
-            sum_within_crease_exact(
-                corners,
-                &face_of_corner,
-                &weight_of_corner,
-                crease_cosine,
-                &mut crease_sums,
-            );
+    let mut sorted_normals = vec![Vec3::ZERO; corner_count];
+    let block_count = if corner_count < PARALLEL_THRESHOLD {
+        1
+    } else {
+        4 * rayon::current_num_threads()
+    };
+    let mut blocks = Vec::with_capacity(block_count);
+    let mut rest = sorted_normals.as_mut_slice();
+    let mut first_group = 0;
+    for block in 1..=block_count {
+        let wanted_end = corner_count * block / block_count;
+        let end_group = if block == block_count {
+            groups.group_count
         } else {
-            sum_within_crease_clustered(
-                corners,
-                &face_of_corner,
-                &weight_of_corner,
-                crease_cosine,
-                &mut crease_sums,
-            );
+            // The first group starting at or after the wanted end.
+            group_start
+                .partition_point(|&start| start < wanted_end)
+                .max(first_group)
+        };
+        let (mine, after) = rest.split_at_mut(group_start[end_group] - group_start[first_group]);
+        blocks.push((first_group..end_group, mine));
+        rest = after;
+        first_group = end_group;
+    }
+    let normals_of_block = |(block_groups, normals): (Range<usize>, &mut [Vec3])| {
+        let offset = group_start[block_groups.start];
+        let mut crease_sums = Vec::new();
+        for group in block_groups {
+            let slots = group_start[group]..group_start[group + 1];
+            let group_corners = &corners_by_group[slots.clone()];
+            normals_at_position(group_corners, corners, crease_cosine, &mut crease_sums);
+            normals[slots.start - offset..slots.end - offset].copy_from_slice(&crease_sums);
         }
-        let mut smooth_normal_of_position = None;
-        for (&corner, &crease_sum) in corners.iter().zip(&crease_sums) {
-            let from_crease = unit_or_zero(crease_sum);
-            normals[corner] = if from_crease != Vec3::ZERO {
-                from_crease
-            } else if face_of_corner[corner] != Vec3::ZERO {
-                face_of_corner[corner]
-            } else {
-                *smooth_normal_of_position.get_or_insert_with(|| {
-                    smooth_normal_ignoring_crease(corners, &face_of_corner, &weight_of_corner)
-                })
-            };
-        }
+    };
+    if block_count == 1 {
+        blocks.into_iter().for_each(normals_of_block);
+    } else {
+        blocks.into_par_iter().for_each(normals_of_block);
+    }
+    let mut normals = vec![Vec3::ZERO; corner_count];
+    for (&corner, &normal) in corners_by_group.iter().zip(&sorted_normals) {
+        normals[corner] = normal;
     }
     normals
 }
 
+/// The face normal and interior angles of each triangle, read by corner.
+#[derive(Clone, Copy)]
+struct CornerFaces<'a> {
+    faces: &'a [(Vec3, [f32; 3])],
+}
+
+impl CornerFaces<'_> {
+    /// The face normal of the corner's triangle (zero when degenerate).
+    fn face(self, corner: usize) -> Vec3 {
+        self.faces[corner / 3].0
+    }
+
+    /// The triangle's interior angle at the corner: the corner's weight.
+    fn weight(self, corner: usize) -> f32 {
+        self.faces[corner / 3].1[corner % 3]
+    }
+}
+
+/// The normals of the corners of one position (in the order given), per the module
+/// documentation, into `normals` (cleared first).
+fn normals_at_position(corners: &[usize], faces: CornerFaces, crease_cosine: f32, normals: &mut Vec<Vec3>) {
+    normals.clear();
+    if corners.len() <= MAX_CORNERS_FOR_EXACT_CREASE {
+        sum_within_crease_exact(corners, faces, crease_cosine, normals);
+    } else {
+        sum_within_crease_clustered(corners, faces, crease_cosine, normals);
+    }
+    let mut smooth_normal_of_position = None;
+    for (&corner, normal) in corners.iter().zip(normals.iter_mut()) {
+        let from_crease = unit_or_zero(*normal);
+        *normal = if from_crease != Vec3::ZERO {
+            from_crease
+        } else if faces.face(corner) != Vec3::ZERO {
+            faces.face(corner)
+        } else {
+            *smooth_normal_of_position.get_or_insert_with(|| smooth_normal_ignoring_crease(corners, faces))
+        };
+    }
+}
+
 /// For each corner of one position, the angle-weighted sum of the face normals within the
 /// crease angle of its own face normal (zero for a corner of a degenerate triangle).
-fn sum_within_crease_exact(
-    corners: &[usize],
-    face_of_corner: &[Vec3],
-    weight_of_corner: &[f32],
-    crease_cosine: f32,
-    sums: &mut Vec<Vec3>,
-) {
+fn sum_within_crease_exact(corners: &[usize], faces: CornerFaces, crease_cosine: f32, sums: &mut Vec<Vec3>) {
     for &corner in corners {
-        let own_face = face_of_corner[corner];
+        let own_face = faces.face(corner);
         let mut sum = Vec3::ZERO;
         if own_face != Vec3::ZERO {
             for &other in corners {
-                let other_face = face_of_corner[other];
+                let other_face = faces.face(other);
                 if other_face != Vec3::ZERO && (other == corner || own_face.dot(other_face) >= crease_cosine)
                 {
-                    sum += weight_of_corner[other] * other_face;
+                    sum += faces.weight(other) * other_face;
                 }
             }
         }
@@ -406,8 +513,7 @@ fn sum_within_crease_exact(
 /// angle, and gets its cluster's sum.
 fn sum_within_crease_clustered(
     corners: &[usize],
-    face_of_corner: &[Vec3],
-    weight_of_corner: &[f32],
+    faces: CornerFaces,
     crease_cosine: f32,
     sums: &mut Vec<Vec3>,
 ) {
@@ -418,7 +524,7 @@ fn sum_within_crease_clustered(
     let mut clusters: Vec<Cluster> = Vec::new();
     let mut cluster_of_corner = Vec::with_capacity(corners.len());
     for &corner in corners {
-        let face = face_of_corner[corner];
+        let face = faces.face(corner);
         if face == Vec3::ZERO {
             cluster_of_corner.push(None);
             continue;
@@ -436,7 +542,7 @@ fn sum_within_crease_clustered(
                 clusters.len() - 1
             }
         };
-        clusters[index].sum += weight_of_corner[corner] * face;
+        clusters[index].sum += faces.weight(corner) * face;
         cluster_of_corner.push(Some(index));
     }
     sums.extend(
@@ -447,14 +553,10 @@ fn sum_within_crease_clustered(
 }
 
 /// Fallbacks 3 to 5 of the module documentation for one position.
-fn smooth_normal_ignoring_crease(
-    corners: &[usize],
-    face_of_corner: &[Vec3],
-    weight_of_corner: &[f32],
-) -> Vec3 {
+fn smooth_normal_ignoring_crease(corners: &[usize], faces: CornerFaces) -> Vec3 {
     let weighted_sum: Vec3 = corners
         .iter()
-        .map(|&corner| weight_of_corner[corner] * face_of_corner[corner])
+        .map(|&corner| faces.weight(corner) * faces.face(corner))
         .sum();
     let average = unit_or_zero(weighted_sum);
     if average != Vec3::ZERO {
@@ -462,7 +564,7 @@ fn smooth_normal_ignoring_crease(
     }
     corners
         .iter()
-        .map(|&corner| face_of_corner[corner])
+        .map(|&corner| faces.face(corner))
         .find(|&face| face != Vec3::ZERO)
         .unwrap_or(FALLBACK_NORMAL)
 }
@@ -483,7 +585,7 @@ fn split_vertices(
             .copied()
             .unwrap_or(0)
     };
-    let mut vertex_by_key: HashMap<(u32, u32, [u32; 3]), u32> = HashMap::with_capacity(positions.len());
+    let mut vertex_by_key: WordMap<(u32, u32, [u32; 3]), u32> = word_map(positions.len());
     let mut mesh = Mesh {
         triangles: Vec::with_capacity(triangles.len()),
         ..Mesh::default()
@@ -511,7 +613,7 @@ fn attribute_groups(vertex_count: usize, attributes: VertexAttributes) -> Vec<u3
     if attributes.is_empty() {
         return Vec::new();
     }
-    let mut group_by_key: HashMap<[u32; 12], u32> = HashMap::with_capacity(vertex_count);
+    let mut group_by_key: WordMap<[u32; 12], u32> = word_map(vertex_count);
     (0..vertex_count)
         .map(|vertex| {
             let next = group_by_key.len() as u32;
