@@ -219,10 +219,7 @@ fn parse_obj_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<Par
         }
         FileContent::ObjText | FileContent::OtherText => {}
     }
-    // OBJ is ASCII in practice; a stray Latin-1 byte in a comment or name should not
-    // reject the file.
-    let text = String::from_utf8_lossy(bytes);
-    let parsed = parse_obj_text(&text)
+    let parsed = parse_obj_text(bytes)
         .map_err(|error| MeshError::at(path, error.line, error.column, error.message))?;
     let mut text_warnings = Vec::new();
     if let Some(&first) = parsed.polyline_lines.first() {

@@ -38,9 +38,9 @@
 //! scanned a second time before it, for diagnostics), and keys its vertex map by three
 //! `usize` through SipHash: loading the 3.4 MB koala scan took 86–125 ms, about 30 MB/s.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::ops::Range;
-use std::str::SplitWhitespace;
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -101,17 +101,25 @@ pub(super) struct ObjText {
     texcoords: Vec<Vec2>,
     normals: Vec<Vec3>,
     /// Triangles and statements, range by range, in file order.
-    ranges: Vec<(Vec<[Corner; 3]>, Vec<(usize, Statement)>)>,
+    ranges: Vec<RangeFaces>,
     /// The line numbers of polyline (`l`) statements, which are not drawn.
     pub polyline_lines: Vec<usize>,
     /// Every `usemtl` name with its line, to report names no library defines.
     pub material_uses: Vec<(String, usize)>,
 }
 
+/// The faces of one range of lines.
+#[derive(Debug)]
+struct RangeFaces {
+    triangles: Vec<[Corner; 3]>,
+    /// Each statement with the number of the range's triangles above it.
+    statements: Vec<(usize, Statement)>,
+}
+
 impl ObjText {
     /// How many triangles the faces make.
     pub fn triangle_count(&self) -> usize {
-        self.ranges.iter().map(|(triangles, _)| triangles.len()).sum()
+        self.ranges.iter().map(|range| range.triangles.len()).sum()
     }
 }
 
@@ -124,22 +132,34 @@ struct RangeCounts {
     elements: [usize; 3],
 }
 
-/// Parses and checks `text` (module documentation, steps 1 and 2).
-pub(super) fn parse_obj_text(text: &str) -> Result<ObjText, ScanError> {
-    parse_in_ranges(text, RANGE_BYTES)
+/// Parses and checks the OBJ file `bytes` (module documentation, steps 1 and 2). The bytes
+/// are read as UTF-8 with invalid sequences replaced, as `String::from_utf8_lossy` does (OBJ
+/// is ASCII in practice; a stray Latin-1 byte in a comment or name should not reject the file).
+pub(super) fn parse_obj_text(bytes: &[u8]) -> Result<ObjText, ScanError> {
+    parse_in_ranges(bytes, RANGE_BYTES)
 }
 
 /// [`parse_obj_text`] with ranges of about `range_bytes`: the result is the same for any size.
-fn parse_in_ranges(text: &str, range_bytes: usize) -> Result<ObjText, ScanError> {
-    let ranges = line_ranges(text, range_bytes);
-    let counts: Vec<RangeCounts> = ranges
-        .par_iter()
-        .map(|range| count_range(&text[range.clone()]))
+fn parse_in_ranges(bytes: &[u8], range_bytes: usize) -> Result<ObjText, ScanError> {
+    // Each range is converted to text on its own: a line end is never part of a multi-byte
+    // sequence, so the ranges' replacements are the whole file's.
+    let ranges: Vec<(Cow<str>, RangeCounts)> = line_ranges(bytes, range_bytes)
+        .into_par_iter()
+        .map(|range| {
+            let bytes = &bytes[range];
+            // `from_utf8` checks ASCII a word at a time; the lossy conversion walks every byte.
+            let text = match std::str::from_utf8(bytes) {
+                Ok(text) => Cow::Borrowed(text),
+                Err(_) => String::from_utf8_lossy(bytes),
+            };
+            let counts = count_range(&text);
+            (text, counts)
+        })
         .collect();
     // Each range's first line number and the elements defined above it.
     let mut starts = Vec::with_capacity(ranges.len());
     let (mut line, mut defined) = (1, [0usize; 3]);
-    for range_counts in &counts {
+    for (_, range_counts) in &ranges {
         starts.push((line, defined));
         line += range_counts.line_ends;
         for (total, count) in defined.iter_mut().zip(range_counts.elements) {
@@ -149,7 +169,7 @@ fn parse_in_ranges(text: &str, range_bytes: usize) -> Result<ObjText, ScanError>
     let parsed: Vec<Result<ParsedRange, ScanError>> = ranges
         .par_iter()
         .zip(&starts)
-        .map(|(range, &(first_line, defined))| parse_range(&text[range.clone()], first_line, defined))
+        .map(|((text, _), &(first_line, defined))| parse_range(text, first_line, defined))
         .collect();
 
     let mut text = ObjText {
@@ -168,17 +188,19 @@ fn parse_in_ranges(text: &str, range_bytes: usize) -> Result<ObjText, ScanError>
         text.positions.extend_from_slice(&range.positions);
         text.texcoords.extend_from_slice(&range.texcoords);
         text.normals.extend_from_slice(&range.normals);
-        text.ranges.push((range.triangles, range.statements));
+        text.ranges.push(RangeFaces {
+            triangles: range.triangles,
+            statements: range.statements,
+        });
         text.polyline_lines.extend(range.polyline_lines);
         text.material_uses.extend(range.material_uses);
     }
     Ok(text)
 }
 
-/// Cuts `text` into ranges of whole lines of about `target` bytes (the last line of a range
+/// Cuts `bytes` into ranges of whole lines of about `target` bytes (the last line of a range
 /// keeps its `\n`).
-fn line_ranges(text: &str, target: usize) -> Vec<Range<usize>> {
-    let bytes = text.as_bytes();
+fn line_ranges(bytes: &[u8], target: usize) -> Vec<Range<usize>> {
     let mut ranges = Vec::with_capacity(bytes.len() / target + 1);
     let mut start = 0;
     while start < bytes.len() {
@@ -195,64 +217,94 @@ fn line_ranges(text: &str, target: usize) -> Vec<Range<usize>> {
 
 /// The first pass over a range (module documentation, step 1).
 fn count_range(range: &str) -> RangeCounts {
-    let mut counts = RangeCounts {
-        line_ends: range.bytes().filter(|&byte| byte == b'\n').count(),
-        ..RangeCounts::default()
+    let mut counts = RangeCounts::default();
+    let mut count = |keyword: Option<&str>| match keyword {
+        Some("v") => counts.elements[0] += 1,
+        Some("vt") => counts.elements[1] += 1,
+        Some("vn") => counts.elements[2] += 1,
+        _ => {}
     };
-    for line in range.lines() {
-        match Words::new(line).next() {
-            Some("v") => counts.elements[0] += 1,
-            Some("vt") => counts.elements[1] += 1,
-            Some("vn") => counts.elements[2] += 1,
-            _ => {}
+    if range.is_ascii() {
+        for line in AsciiLines::new(range) {
+            count(AsciiWords::new(line).next());
+        }
+    } else {
+        for line in range.lines() {
+            count(line.split_whitespace().next());
         }
     }
+    counts.line_ends = memchr::memchr_iter(b'\n', range.as_bytes()).count();
     counts
 }
 
-/// The words of a line, split at whitespace as `str::split_whitespace` splits them; bytes are
-/// compared directly when the line is ASCII (almost every OBJ line).
-enum Words<'a> {
-    Ascii { line: &'a str, position: usize },
-    Unicode(SplitWhitespace<'a>),
+/// The lines of an ASCII text, as `str::lines` cuts them (the `\r` of a `\r\n` is left at
+/// the end of its line, where it is whitespace), found with a vectorised search for `\n`.
+struct AsciiLines<'a> {
+    text: &'a str,
+    start: usize,
+    line_ends: memchr::Memchr<'a>,
 }
 
-impl<'a> Words<'a> {
-    fn new(line: &'a str) -> Self {
-        if line.is_ascii() {
-            Words::Ascii { line, position: 0 }
-        } else {
-            Words::Unicode(line.split_whitespace())
+impl<'a> AsciiLines<'a> {
+    fn new(text: &'a str) -> Self {
+        AsciiLines {
+            text,
+            start: 0,
+            line_ends: memchr::memchr_iter(b'\n', text.as_bytes()),
         }
+    }
+}
+
+impl<'a> Iterator for AsciiLines<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        let start = self.start;
+        let end = match self.line_ends.next() {
+            Some(end) => end,
+            // A last line without a line end.
+            None if start < self.text.len() => self.text.len(),
+            None => return None,
+        };
+        self.start = end + 1;
+        // An ASCII text splits at any byte.
+        self.text.get(start..end)
+    }
+}
+
+/// The words of an ASCII line, split at whitespace as `str::split_whitespace` splits them.
+struct AsciiWords<'a> {
+    line: &'a str,
+    position: usize,
+}
+
+impl<'a> AsciiWords<'a> {
+    fn new(line: &'a str) -> Self {
+        AsciiWords { line, position: 0 }
     }
 }
 
 /// The ASCII characters `char::is_whitespace` accepts (vertical tab included).
-fn is_ascii_white_space(byte: u8) -> bool {
+fn is_blank(byte: u8) -> bool {
     matches!(byte, b' ' | b'\t' | b'\n' | b'\x0B' | b'\x0C' | b'\r')
 }
 
-impl<'a> Iterator for Words<'a> {
+impl<'a> Iterator for AsciiWords<'a> {
     type Item = &'a str;
 
     fn next(&mut self) -> Option<&'a str> {
-        match self {
-            Words::Ascii { line, position } => {
-                let bytes = line.as_bytes();
-                let start = *position
-                    + bytes[*position..]
-                        .iter()
-                        .position(|&byte| !is_ascii_white_space(byte))?;
-                let end = bytes[start..]
-                    .iter()
-                    .position(|&byte| is_ascii_white_space(byte))
-                    .map_or(bytes.len(), |length| start + length);
-                *position = end;
-                // An ASCII line splits at any byte.
-                line.get(start..end)
-            }
-            Words::Unicode(words) => words.next(),
+        let bytes = self.line.as_bytes();
+        let mut start = self.position;
+        while start < bytes.len() && is_blank(bytes[start]) {
+            start += 1;
         }
+        let mut end = start;
+        while end < bytes.len() && !is_blank(bytes[end]) {
+            end += 1;
+        }
+        self.position = end;
+        // An ASCII line splits at any byte.
+        (end > start).then(|| self.line.get(start..end)).flatten()
     }
 }
 
@@ -270,20 +322,58 @@ fn column_of(line: &str, word: &str) -> usize {
 
 /// Parses one range of lines (module documentation, step 2): `first_line` is its first
 /// line's number and `defined` the positions, texture coordinates and normals defined above
-/// it.
+/// it. ASCII ranges (almost all) are cut into lines and words by bytes; others as `str::lines`
+/// and `str::split_whitespace` cut them.
 fn parse_range(range: &str, first_line: usize, defined: [usize; 3]) -> Result<ParsedRange, ScanError> {
-    let mut parsed = ParsedRange::default();
-    let mut corners: Vec<Corner> = Vec::new();
-    for (index, line) in range.lines().enumerate() {
-        let line_number = first_line + index;
-        let mut words = Words::new(line);
-        let Some(keyword) = words.next() else { continue };
+    let mut parser = RangeParser {
+        parsed: ParsedRange::default(),
+        defined,
+        corners: Vec::new(),
+    };
+    if range.is_ascii() {
+        for (index, line) in AsciiLines::new(range).enumerate() {
+            let mut words = AsciiWords::new(line);
+            if let Some(keyword) = words.next() {
+                parser.statement(keyword, &mut words, first_line + index, || line)?;
+            }
+        }
+    } else {
+        for (index, line) in range.lines().enumerate() {
+            let mut words = line.split_whitespace();
+            if let Some(keyword) = words.next() {
+                parser.statement(keyword, &mut words, first_line + index, || line)?;
+            }
+        }
+    }
+    Ok(parser.parsed)
+}
+
+/// What [`parse_range`] has parsed so far.
+struct RangeParser {
+    parsed: ParsedRange,
+    /// Positions, texture coordinates and normals defined above the range.
+    defined: [usize; 3],
+    /// The corners of the face being read.
+    corners: Vec<Corner>,
+}
+
+impl RangeParser {
+    /// One statement: its `keyword`, the `words` after it, its line's number, and its line's
+    /// text (only read for names and errors).
+    fn statement<'a>(
+        &mut self,
+        keyword: &'a str,
+        words: &mut impl Iterator<Item = &'a str>,
+        line_number: usize,
+        line: impl Fn() -> &'a str,
+    ) -> Result<(), ScanError> {
         let fail_at = |word: &str, message: String| ScanError {
             line: line_number,
-            column: column_of(line, word),
+            column: column_of(line(), word),
             message,
         };
         let fail = |message: String| fail_at(keyword, message);
+        let parsed = &mut self.parsed;
         match keyword {
             "v" => parsed.positions.push(parse_position(words).map_err(fail)?),
             "vt" => {
@@ -295,31 +385,32 @@ fn parse_range(range: &str, first_line: usize, defined: [usize; 3]) -> Result<Pa
                 .push(Vec3::from_array(parse_numbers(words, "normal").map_err(fail)?)),
             "f" => {
                 let so_far = [
-                    defined[0] + parsed.positions.len(),
-                    defined[1] + parsed.texcoords.len(),
-                    defined[2] + parsed.normals.len(),
+                    self.defined[0] + parsed.positions.len(),
+                    self.defined[1] + parsed.texcoords.len(),
+                    self.defined[2] + parsed.normals.len(),
                 ];
-                corners.clear();
+                self.corners.clear();
                 for word in words {
-                    corners.push(parse_corner(word, so_far).map_err(|message| fail_at(word, message))?);
+                    let corner = parse_corner(word, so_far).map_err(|message| fail_at(word, message))?;
+                    self.corners.push(corner);
                 }
                 // A face needs three corners; fewer is what a file cut off in the middle of
                 // its last line looks like (`f 1 3 `), so it is an error, not a dropped face.
-                if corners.len() < 3 {
+                if self.corners.len() < 3 {
                     return Err(fail(format!(
                         "a face needs at least 3 vertices, this one has {}: `{}` (is the file truncated?)",
-                        corners.len(),
-                        line.trim()
+                        self.corners.len(),
+                        line().trim()
                     )));
                 }
-                let first = corners[0];
+                let first = self.corners[0];
                 parsed
                     .triangles
-                    .extend(corners[1..].windows(2).map(|pair| [first, pair[0], pair[1]]));
+                    .extend(self.corners[1..].windows(2).map(|pair| [first, pair[0], pair[1]]));
             }
             "l" => parsed.polyline_lines.push(line_number),
             "usemtl" => {
-                let name = rest_after(line, keyword);
+                let name = rest_after(line(), keyword);
                 if name.is_empty() {
                     return Err(fail("usemtl needs a material name".to_string()));
                 }
@@ -329,13 +420,13 @@ fn parse_range(range: &str, first_line: usize, defined: [usize; 3]) -> Result<Pa
             }
             "mtllib" => {
                 let statement = Statement::MaterialLibrary {
-                    file: rest_after(line, keyword).to_string(),
+                    file: rest_after(line(), keyword).to_string(),
                     line: line_number,
                 };
                 parsed.statements.push((parsed.triangles.len(), statement));
             }
             "o" | "g" => {
-                let name = match rest_after(line, keyword) {
+                let name = match rest_after(line(), keyword) {
                     "" => UNNAMED_MODEL,
                     name => name,
                 };
@@ -344,8 +435,8 @@ fn parse_range(range: &str, first_line: usize, defined: [usize; 3]) -> Result<Pa
             }
             _ => {}
         }
+        Ok(())
     }
-    Ok(parsed)
 }
 
 /// A `v` line after the keyword: `x y z`, then nothing, `w`, or an `r g b` colour (which is
@@ -404,12 +495,22 @@ fn parse_corner(word: &str, defined: [usize; 3]) -> Result<Corner, String> {
         ("normal", "normals"),
     ];
     let malformed = || format!("malformed face vertex '{word}'");
-    let mut parts: [&str; 3] = [""; 3];
+    let bytes = word.as_bytes();
+    let mut parts: [&[u8]; 3] = [b""; 3];
     let mut part_count = 0;
-    for part in word.split('/') {
-        *parts.get_mut(part_count).ok_or_else(malformed)? = part;
-        part_count += 1;
+    let mut start = 0;
+    for (end, &byte) in bytes.iter().enumerate() {
+        if byte == b'/' {
+            if part_count == 2 {
+                return Err(malformed());
+            }
+            parts[part_count] = &bytes[start..end];
+            part_count += 1;
+            start = end + 1;
+        }
     }
+    parts[part_count] = &bytes[start..];
+    part_count += 1;
     if parts[0].is_empty() {
         return Err(malformed());
     }
@@ -421,11 +522,12 @@ fn parse_corner(word: &str, defined: [usize; 3]) -> Result<Corner, String> {
         ));
     }
     let mut corner = [ABSENT; 3];
-    for (((slot, part), (kind, kinds)), count) in corner.iter_mut().zip(parts).zip(KINDS).zip(defined) {
+    for (k, part) in parts[..part_count].iter().enumerate() {
         if part.is_empty() {
             continue;
         }
         let index = parse_index(part).ok_or_else(malformed)?;
+        let ((kind, kinds), count) = (KINDS[k], defined[k]);
         if index == 0 {
             return Err(format!(
                 "face index 0 in '{word}' is invalid: OBJ indices start at 1"
@@ -444,15 +546,15 @@ fn parse_corner(word: &str, defined: [usize; 3]) -> Result<Corner, String> {
             count - index.unsigned_abs() as usize
         };
         // Fewer elements than bytes in a file of at most 4 GiB.
-        *slot = resolved as u32;
+        corner[k] = resolved as u32;
     }
     Ok(corner)
 }
 
 /// A face index as `i64::from_str` reads it (an optional sign, then decimal digits), without
 /// its generality.
-fn parse_index(text: &str) -> Option<i64> {
-    let (negative, digits) = match text.as_bytes() {
+fn parse_index(text: &[u8]) -> Option<i64> {
+    let (negative, digits) = match text {
         [b'-', rest @ ..] => (true, rest),
         [b'+', rest @ ..] => (false, rest),
         digits => (false, digits),
@@ -480,8 +582,8 @@ fn parse_index(text: &str) -> Option<i64> {
 /// Parses a decimal number as `str::parse::<f32>` does, bit for bit, with a shortcut for the
 /// plain decimals OBJ files are made of (`-0.777853`, `74.009689`, `1e-3`).
 ///
-/// The shortcut reads up to 19 significant digits into an integer `m` and the decimal
-/// exponent `e`; when `m < 2⁵³` and `|e| ≤ 22`, both `m` and `10^|e|` are exact in `f64`, so
+/// The shortcut reads the digits into an integer `m` and the decimal exponent `e`; when
+/// `m < 2⁵³` and `|e| ≤ 22`, both `m` and `10^|e|` are exact in `f64`, so
 /// one `f64` multiplication or division gives the correctly rounded `f64` of the number.
 /// Rounding that to `f32` gives the correctly rounded `f32` (what `str::parse` returns) unless
 /// the `f64` lies exactly halfway between two `f32`s: rounding is monotonic and every such
@@ -498,61 +600,67 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
         1e18, 1e19, 1e20, 1e21, 1e22,
     ];
-    let (negative, mut rest) = match bytes {
-        [b'-', rest @ ..] => (true, rest),
-        [b'+', rest @ ..] => (false, rest),
-        _ => (false, bytes),
+    const MANTISSA_LIMIT: u64 = 1 << 53;
+    let (negative, start) = match bytes.first() {
+        Some(b'-') => (true, 1),
+        Some(b'+') => (false, 1),
+        _ => (false, 0),
     };
+    let mut i = start;
     let mut mantissa: u64 = 0;
-    let mut digits = 0usize;
-    let mut exponent: i64 = 0;
-    let mut read_digits = |rest: &mut &[u8], after_point: bool| {
-        let mut count = 0;
-        while let [digit @ b'0'..=b'9', tail @ ..] = *rest {
-            // Leading zeros are not significant; 19 digits always fit in a u64 (more are left
-            // to `str::parse`).
-            if mantissa != 0 || *digit != b'0' {
-                digits += 1;
-            }
-            if digits <= 19 {
-                mantissa = mantissa * 10 + u64::from(digit - b'0');
-            }
-            if after_point {
-                exponent -= 1;
-            }
-            count += 1;
-            *rest = tail;
-        }
-        count
+    // Below 2⁵³ before a digit is added, so `10·m + 9` cannot overflow.
+    let add_digit = |digit: u8, mantissa: &mut u64| {
+        *mantissa = *mantissa * 10 + u64::from(digit - b'0');
+        *mantissa < MANTISSA_LIMIT
     };
-    let mut digit_count = read_digits(&mut rest, false);
-    if let [b'.', tail @ ..] = rest {
-        rest = tail;
-        digit_count += read_digits(&mut rest, true);
+    while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
+        if !add_digit(digit, &mut mantissa) {
+            return None;
+        }
+        i += 1;
     }
-    if digit_count == 0 || digits > 19 {
+    let mut digit_count = i - start;
+    let mut exponent: i64 = 0;
+    if bytes.get(i) == Some(&b'.') {
+        i += 1;
+        let fraction_start = i;
+        while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
+            if !add_digit(digit, &mut mantissa) {
+                return None;
+            }
+            i += 1;
+        }
+        exponent = -((i - fraction_start) as i64);
+        digit_count += i - fraction_start;
+    }
+    if digit_count == 0 {
         return None;
     }
-    if let [b'e' | b'E', tail @ ..] = rest {
-        let (exponent_negative, mut tail) = match tail {
-            [b'-', tail @ ..] => (true, tail),
-            [b'+', tail @ ..] => (false, tail),
-            _ => (false, tail),
+    if let Some(b'e' | b'E') = bytes.get(i) {
+        i += 1;
+        let exponent_negative = match bytes.get(i) {
+            Some(b'-') => {
+                i += 1;
+                true
+            }
+            Some(b'+') => {
+                i += 1;
+                false
+            }
+            _ => false,
         };
+        let exponent_start = i;
         let mut written: i64 = 0;
-        let mut exponent_digits = 0;
-        while let [digit @ b'0'..=b'9', after @ ..] = tail {
+        while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
             written = (written * 10 + i64::from(digit - b'0')).min(1 << 20);
-            exponent_digits += 1;
-            tail = after;
+            i += 1;
         }
-        if exponent_digits == 0 {
+        if i == exponent_start {
             return None;
         }
         exponent += if exponent_negative { -written } else { written };
-        rest = tail;
     }
-    if !rest.is_empty() || mantissa >= 1 << 53 || exponent.unsigned_abs() > 22 {
+    if i != bytes.len() || exponent.unsigned_abs() > 22 {
         return None;
     }
     let scale = POWERS_OF_TEN[exponent.unsigned_abs() as usize];
@@ -614,7 +722,11 @@ pub(super) fn assemble(
     let mut material_by_name: HashMap<String, usize> = HashMap::new();
     let mut material_count = 0;
     let mut material = None;
-    for (triangles, statements) in &text.ranges {
+    for RangeFaces {
+        triangles,
+        statements,
+    } in &text.ranges
+    {
         let mut done = 0;
         for (at, statement) in statements {
             models.add_triangles(&triangles[done..*at], material);
@@ -808,6 +920,9 @@ mod tests {
                 _ => line,
             })
             .collect();
+        // `..Default::default()` covers tobj's options that exist only under cargo features
+        // some other crate could enable (absent in this build, hence the allow).
+        #[allow(clippy::needless_update)]
         let options = tobj::LoadOptions {
             triangulate: true,
             single_index: true,
@@ -882,7 +997,8 @@ mod tests {
     /// Parses and assembles `text` with ranges of `range_bytes`, the libraries named as in
     /// [`tobj_geometry`].
     fn geometry(text: &str, libraries: &[(&str, &str)], range_bytes: usize) -> ObjGeometry {
-        let parsed = parse_in_ranges(text, range_bytes).unwrap_or_else(|error| panic!("{error:?}"));
+        let parsed =
+            parse_in_ranges(text.as_bytes(), range_bytes).unwrap_or_else(|error| panic!("{error:?}"));
         assemble(&parsed, |file, _| {
             let (_, mtl) = libraries.iter().find(|(library, _)| *library == file)?;
             let (materials, _) = tobj::load_mtl_buf(&mut Cursor::new(mtl.as_bytes())).ok()?;
@@ -983,6 +1099,37 @@ mod tests {
     }
 
     #[test]
+    fn invalid_utf8_is_replaced_as_from_utf8_lossy_replaces_it() {
+        let mut bytes = b"# caf\xE9\nmtllib m\xFF.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n".to_vec();
+        bytes.extend_from_slice(
+            b"usemtl \xC3\nf 1 2 3\ng \xE2\x82\n\xE2\x82\xACf 1 3 2\nf 1 2 3\n# \xF0\x9F\n",
+        );
+        let lossy = String::from_utf8_lossy(&bytes).into_owned();
+        let expected = parse_in_ranges(lossy.as_bytes(), RANGE_BYTES).map(|text| {
+            let statements: Vec<_> = text
+                .ranges
+                .iter()
+                .flat_map(|range| range.statements.iter().map(|(_, s)| s.clone()))
+                .collect();
+            (text.material_uses.clone(), statements)
+        });
+        for range_bytes in [1, 3, 16, RANGE_BYTES] {
+            let parsed = parse_in_ranges(&bytes, range_bytes).map(|text| {
+                let statements: Vec<_> = text
+                    .ranges
+                    .iter()
+                    .flat_map(|range| range.statements.iter().map(|(_, s)| s.clone()))
+                    .collect();
+                (text.material_uses.clone(), statements)
+            });
+            assert_eq!(parsed, expected, "ranges of {range_bytes} bytes");
+        }
+        let (uses, statements) = expected.unwrap_or_else(|error| panic!("{error:?}"));
+        assert_eq!(uses, vec![("\u{FFFD}".to_string(), 6)]);
+        assert_eq!(statements.len(), 3, "{statements:?}");
+    }
+
+    #[test]
     fn errors_are_the_same_whatever_the_ranges() {
         let cases = [
             format!("{TRIANGLE}f 1 2 3\n{TRIANGLE}f 1 2 7\nf 1 2 9\n"),
@@ -993,10 +1140,14 @@ mod tests {
             format!("{TRIANGLE}{TRIANGLE}{TRIANGLE}f 1 2 10\n"),
         ];
         for text in &cases {
-            let whole = parse_in_ranges(text, RANGE_BYTES).err();
+            let whole = parse_in_ranges(text.as_bytes(), RANGE_BYTES).err();
             assert!(whole.is_some(), "{text:?} parsed");
             for range_bytes in [1, 5, 16] {
-                assert_eq!(parse_in_ranges(text, range_bytes).err(), whole, "{text:?}");
+                assert_eq!(
+                    parse_in_ranges(text.as_bytes(), range_bytes).err(),
+                    whole,
+                    "{text:?}"
+                );
             }
         }
     }
@@ -1119,7 +1270,7 @@ mod tests {
             "99999999999999999999",
             "٣",
         ] {
-            assert_eq!(parse_index(text), text.parse::<i64>().ok(), "{text:?}");
+            assert_eq!(parse_index(text.as_bytes()), text.parse::<i64>().ok(), "{text:?}");
         }
     }
 }
