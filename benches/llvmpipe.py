@@ -94,7 +94,7 @@ def glref_median(work, stem, mode, threads, frames):
 
 
 def lampshade_bench(scene, modes, threads, frames, extra=()):
-    command = [LAMPSHADE, "bench", scene, "--json", "--frames", str(frames), "--warmup", "3",
+    command = [LAMPSHADE, "bench", scene, "--json", "--frames", str(frames), "--warmup", "3", "--loads", "0",
                "--modes", ",".join(modes), "--threads", str(threads), *extra]
     output = subprocess.run(command, check=True, capture_output=True, text=True, cwd=ROOT).stdout
     return [json.loads(line) for line in output.splitlines() if line.startswith("{")]

@@ -16,6 +16,11 @@
 //! `cores` is the process's CPU time per timed frame over the median frame time: how many cores
 //! the frame kept busy on average.
 //!
+//! Before the frames, each scene is also loaded `loads` times per thread count, from scratch
+//! (no mesh cache: what a one-shot `render` does), and the `load` row gives the median time and
+//! the rate over the bytes of every file the scene read (scene, includes, meshes, materials,
+//! textures), in MB/s of 10⁶ bytes.
+//!
 //! This is a benchmark, not a test: it asserts nothing about time.
 
 use std::path::{Path, PathBuf};
@@ -67,7 +72,12 @@ pub struct BenchArgs {
     /// Write the last frame of each scene and mode to DIR/SCENE__MODE.png.
     #[arg(long, value_name = "DIR")]
     pub save: Option<PathBuf>,
-    /// One JSON object per line and per scene × mode × thread count, instead of the table.
+    /// Timed loads of each scene per thread count (reading, parsing and checking the scene and
+    /// every file it names, from scratch); 0 skips them.
+    #[arg(long, default_value_t = 3)]
+    pub loads: u32,
+    /// One JSON object per line and per scene × mode × thread count, instead of the table (then
+    /// one per scene × thread count for the loads, with `"stage": "load"`).
     #[arg(long)]
     pub json: bool,
 }
@@ -218,6 +228,13 @@ pub fn run(args: &BenchArgs) -> i32 {
                 },
             );
         }
+        let bytes_read = bytes_of_files(&loaded.files_read);
+        if args.loads > 0 {
+            for &threads in &thread_counts {
+                let times = measure_loads(path, &load_options, threads, args.loads);
+                report_loads(args.json, &scene_name, threads, &times, bytes_read);
+            }
+        }
         for &mode in &args.modes {
             let scene = mode.apply(base);
             for &threads in &thread_counts {
@@ -259,6 +276,69 @@ pub fn run(args: &BenchArgs) -> i32 {
         }
     }
     exit
+}
+
+/// The total size of `files` (each counted once).
+fn bytes_of_files(files: &[PathBuf]) -> u64 {
+    let mut unique: Vec<&PathBuf> = files.iter().collect();
+    unique.sort();
+    unique.dedup();
+    unique
+        .iter()
+        .filter_map(|file| std::fs::metadata(file).ok())
+        .map(|metadata| metadata.len())
+        .sum()
+}
+
+/// Times `count` loads of the scene at `path` from scratch, on a pool of `threads` (the
+/// global pool when `None`).
+fn measure_loads(path: &Path, options: &LoadOptions, threads: Option<usize>, count: u32) -> Vec<Duration> {
+    let run = || {
+        (0..count)
+            .map(|_| {
+                let started = std::time::Instant::now();
+                let loaded = load_scene(path, options);
+                let elapsed = started.elapsed();
+                drop(loaded);
+                elapsed
+            })
+            .collect()
+    };
+    match threads.and_then(|threads| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()) {
+        Some(pool) => pool.install(run),
+        None => run(),
+    }
+}
+
+fn report_loads(json: bool, scene_name: &str, threads: Option<usize>, times: &[Duration], bytes: u64) {
+    let ms = |d: Duration| d.as_secs_f64() * 1000.0;
+    let median = median(times.iter().copied());
+    let min = times.iter().copied().min().unwrap_or_default();
+    let threads = threads.unwrap_or_else(rayon::current_num_threads);
+    let megabytes_per_second = bytes as f64 / 1e6 / median.as_secs_f64().max(1e-9);
+    if json {
+        let line = json!({
+            "scene": scene_name,
+            "stage": "load",
+            "threads": threads,
+            "loads": times.len(),
+            "median_ms": ms(median),
+            "min_ms": ms(min),
+            "bytes_read": bytes,
+            "mb_per_s": megabytes_per_second,
+        });
+        outln!("{line}");
+    } else {
+        outln!(
+            "  {:<8} {:>3} {:>6.2} ms {:>6.2} ms | {:.2} MB read, {:.0} MB/s",
+            "load",
+            threads,
+            ms(median),
+            ms(min),
+            bytes as f64 / 1e6,
+            megabytes_per_second,
+        );
+    }
 }
 
 /// Renders `warmup` frames, then times `frames` more.

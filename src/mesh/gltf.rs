@@ -189,11 +189,7 @@ pub fn default_material() -> Material {
 
 /// Loads a `.gltf` or `.glb` file into one [`Mesh`]; see the module documentation.
 pub fn load_gltf(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
-    let bytes = options
-        .access
-        .read(path)
-        .map_err(|error| MeshError::new(path, format!("cannot read mesh file: {error}")))?;
-    load_gltf_from_bytes(path, &bytes, options)
+    parse_gltf(path, &options.access)?.build(options.crease_angle_degrees)
 }
 
 /// [`load_gltf`] on the bytes of the file at `path`, already read (external buffers and images
@@ -204,7 +200,40 @@ pub fn load_gltf_from_bytes(
     bytes: &[u8],
     options: &MeshOptions,
 ) -> Result<LoadedMesh, MeshError> {
-    catch_unwind(AssertUnwindSafe(|| load_gltf_bytes(path, bytes, options))).unwrap_or_else(|panic| {
+    parse_gltf_bytes(path, bytes, &options.access)?.build(options.crease_angle_degrees)
+}
+
+/// Reads and parses a glTF or GLB file and its buffers: the part of a load that does not
+/// depend on the crease angle. [`ParsedGltf::build`] makes the mesh.
+pub fn parse_gltf(path: &Path, access: &FileAccess) -> Result<ParsedGltf, MeshError> {
+    let bytes = access
+        .read(path)
+        .map_err(|error| MeshError::new(path, format!("cannot read mesh file: {error}")))?;
+    parse_gltf_bytes(path, &bytes, access)
+}
+
+/// A glTF file read and parsed, with its buffers; its images are decoded by the build.
+#[derive(Debug, Clone)]
+pub struct ParsedGltf {
+    path: PathBuf,
+    document: gltf::Document,
+    buffers: Vec<Vec<u8>>,
+    /// The file and its buffer files.
+    files_read: Vec<PathBuf>,
+    access: FileAccess,
+}
+
+impl ParsedGltf {
+    /// The mesh for one crease angle (module documentation).
+    pub fn build(&self, crease_angle_degrees: f32) -> Result<LoadedMesh, MeshError> {
+        contain_panics(&self.path, || self.build_unguarded(crease_angle_degrees))
+    }
+}
+
+/// Runs a step of loading the glTF file at `path`, turning a panic of the `gltf` crate into
+/// "malformed glTF".
+fn contain_panics<T>(path: &Path, step: impl FnOnce() -> Result<T, MeshError>) -> Result<T, MeshError> {
+    catch_unwind(AssertUnwindSafe(step)).unwrap_or_else(|panic| {
         let reason = panic
             .downcast_ref::<&str>()
             .map(|s| s.to_string())
@@ -214,49 +243,72 @@ pub fn load_gltf_from_bytes(
     })
 }
 
-fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
-    let fail = |message: String| MeshError::new(path, message);
-    check_content(bytes).map_err(|(message, other_kind)| match other_kind {
-        true => fail(message).with_hint(USE_GLTF_HINT),
-        false => fail(message),
-    })?;
-    let (document, blob) = parse_document(bytes).map_err(fail)?;
-    let mut files_read = vec![path.to_path_buf()];
-    let directory = path.parent().unwrap_or(Path::new(""));
-    let buffers = load_buffers(&document, blob, directory, &options.access, &mut files_read).map_err(fail)?;
+fn parse_gltf_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<ParsedGltf, MeshError> {
+    contain_panics(path, || {
+        let fail = |message: String| MeshError::new(path, message);
+        check_content(bytes).map_err(|(message, other_kind)| match other_kind {
+            true => fail(message).with_hint(USE_GLTF_HINT),
+            false => fail(message),
+        })?;
+        let (document, blob) = parse_document(bytes).map_err(fail)?;
+        let mut files_read = vec![path.to_path_buf()];
+        let directory = path.parent().unwrap_or(Path::new(""));
+        let buffers = load_buffers(&document, blob, directory, access, &mut files_read).map_err(fail)?;
+        Ok(ParsedGltf {
+            path: path.to_path_buf(),
+            document,
+            buffers,
+            files_read,
+            access: access.clone(),
+        })
+    })
+}
 
-    let mut baker = Baker {
-        buffers: &buffers,
-        crease_angle_degrees: options.crease_angle_degrees,
-        default_material_index: document.materials().len() as u32,
-        mesh: Mesh::default(),
-        skipped_primitives: Vec::new(),
-        repaired_normals: 0,
-        computed_normals: false,
-        missing_uv_sets: Vec::new(),
-        warnings: Vec::new(),
-    };
-    let mut lights = Vec::new();
-    let mut cameras = Vec::new();
-    let mut placement_warnings = Vec::new();
-    for (node, world) in scene_instances(&document).map_err(fail)? {
-        if let Some(mesh) = node.mesh() {
-            for primitive in mesh.primitives() {
-                baker.bake(&mesh, &primitive, world).map_err(fail)?;
+impl ParsedGltf {
+    fn build_unguarded(&self, crease_angle_degrees: f32) -> Result<LoadedMesh, MeshError> {
+        let path = self.path.as_path();
+        let fail = |message: String| MeshError::new(path, message);
+        let document = &self.document;
+        let buffers = &self.buffers;
+        let mut files_read = self.files_read.clone();
+        let directory = path.parent().unwrap_or(Path::new(""));
+        let options = MeshOptions {
+            crease_angle_degrees,
+            access: self.access.clone(),
+        };
+
+        let mut baker = Baker {
+            buffers,
+            crease_angle_degrees: options.crease_angle_degrees,
+            default_material_index: document.materials().len() as u32,
+            mesh: Mesh::default(),
+            skipped_primitives: Vec::new(),
+            repaired_normals: 0,
+            computed_normals: false,
+            missing_uv_sets: Vec::new(),
+            warnings: Vec::new(),
+        };
+        let mut lights = Vec::new();
+        let mut cameras = Vec::new();
+        let mut placement_warnings = Vec::new();
+        for (node, world) in scene_instances(document).map_err(fail)? {
+            if let Some(mesh) = node.mesh() {
+                for primitive in mesh.primitives() {
+                    baker.bake(&mesh, &primitive, world).map_err(fail)?;
+                }
             }
-        }
-        if let Some(light) = node.light() {
-            match imported_light(&light, world) {
-                Some(light) => lights.push(light),
-                None => placement_warnings.push(format!(
-                    "light {} (node {}) has a non-finite colour, intensity or placement and is ignored",
-                    light.index(),
-                    node.index()
-                )),
+            if let Some(light) = node.light() {
+                match imported_light(&light, world) {
+                    Some(light) => lights.push(light),
+                    None => placement_warnings.push(format!(
+                        "light {} (node {}) has a non-finite colour, intensity or placement and is ignored",
+                        light.index(),
+                        node.index()
+                    )),
+                }
             }
-        }
-        if let Some(camera) = node.camera() {
-            match imported_camera(&camera, node.name(), world) {
+            if let Some(camera) = node.camera() {
+                match imported_camera(&camera, node.name(), world) {
                 Some(camera) => cameras.push(camera),
                 None => placement_warnings.push(format!(
                     "camera {} (node {}) has non-finite or invalid settings or placement and cannot be used",
@@ -264,110 +316,111 @@ fn load_gltf_bytes(path: &Path, bytes: &[u8], options: &MeshOptions) -> Result<L
                     node.index()
                 )),
             }
+            }
         }
-    }
-    if baker.mesh.triangles.is_empty() {
-        return Err(fail("contains no triangles".to_string()));
-    }
+        if baker.mesh.triangles.is_empty() {
+            return Err(fail("contains no triangles".to_string()));
+        }
 
-    let Baker {
-        mut mesh,
-        mut warnings,
-        skipped_primitives,
-        repaired_normals,
-        computed_normals,
-        default_material_index,
-        missing_uv_sets,
-        ..
-    } = baker;
-    let crease_angle_used = computed_normals || repaired_normals > 0;
-    if !skipped_primitives.is_empty() {
-        warnings.push(format!(
-            "skipped {} point or line primitives (mesh, primitive: {}): only triangles are drawn",
-            skipped_primitives.len(),
-            skipped_primitives
-                .iter()
-                .map(|(mesh, primitive)| format!("{mesh}, {primitive}"))
-                .collect::<Vec<_>>()
-                .join("; ")
-        ));
-    }
-    warnings.extend(placement_warnings);
-    let ranged: Vec<String> = lights
-        .iter()
-        .filter(|light| light.range.is_some())
-        .map(|light| light.index.to_string())
-        .collect();
-    if !ranged.is_empty() {
-        warnings.push(format!(
-            "lights {} have a `range`, which is not applied: they fall off as 1/d² everywhere",
-            ranged.join(", ")
-        ));
-    }
-    if repaired_normals > 0 {
-        warnings.push(format!(
-            "{repaired_normals} vertex normals in the file were zero and were recomputed"
-        ));
-    }
-
-    // A primitive lacking the UV set its material reads is worth a warning only when the
-    // mesh has that set at all; otherwise the binding is dropped below, with its own warning.
-    for (here, set) in missing_uv_sets {
-        let has_set = if set == 0 { &mesh.uvs } else { &mesh.uvs1 };
-        if !has_set.is_empty() {
+        let Baker {
+            mut mesh,
+            mut warnings,
+            skipped_primitives,
+            repaired_normals,
+            computed_normals,
+            default_material_index,
+            missing_uv_sets,
+            ..
+        } = baker;
+        let crease_angle_used = computed_normals || repaired_normals > 0;
+        if !skipped_primitives.is_empty() {
             warnings.push(format!(
-                "{here}: its material's texture reads TEXCOORD_{set}, which the primitive lacks; it reads the texture's corner (0, 0)"
+                "skipped {} point or line primitives (mesh, primitive: {}): only triangles are drawn",
+                skipped_primitives.len(),
+                skipped_primitives
+                    .iter()
+                    .map(|(mesh, primitive)| format!("{mesh}, {primitive}"))
+                    .collect::<Vec<_>>()
+                    .join("; ")
             ));
         }
-    }
-
-    let mut images = ImageLoader {
-        buffers: &buffers,
-        access: &options.access,
-        refused: None,
-        directory,
-        index_by_image: HashMap::new(),
-        textures: Vec::new(),
-        files_read: Vec::new(),
-        warnings: Vec::new(),
-    };
-    mesh.materials = document
-        .materials()
-        .map(|material| {
-            let mut lowered = material_from_gltf(&material);
-            bind_textures(&material, &mut lowered, &mesh, &mut images, &mut warnings);
-            lowered
-        })
-        .collect();
-    if mesh.triangle_materials.contains(&default_material_index) {
-        mesh.materials.push(default_material());
-    }
-    // An image outside the sandbox is an error, not the warning of a missing one.
-    if let Some(problem) = images.refused {
-        return Err(fail(problem));
-    }
-    mesh.textures = images.textures;
-    files_read.extend(images.files_read);
-    warnings.extend(images.warnings);
-    // A normal-mapped material that no drawn primitive uses leaves the mesh without
-    // tangents; the invariant wants them, and any perpendicular unit vectors do.
-    let normal_mapped = mesh.materials.iter().any(|m| m.textures.normal.is_some());
-    if normal_mapped && mesh.tangents.is_empty() {
-        mesh.tangents = mesh
-            .normals
+        warnings.extend(placement_warnings);
+        let ranged: Vec<String> = lights
             .iter()
-            .map(|&n| tangents::fallback_tangent(n))
+            .filter(|light| light.range.is_some())
+            .map(|light| light.index.to_string())
             .collect();
-    }
+        if !ranged.is_empty() {
+            warnings.push(format!(
+                "lights {} have a `range`, which is not applied: they fall off as 1/d² everywhere",
+                ranged.join(", ")
+            ));
+        }
+        if repaired_normals > 0 {
+            warnings.push(format!(
+                "{repaired_normals} vertex normals in the file were zero and were recomputed"
+            ));
+        }
 
-    Ok(LoadedMesh {
-        mesh,
-        files_read,
-        warnings,
-        lights,
-        cameras,
-        crease_angle_used,
-    })
+        // A primitive lacking the UV set its material reads is worth a warning only when the
+        // mesh has that set at all; otherwise the binding is dropped below, with its own warning.
+        for (here, set) in missing_uv_sets {
+            let has_set = if set == 0 { &mesh.uvs } else { &mesh.uvs1 };
+            if !has_set.is_empty() {
+                warnings.push(format!(
+                "{here}: its material's texture reads TEXCOORD_{set}, which the primitive lacks; it reads the texture's corner (0, 0)"
+            ));
+            }
+        }
+
+        let mut images = ImageLoader {
+            buffers,
+            access: &options.access,
+            refused: None,
+            directory,
+            index_by_image: HashMap::new(),
+            textures: Vec::new(),
+            files_read: Vec::new(),
+            warnings: Vec::new(),
+        };
+        mesh.materials = document
+            .materials()
+            .map(|material| {
+                let mut lowered = material_from_gltf(&material);
+                bind_textures(&material, &mut lowered, &mesh, &mut images, &mut warnings);
+                lowered
+            })
+            .collect();
+        if mesh.triangle_materials.contains(&default_material_index) {
+            mesh.materials.push(default_material());
+        }
+        // An image outside the sandbox is an error, not the warning of a missing one.
+        if let Some(problem) = images.refused {
+            return Err(fail(problem));
+        }
+        mesh.textures = images.textures;
+        files_read.extend(images.files_read);
+        warnings.extend(images.warnings);
+        // A normal-mapped material that no drawn primitive uses leaves the mesh without
+        // tangents; the invariant wants them, and any perpendicular unit vectors do.
+        let normal_mapped = mesh.materials.iter().any(|m| m.textures.normal.is_some());
+        if normal_mapped && mesh.tangents.is_empty() {
+            mesh.tangents = mesh
+                .normals
+                .iter()
+                .map(|&n| tangents::fallback_tangent(n))
+                .collect();
+        }
+
+        Ok(LoadedMesh {
+            mesh,
+            files_read,
+            warnings,
+            lights,
+            cameras,
+            crease_angle_used,
+        })
+    }
 }
 
 /// A `KHR_lights_punctual` light at a node with world matrix `world`; `None` when something

@@ -1,11 +1,13 @@
 //! Triangle meshes: the built-in primitives and the OBJ / glTF loaders, all producing [`Mesh`].
 //!
-//! Code map: [`primitives`] (sphere, plane, cube), [`obj`] (OBJ + MTL through `tobj`),
-//! [`gltf`] (glTF 2.0 through `gltf`), [`normals`] (face normals, crease-angle vertex
-//! normals, repair of file normals) and [`tangents`] (tangent frames for normal maps), which
-//! the loaders share. Loaders merge everything a file holds into one [`Mesh`], decode the
-//! textures its materials use ([`crate::texture`]), record every file they read or looked
-//! for, and report problems that do not stop the load (a missing texture, say) as warnings.
+//! Code map: [`primitives`] (sphere, plane, cube), [`obj`] (OBJ text through our own parser
+//! in `obj_parse`, MTL through `tobj`), [`gltf`] (glTF 2.0 through `gltf`), [`normals`] (face
+//! normals, crease-angle vertex normals, repair of file normals) and [`tangents`] (tangent
+//! frames for normal maps), which the loaders share. Loaders merge everything a file holds
+//! into one [`Mesh`], decode the textures its materials use ([`crate::texture`]), record every
+//! file they read or looked for, and report problems that do not stop the load (a missing
+//! texture, say) as warnings. A file is loaded in two stages ([`ParsedMeshFile`]): read and
+//! parse once, then build the mesh for each crease angle that objects ask for.
 //!
 //! Architecture invariant: every `Mesh` leaving this module is renderable as it is
 //! ([`Mesh::check_invariant`] tests all of it):
@@ -23,6 +25,7 @@ pub mod closed;
 pub mod gltf;
 pub mod normals;
 pub mod obj;
+mod obj_parse;
 pub mod primitives;
 pub mod tangents;
 
@@ -32,6 +35,7 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec3, Vec2, Vec3, Vec4};
 
+use crate::scene::access::FileAccess;
 use crate::texture::Texture;
 
 use crate::scene::{Attenuation, Light, Material};
@@ -362,6 +366,36 @@ pub(crate) fn io_error_text(error: &std::io::Error) -> String {
     match text.find(" (os error") {
         Some(end) => text[..end].to_string(),
         None => text,
+    }
+}
+
+/// A mesh file read and parsed with what it names (material libraries and textures, buffers):
+/// the part of a load that does not depend on the crease angle. Objects that name one file
+/// with different crease angles share one parse and [`build`](ParsedMeshFile::build) a mesh
+/// each.
+#[derive(Debug, Clone)]
+pub enum ParsedMeshFile {
+    Obj(Box<obj::ParsedObj>),
+    Gltf(Box<gltf::ParsedGltf>),
+}
+
+impl ParsedMeshFile {
+    /// Reads and parses the OBJ (`is_obj`) or glTF/GLB file at `path`, reading what it names
+    /// through `access`.
+    pub fn parse(path: &Path, is_obj: bool, access: &FileAccess) -> Result<Self, MeshError> {
+        Ok(if is_obj {
+            ParsedMeshFile::Obj(Box::new(obj::parse_obj(path, access)?))
+        } else {
+            ParsedMeshFile::Gltf(Box::new(gltf::parse_gltf(path, access)?))
+        })
+    }
+
+    /// The mesh with normals computed (where the file has none) with this crease angle.
+    pub fn build(&self, crease_angle_degrees: f32) -> Result<LoadedMesh, MeshError> {
+        match self {
+            ParsedMeshFile::Obj(parsed) => Ok(parsed.build(crease_angle_degrees)),
+            ParsedMeshFile::Gltf(parsed) => parsed.build(crease_angle_degrees),
+        }
     }
 }
 

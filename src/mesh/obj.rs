@@ -1,46 +1,40 @@
-//! Wavefront OBJ meshes and their MTL materials, parsed by `tobj`.
+//! Wavefront OBJ meshes and their MTL materials: the text parsed by [`super::obj_parse`], the
+//! MTL files by `tobj`.
 //!
 //! # Design
 //!
-//! 1. **Pre-scan.** The OBJ text is read here and scanned line by line before `tobj` sees it.
-//!    `tobj` reports errors without line numbers, accepts some malformed files silently, and
-//!    panics on others (an index like `-99999999999` overflows its arithmetic), so the scan
-//!    rejects, with the line number: face indices that are 0, malformed, or out of range
-//!    (OBJ indices are 1-based, negative ones count back from the last element defined so
-//!    far, and an index may only refer to an element defined above it); vertex lines
-//!    without three numbers or with a non-finite one, and `vt`/`vn` lines with a non-finite
-//!    number (non-finite input is rejected, not repaired); `w = 0`; faces with fewer than
-//!    three vertices (what a file cut off in its last face line looks like). Errors carry the
-//!    line and the column of the offending word. It also blanks polyline (`l`) lines, which
-//!    `tobj` would otherwise turn into triangles, and warns about them.
-//!    Before the scan, a file that is not OBJ text (a GLB, a glTF's JSON, any binary file) is
-//!    refused with what it is ([`FileContent`]).
-//! 2. **Parse.** `tobj::load_obj_buf` with `triangulate` (fans, so convex polygons only),
-//!    `single_index` (one vertex per distinct position/texture/normal triple) and
-//!    `ignore_points`/`ignore_lines`. The call runs under `catch_unwind` as a last line of
-//!    defence, reported as "malformed OBJ". All models and groups are merged into one mesh.
-//! 3. **Materials.** MTL files are read by this module's own loader, which records each file
-//!    read (so a watcher follows it) and pre-checks it: colours with a single number are
-//!    expanded to grey as the MTL spec allows (`tobj` would panic on them), and other
-//!    malformed numbers are reported with their line. A missing or malformed MTL file is a
+//! Loading has two stages, so that a file several objects name with different crease angles
+//! is read and parsed once ([`parse_obj`], then [`ParsedObj::build`] per crease angle):
+//!
+//! 1. **Parse.** A file that is not OBJ text (a GLB, a glTF's JSON, any binary file) is
+//!    refused with what it is ([`FileContent`]). The text is parsed and checked in parallel
+//!    ranges of lines ([`super::obj_parse`]: every error with its line and column; polygons
+//!    fanned into triangles, so convex polygons only); polyline (`l`) lines are skipped with a
+//!    warning. The faces are assembled into one mesh with `tobj`'s grouping and vertex rules
+//!    (one vertex per distinct position/texture/normal triple within each model).
+//! 2. **Materials.** MTL files are read by this module's own loader when an `mtllib` line names
+//!    them, which records each file read (so a watcher follows it) and pre-checks it: colours
+//!    with a single number are expanded to grey as the MTL spec allows (`tobj` would panic on
+//!    them), and other malformed numbers are reported with their line; `tobj` then parses it
+//!    (under `catch_unwind`, as a last line of defence). A missing or malformed MTL file is a
 //!    warning, never an error: its materials are absent, and when no library loads the mesh
 //!    has no materials at all (the scene then supplies its default).
 //!    A library that is named but missing is still recorded in `files_read`, so that a
 //!    watcher reloads the mesh when it appears.
-//! 4. **Texture coordinates.** `vt` values become [`Mesh::uvs`] with v flipped to the glTF
+//! 3. **Texture coordinates.** `vt` values become [`Mesh::uvs`] with v flipped to the glTF
 //!    convention the renderer uses (v' = 1 − v: OBJ's v = 0 is the bottom of the image,
-//!    glTF's the top; non-finite ones were rejected by the pre-scan). A model where only some face vertices have
-//!    one cannot be trusted (`tobj` then packs them without gaps, so they no longer line up
-//!    with the vertices): its coordinates are dropped with a warning. Models without any get
-//!    zeros when another model has some, so the array stays one per vertex.
-//! 5. **Normals.** When every vertex has a file normal they are used, renormalised, and any
-//!    zero or non-finite one is recomputed ([`normals::repair_normals`]). When none or only
-//!    some have one, all normals are computed with the crease angle
-//!    ([`normals::compute_vertex_normals`]); mixing file and computed normals across one
-//!    surface would show a seam, and "only some" usually means a broken export (a warning
-//!    says so). Either way the texture coordinates follow their vertices, and vertices on a
-//!    UV seam stay apart.
-//! 6. **Textures.** `map_Kd` and `map_Ka` are decoded as sRGB colour textures
+//!    glTF's the top; non-finite ones were rejected by the parser). A model where only some
+//!    face vertices have one cannot be trusted: its coordinates are dropped with a warning.
+//!    Models without any get zeros when another model has some, so the array stays one per
+//!    vertex.
+//! 4. **Normals** (the build, per crease angle). When every vertex has a file normal they are
+//!    used, renormalised, and any zero or non-finite one is recomputed
+//!    ([`normals::repair_normals`]). When none or only some have one, all normals are computed
+//!    with the crease angle ([`normals::compute_vertex_normals`]); mixing file and computed
+//!    normals across one surface would show a seam, and "only some" usually means a broken
+//!    export (a warning says so). Either way the texture coordinates follow their vertices,
+//!    and vertices on a UV seam stay apart.
+//! 5. **Textures.** `map_Kd` and `map_Ka` are decoded as sRGB colour textures
 //!    ([`Texture::load`]) into [`Mesh::textures`], once per file, and bound to the material's
 //!    `textures.diffuse` / `textures.ambient` (UV set 0, scale 1, wrap `Repeat`, or
 //!    `ClampToEdge` under the statement's `-clamp on` option). Paths are relative to the MTL
@@ -67,7 +61,6 @@
 //! carries none.
 
 use std::borrow::Cow;
-use std::cell::RefCell;
 use std::io::Cursor;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
@@ -75,10 +68,11 @@ use std::path::{Path, PathBuf};
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::normals::VertexAttributes;
-use super::{FileContent, LoadedMesh, Mesh, MeshError, MeshOptions, USE_GLTF_HINT, first_bytes, normals};
+use super::obj_parse::{FileNormals, ObjGeometry, assemble, parse_obj_text};
+use super::{FileContent, LoadedMesh, MeshError, MeshOptions, USE_GLTF_HINT, first_bytes, normals};
 use crate::scene::access::FileAccess;
 use crate::scene::limits::MAX_LIGHTING_VALUE;
 use crate::scene::{LightingModel, Material, TextureBinding};
@@ -108,11 +102,7 @@ pub fn default_material() -> Material {
 /// Loads an OBJ file and the MTL files it names into one [`Mesh`]; see the module
 /// documentation for what is checked, computed and defaulted.
 pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
-    let bytes = options
-        .access
-        .read(path)
-        .map_err(|error| MeshError::new(path, format!("cannot read mesh file: {error}")))?;
-    load_obj_from_bytes(path, &bytes, options)
+    Ok(parse_obj(path, &options.access)?.build(options.crease_angle_degrees))
 }
 
 /// [`load_obj`] on the bytes of the file at `path`, already read (MTL files and textures are
@@ -122,8 +112,91 @@ pub fn load_obj_from_bytes(
     bytes: &[u8],
     options: &MeshOptions,
 ) -> Result<LoadedMesh, MeshError> {
-    // OBJ is ASCII in practice; a stray Latin-1 byte in a comment or name should not
-    // reject the file.
+    Ok(parse_obj_bytes(path, bytes, &options.access)?.build(options.crease_angle_degrees))
+}
+
+/// Reads and parses an OBJ file, its MTL files and its textures: everything of a load that
+/// does not depend on the crease angle (module documentation, steps 1 to 3 and 5).
+pub fn parse_obj(path: &Path, access: &FileAccess) -> Result<ParsedObj, MeshError> {
+    let bytes = access
+        .read(path)
+        .map_err(|error| MeshError::new(path, format!("cannot read mesh file: {error}")))?;
+    parse_obj_bytes(path, &bytes, access)
+}
+
+/// An OBJ file read and parsed with its materials and textures; [`ParsedObj::build`] makes
+/// its mesh for a crease angle.
+#[derive(Debug, Clone)]
+pub struct ParsedObj {
+    geometry: ObjGeometry,
+    materials: Vec<Material>,
+    /// Per triangle, its index in `materials`; empty when the mesh has no materials.
+    triangle_materials: Vec<u32>,
+    textures: Vec<Arc<Texture>>,
+    files_read: Vec<PathBuf>,
+    /// Warnings of the file's text and libraries, then those of its materials and textures
+    /// (the build's normals warnings come between them).
+    text_warnings: Vec<String>,
+    material_warnings: Vec<String>,
+}
+
+impl ParsedObj {
+    /// The mesh, with its normals as the module documentation says (step 4).
+    pub fn build(&self, crease_angle_degrees: f32) -> LoadedMesh {
+        let geometry = &self.geometry;
+        let crease = crease_angle_degrees;
+        let attributes = VertexAttributes {
+            uvs: &geometry.uvs,
+            ..VertexAttributes::default()
+        };
+        let mut warnings = self.text_warnings.clone();
+        // Computed normals depend on the crease angle; file normals do not.
+        let mut crease_angle_used = true;
+        let mut mesh = match &geometry.normals {
+            FileNormals::All(file_normals) => {
+                let repaired = normals::repair_normals(
+                    &geometry.positions,
+                    file_normals,
+                    attributes,
+                    &geometry.triangles,
+                    crease,
+                );
+                crease_angle_used = repaired.replaced_count > 0;
+                if repaired.replaced_count > 0 {
+                    warnings.push(format!(
+                        "{} vertex normals in the file were zero or not finite and were recomputed",
+                        repaired.replaced_count
+                    ));
+                }
+                repaired.mesh
+            }
+            FileNormals::Some => {
+                warnings.push(format!(
+                    "only some face vertices have normals; all normals were computed (crease angle {crease}°)"
+                ));
+                normals::compute_vertex_normals(&geometry.positions, attributes, &geometry.triangles, crease)
+            }
+            FileNormals::None => {
+                normals::compute_vertex_normals(&geometry.positions, attributes, &geometry.triangles, crease)
+            }
+        };
+        mesh.materials.clone_from(&self.materials);
+        mesh.triangle_materials.clone_from(&self.triangle_materials);
+        mesh.textures.clone_from(&self.textures);
+        warnings.extend(self.material_warnings.iter().cloned());
+        LoadedMesh {
+            mesh,
+            files_read: self.files_read.clone(),
+            warnings,
+            lights: Vec::new(),
+            cameras: Vec::new(),
+            crease_angle_used,
+        }
+    }
+}
+
+/// [`parse_obj`] on the bytes of the file at `path`, already read.
+fn parse_obj_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<ParsedObj, MeshError> {
     // A glTF or binary file named as `Obj(...)` would otherwise give "contains no triangles"
     // or a confusing line error: say what it is.
     match FileContent::of(bytes) {
@@ -146,406 +219,180 @@ pub fn load_obj_from_bytes(
         }
         FileContent::ObjText | FileContent::OtherText => {}
     }
-    let text = String::from_utf8_lossy(bytes);
-    let scan =
-        scan_obj(&text).map_err(|error| MeshError::at(path, error.line, error.column, error.message))?;
+    let parsed = parse_obj_text(bytes)
+        .map_err(|error| MeshError::at(path, error.line, error.column, error.message))?;
+    let mut text_warnings = Vec::new();
+    if let Some(&first) = parsed.polyline_lines.first() {
+        text_warnings.push(format!(
+            "ignored {} polyline ('l') elements (first at line {first}): lines are not drawn",
+            parsed.polyline_lines.len()
+        ));
+    }
 
-    let libraries = MaterialLibraries {
-        access: &options.access,
-        refused: RefCell::new(None),
+    let mut libraries = MaterialLibraries {
+        access,
+        refused: None,
         directory: path.parent().unwrap_or(Path::new("")).to_path_buf(),
-        files_read: RefCell::new(Vec::new()),
-        warnings: RefCell::new(Vec::new()),
-        material_directories: RefCell::new(Vec::new()),
+        files_read: Vec::new(),
+        warnings: Vec::new(),
+        materials: Vec::new(),
+        material_directories: Vec::new(),
     };
-    // `..Default::default()` covers tobj's other options, which exist only under cargo
-    // features some other crate could enable (they are absent in this build, hence the
-    // allow).
-    #[allow(clippy::needless_update)]
-    let load_options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ignore_points: true,
-        ignore_lines: true,
-        ..Default::default()
-    };
-    let parsed = catch_unwind(AssertUnwindSafe(|| {
-        tobj::load_obj_buf(&mut Cursor::new(scan.text.as_bytes()), &load_options, |library| {
-            libraries.load(library)
-        })
-    }));
-    let (models, library_materials) = match parsed {
-        Ok(Ok(parsed)) => parsed,
-        Ok(Err(error)) => return Err(MeshError::new(path, format!("malformed OBJ: {error}"))),
-        Err(_) => {
-            return Err(MeshError::new(
-                path,
-                "malformed OBJ: the OBJ parser gave up on this file",
-            ));
-        }
-    };
+    let geometry = assemble(&parsed, |file, line| libraries.load(file, line))
+        .map_err(|message| MeshError::new(path, message))?;
     // A library outside the sandbox is an error, not the warning of a missing one: the
     // sandbox must never be silently worked around.
-    if let Some((library, problem)) = libraries.refused.into_inner() {
-        let line = scan
-            .text
-            .lines()
-            .position(|line| line.trim_start().starts_with("mtllib") && line.contains(library.as_str()));
-        let message = format!("mtllib `{library}`: refused: {problem}");
-        return Err(match line {
-            Some(index) => MeshError::at_line(path, index + 1, message),
-            None => MeshError::new(path, message),
-        });
+    if let Some((library, line, problem)) = libraries.refused {
+        return Err(MeshError::at_line(
+            path,
+            line,
+            format!("mtllib `{library}`: refused: {problem}"),
+        ));
     }
-    // A library that failed has already left a warning; tobj only reports an error here
-    // when no library loaded at all.
-    let library_materials = library_materials.unwrap_or_default();
-
     let mut files_read = vec![path.to_path_buf()];
-    files_read.extend(libraries.files_read.into_inner());
-    let mut warnings = scan.warnings;
-    warnings.extend(libraries.warnings.into_inner());
-    let material_directories = libraries.material_directories.into_inner();
-
-    let geometry = merge_models(&models, &mut warnings).map_err(|message| MeshError::new(path, message))?;
+    files_read.extend(libraries.files_read);
+    text_warnings.extend(libraries.warnings);
+    if !geometry.models_with_partial_uvs.is_empty() {
+        text_warnings.push(format!(
+            "only some face vertices have texture coordinates in {}; those texture coordinates were dropped",
+            geometry
+                .models_with_partial_uvs
+                .iter()
+                .map(|name| format!("'{name}'"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
     if geometry.triangles.is_empty() {
         return Err(MeshError::new(path, "contains no triangles"));
     }
 
-    let crease = options.crease_angle_degrees;
-    let attributes = VertexAttributes {
-        uvs: &geometry.uvs,
-        ..VertexAttributes::default()
-    };
-    // Computed normals depend on the crease angle; file normals do not.
-    let mut crease_angle_used = true;
-    let mut mesh = match &geometry.normals {
-        FileNormals::All(file_normals) => {
-            let repaired = normals::repair_normals(
-                &geometry.positions,
-                file_normals,
-                attributes,
-                &geometry.triangles,
-                crease,
-            );
-            crease_angle_used = repaired.replaced_count > 0;
-            if repaired.replaced_count > 0 {
-                warnings.push(format!(
-                    "{} vertex normals in the file were zero or not finite and were recomputed",
-                    repaired.replaced_count
-                ));
-            }
-            repaired.mesh
-        }
-        FileNormals::Some => {
-            warnings.push(format!(
-                "only some face vertices have normals; all normals were computed (crease angle {crease}°)"
-            ));
-            normals::compute_vertex_normals(&geometry.positions, attributes, &geometry.triangles, crease)
-        }
-        FileNormals::None => {
-            normals::compute_vertex_normals(&geometry.positions, attributes, &geometry.triangles, crease)
-        }
-    };
-
-    assign_materials(
-        &mut mesh,
+    let library_materials = libraries.materials;
+    let mut material_warnings = Vec::new();
+    let (mut materials, triangle_materials) = assign_materials(
         &geometry.triangle_material_ids,
         &library_materials,
-        &mut warnings,
+        &mut material_warnings,
     );
     // `assign_materials` keeps the libraries' order: material i is library material i.
     let mut textures = TextureFiles {
-        access: options.access.clone(),
+        access: access.clone(),
         ..TextureFiles::default()
     };
-    let has_uvs = !mesh.uvs.is_empty();
-    let with_directories = library_materials.iter().zip(&material_directories);
-    for (material, (mtl, directory)) in mesh.materials.iter_mut().zip(with_directories) {
-        bind_textures(material, mtl, directory, has_uvs, &mut textures, &mut warnings);
+    let has_uvs = !geometry.uvs.is_empty();
+    let with_directories = library_materials.iter().zip(&libraries.material_directories);
+    for (material, (mtl, directory)) in materials.iter_mut().zip(with_directories) {
+        bind_textures(
+            material,
+            mtl,
+            directory,
+            has_uvs,
+            &mut textures,
+            &mut material_warnings,
+        );
     }
     if let Some(problem) = textures.refused {
         return Err(MeshError::new(path, problem));
     }
-    mesh.textures = textures.loaded;
     files_read.extend(textures.files_read);
     if !library_materials.is_empty() {
         let mut reported: Vec<&str> = Vec::new();
-        for (name, line) in &scan.material_uses {
+        for (name, line) in &parsed.material_uses {
             let defined = library_materials.iter().any(|material| &material.name == name);
             if !defined && !reported.contains(&name.as_str()) {
                 reported.push(name);
-                warnings.push(format!(
+                material_warnings.push(format!(
                     "line {line}: material '{name}' is not defined in the material libraries; its faces use the default material"
                 ));
             }
         }
     }
 
-    Ok(LoadedMesh {
-        mesh,
+    Ok(ParsedObj {
+        geometry,
+        materials,
+        triangle_materials,
+        textures: textures.loaded,
         files_read,
-        warnings,
-        lights: Vec::new(),
-        cameras: Vec::new(),
-        crease_angle_used,
+        text_warnings,
+        material_warnings,
     })
 }
 
-/// What the pre-scan learned about an OBJ text.
-struct ObjScan<'a> {
-    /// The text handed to `tobj`: the file's, with polyline lines blanked.
-    text: Cow<'a, str>,
-    warnings: Vec<String>,
-    /// Every `usemtl` name with its line, to report names no library defines.
-    material_uses: Vec<(String, usize)>,
-}
-
-/// A problem the pre-scan found: where (1-based line, and column in chars) and what.
-#[derive(Debug)]
-struct ScanError {
-    line: usize,
-    column: usize,
-    message: String,
-}
-
-/// The pre-scan of the module documentation.
-fn scan_obj(text: &str) -> Result<ObjScan<'_>, ScanError> {
-    // Elements defined so far: positions, texture coordinates, normals.
-    let mut defined = [0usize; 3];
-    let mut polyline_lines = Vec::new();
-    let mut material_uses = Vec::new();
-
-    for (index, line) in text.lines().enumerate() {
-        let line_number = index + 1;
-        let mut words = line.split_whitespace();
-        // `words` borrow from `line`, so a word's offset in it gives its column.
-        let column_of = |word: &str| {
-            let offset = (word.as_ptr() as usize).saturating_sub(line.as_ptr() as usize);
-            1 + line.get(..offset).map_or(0, |before| before.chars().count())
-        };
-        let Some(keyword) = words.next() else { continue };
-        let fail_at = |word: &str, message: String| ScanError {
-            line: line_number,
-            column: column_of(word),
-            message,
-        };
-        let fail = |message: String| fail_at(keyword, message);
-        match keyword {
-            "v" => {
-                check_vertex_line(&words.collect::<Vec<_>>()).map_err(fail)?;
-                defined[0] += 1;
-            }
-            "vt" => {
-                check_numbers(words, 2, "texture coordinate").map_err(fail)?;
-                defined[1] += 1;
-            }
-            "vn" => {
-                check_numbers(words, 3, "normal").map_err(fail)?;
-                defined[2] += 1;
-            }
-            "f" => {
-                let mut corner_count = 0;
-                for word in words {
-                    check_face_vertex(word, defined).map_err(|message| fail_at(word, message))?;
-                    corner_count += 1;
-                }
-                // A face needs three corners; fewer is what a file cut off in the middle of
-                // its last line looks like (`f 1 3 `), so it is an error, not a dropped face.
-                if corner_count < 3 {
-                    return Err(fail(format!(
-                        "a face needs at least 3 vertices, this one has {corner_count}: `{}` (is the file truncated?)",
-                        line.trim()
-                    )));
-                }
-            }
-            "l" => polyline_lines.push(index),
-            "usemtl" => {
-                let name = line.trim_start()["usemtl".len()..].trim();
-                if name.is_empty() {
-                    return Err(fail("usemtl needs a material name".to_string()));
-                }
-                material_uses.push((name.to_string(), line_number));
-            }
-            _ => {}
-        }
-    }
-
-    let mut warnings = Vec::new();
-    let text = match polyline_lines.first() {
-        None => Cow::Borrowed(text),
-        Some(&first) => {
-            warnings.push(format!(
-                "ignored {} polyline ('l') elements (first at line {}): lines are not drawn",
-                polyline_lines.len(),
-                first + 1
-            ));
-            // Blank lines keep the numbering of everything else.
-            let mut blanked = polyline_lines.iter().peekable();
-            let kept: Vec<&str> = text
-                .lines()
-                .enumerate()
-                .map(|(index, line)| {
-                    if blanked.peek() == Some(&&index) {
-                        blanked.next();
-                        ""
-                    } else {
-                        line
-                    }
-                })
-                .collect();
-            Cow::Owned(kept.join("\n"))
-        }
-    };
-    Ok(ObjScan {
-        text,
-        warnings,
-        material_uses,
-    })
-}
-
-/// A `v` line after the keyword: `x y z`, then nothing, `w`, or an `r g b` colour (what
-/// `tobj` accepts), with finite coordinates and a non-zero `w`.
-fn check_vertex_line(words: &[&str]) -> Result<(), String> {
-    let number = |word: &str| word.parse::<f32>().ok();
-    let coordinates: Option<Vec<f32>> = words.iter().take(3).map(|w| number(w)).collect();
-    let coordinates = match coordinates {
-        Some(c) if c.len() == 3 => c,
-        _ => return Err("a vertex position needs three numbers".to_string()),
-    };
-    if !coordinates.iter().all(|c| c.is_finite()) {
-        return Err("vertex position is not finite (NaN or infinity)".to_string());
-    }
-    match words.len() {
-        3 | 6 => Ok(()),
-        4 => match number(words[3]) {
-            Some(w) if w != 0.0 && coordinates.iter().all(|c| (c / w).is_finite()) => Ok(()),
-            Some(_) => Err("vertex weight w must be non-zero and keep the position finite".to_string()),
-            None => Err(format!("vertex weight w '{}' is not a number", words[3])),
-        },
-        _ => Err("a vertex is x y z, optionally followed by w or by an r g b colour".to_string()),
-    }
-}
-
-/// The first `count` words must be numbers (more are allowed and ignored, as `tobj` does).
-fn check_numbers<'a>(words: impl Iterator<Item = &'a str>, count: usize, what: &str) -> Result<(), String> {
-    let numbers: Vec<Option<f32>> = words.take(count).map(|w| w.parse::<f32>().ok()).collect();
-    if numbers.len() < count || numbers.iter().any(Option::is_none) {
-        return Err(format!("a {what} needs {count} numbers"));
-    }
-    // `1e39` parses as infinity in `f32`; a NaN or infinite normal or texture coordinate is a
-    // broken export, rejected like a non-finite position rather than silently repaired.
-    if numbers.iter().flatten().all(|n| n.is_finite()) {
-        Ok(())
-    } else {
-        Err(format!("{what} is not finite (NaN or infinity)"))
-    }
-}
-
-/// One `v`, `v/vt`, `v//vn` or `v/vt/vn` word of a face, against the element counts defined
-/// so far (positions, texture coordinates, normals).
-fn check_face_vertex(word: &str, defined: [usize; 3]) -> Result<(), String> {
-    const KINDS: [(&str, &str); 3] = [
-        ("vertex", "vertices"),
-        ("texture coordinate", "texture coordinates"),
-        ("normal", "normals"),
-    ];
-    let parts: Vec<&str> = word.split('/').collect();
-    if parts.len() > 3 || parts[0].is_empty() {
-        return Err(format!("malformed face vertex '{word}'"));
-    }
-    // `3/` or `3/1/`: `tobj` reads these silently as if the last index were absent; they are
-    // what a file cut off in the middle of a face looks like.
-    if parts.len() > 1 && parts.last().is_some_and(|last| last.is_empty()) {
-        return Err(format!(
-            "face vertex '{word}' ends with '/': the file is truncated or malformed"
-        ));
-    }
-    for ((part, (kind, kinds)), count) in parts.iter().zip(KINDS).zip(defined) {
-        if part.is_empty() {
-            continue;
-        }
-        let index: i64 = part
-            .parse()
-            .map_err(|_| format!("malformed face vertex '{word}'"))?;
-        if index == 0 {
-            return Err(format!(
-                "face index 0 in '{word}' is invalid: OBJ indices start at 1"
-            ));
-        }
-        // Positive indices count from the first element, negative ones back from the last
-        // defined so far: either way |index| may not exceed the count.
-        if index.unsigned_abs() > count as u64 {
-            return Err(format!(
-                "face refers to {kind} {index}, but only {count} {kinds} are defined above this line"
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// Reads the MTL files `tobj` asks for, relative to the OBJ's directory, recording what
-/// was read and what went wrong (the loader callback cannot return anything else).
+/// Reads the MTL files `mtllib` lines name, relative to the OBJ's directory, recording what
+/// was read and what went wrong.
 struct MaterialLibraries<'a> {
     access: &'a FileAccess,
-    /// A library the sandbox refused (as named in the OBJ file) and why: an error.
-    refused: RefCell<Option<(String, String)>>,
+    /// A library the sandbox refused (as named in the OBJ file), its line, and why: an error.
+    refused: Option<(String, usize, String)>,
     directory: PathBuf,
     /// Libraries read, and libraries named but missing (for a watcher).
-    files_read: RefCell<Vec<PathBuf>>,
-    warnings: RefCell<Vec<String>>,
-    /// The folder of the library of each material returned to `tobj`, in order: `tobj`
-    /// appends each library's materials to its list as they come, so material i of the
-    /// final list came from `material_directories[i]` (texture paths are relative to it).
-    material_directories: RefCell<Vec<PathBuf>>,
+    files_read: Vec<PathBuf>,
+    warnings: Vec<String>,
+    /// The materials of every library that loaded, in order.
+    materials: Vec<tobj::Material>,
+    /// The folder of the library of each material (texture paths are relative to it).
+    material_directories: Vec<PathBuf>,
 }
 
 impl MaterialLibraries<'_> {
-    fn load(&self, library: &Path) -> tobj::MTLLoadResult {
+    /// Loads the library `library` (named at `line`) and returns its material names, or
+    /// `None` (after a warning, or an error for the sandbox) when it cannot be used.
+    fn load(&mut self, library: &str, line: usize) -> Option<Vec<String>> {
         let path = self.directory.join(library);
-        let warn = |problem: String| {
-            self.warnings.borrow_mut().push(format!(
+        let warn = |warnings: &mut Vec<String>, problem: String| {
+            warnings.push(format!(
                 "material library {}: {problem}; its materials are not used",
                 path.display()
             ));
         };
-        {
-            // Recorded even when it cannot be read: a watcher then reloads when it appears.
-            let mut files_read = self.files_read.borrow_mut();
-            if !files_read.contains(&path) {
-                files_read.push(path.clone());
-            }
+        // Recorded even when it cannot be read: a watcher then reloads when it appears.
+        if !self.files_read.contains(&path) {
+            self.files_read.push(path.clone());
         }
         let bytes = match self.access.read(&path) {
             Ok(bytes) => bytes,
             Err(error) if error.is_sandbox() => {
                 self.refused
-                    .borrow_mut()
-                    .get_or_insert_with(|| (library.display().to_string(), error.to_string()));
-                return Err(tobj::LoadError::OpenFileFailed);
+                    .get_or_insert_with(|| (library.to_string(), line, error.to_string()));
+                return None;
             }
             Err(error) => {
-                warn(format!("cannot read it: {error}"));
-                return Err(tobj::LoadError::OpenFileFailed);
+                warn(&mut self.warnings, format!("cannot read it: {error}"));
+                return None;
             }
         };
         let text = String::from_utf8_lossy(&bytes);
         let text = match prepare_mtl(&text) {
             Ok(text) => text,
             Err((line, message)) => {
-                warn(format!("line {line}: {message}"));
-                return Err(tobj::LoadError::MaterialParseError);
+                warn(&mut self.warnings, format!("line {line}: {message}"));
+                return None;
             }
         };
-        let loaded = tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes()))
-            .inspect_err(|error| warn(error.to_string()));
-        if let Ok((materials, _)) = &loaded {
-            let directory = path.parent().unwrap_or(Path::new("")).to_path_buf();
-            self.material_directories
-                .borrow_mut()
-                .extend(std::iter::repeat_n(directory, materials.len()));
-        }
-        loaded
+        let parsed = catch_unwind(AssertUnwindSafe(|| {
+            tobj::load_mtl_buf(&mut Cursor::new(text.as_bytes()))
+        }));
+        let materials = match parsed {
+            Ok(Ok((materials, _))) => materials,
+            Ok(Err(error)) => {
+                warn(&mut self.warnings, error.to_string());
+                return None;
+            }
+            Err(_) => {
+                warn(
+                    &mut self.warnings,
+                    "the MTL parser gave up on this file".to_string(),
+                );
+                return None;
+            }
+        };
+        let directory = path.parent().unwrap_or(Path::new("")).to_path_buf();
+        self.material_directories
+            .extend(std::iter::repeat_n(directory, materials.len()));
+        let names = materials.iter().map(|material| material.name.clone()).collect();
+        self.materials.extend(materials);
+        Some(names)
     }
 }
 
@@ -608,134 +455,30 @@ fn prepare_mtl(text: &str) -> Result<Cow<'_, str>, (usize, String)> {
     Ok(Cow::Owned(lines.join("\n")))
 }
 
-/// Which vertices of the merged models came with a normal.
-enum FileNormals {
-    /// Every vertex, in vertex order.
-    All(Vec<Vec3>),
-    /// Some but not all.
-    Some,
-    None,
-}
-
-/// All `tobj` models merged into one indexed triangle list.
-struct MergedGeometry {
-    positions: Vec<Vec3>,
-    normals: FileNormals,
-    /// One per position in the glTF convention (module documentation), or empty.
-    uvs: Vec<Vec2>,
-    triangles: Vec<[u32; 3]>,
-    /// Per triangle, the index of its material among the libraries' materials.
-    triangle_material_ids: Vec<Option<usize>>,
-}
-
-fn merge_models(models: &[tobj::Model], warnings: &mut Vec<String>) -> Result<MergedGeometry, String> {
-    let mut positions = Vec::new();
-    let mut normals = Vec::new();
-    // Per model, its texture coordinates, when every vertex of it has one.
-    let mut model_uvs: Vec<Option<Vec<Vec2>>> = Vec::with_capacity(models.len());
-    let mut triangles = Vec::new();
-    let mut triangle_material_ids = Vec::new();
-    let (mut with_normals, mut without_normals) = (0usize, 0usize);
-    let mut models_with_partial_uvs = Vec::new();
-
-    for model in models {
-        let mesh = &model.mesh;
-        let offset = positions.len();
-        let vertex_count = mesh.positions.len() / 3;
-        positions.extend(mesh.positions.chunks_exact(3).map(Vec3::from_slice));
-        if mesh.texcoords.len() == 2 * vertex_count && vertex_count > 0 {
-            let flipped = mesh.texcoords.chunks_exact(2).map(|uv| {
-                let flipped = Vec2::new(uv[0], 1.0 - uv[1]);
-                Vec2::select(flipped.is_finite_mask(), flipped, Vec2::ZERO)
-            });
-            model_uvs.push(Some(flipped.collect()));
-        } else {
-            if !mesh.texcoords.is_empty() {
-                models_with_partial_uvs.push(model.name.as_str());
-            }
-            model_uvs.push(None);
-        }
-        if mesh.normals.len() == mesh.positions.len() {
-            normals.extend(mesh.normals.chunks_exact(3).map(Vec3::from_slice));
-            with_normals += vertex_count;
-        } else {
-            with_normals += mesh.normals.len() / 3;
-            without_normals += vertex_count - (mesh.normals.len() / 3).min(vertex_count);
-        }
-        for corners in mesh.indices.chunks_exact(3) {
-            let mut triangle = [0u32; 3];
-            for (slot, &vertex) in triangle.iter_mut().zip(corners) {
-                if vertex as usize >= vertex_count {
-                    return Err(format!("malformed OBJ: vertex index {vertex} out of range"));
-                }
-                *slot = u32::try_from(offset + vertex as usize)
-                    .map_err(|_| "too many vertices (more than 2³² after splitting)".to_string())?;
-            }
-            triangles.push(triangle);
-            triangle_material_ids.push(mesh.material_id);
-        }
-    }
-    if !positions.iter().all(|p| p.is_finite()) {
-        return Err("a vertex position is not finite (NaN or infinity)".to_string());
-    }
-    let normals = match (with_normals, without_normals) {
-        (0, _) => FileNormals::None,
-        (_, 0) => FileNormals::All(normals),
-        _ => FileNormals::Some,
-    };
-    if !models_with_partial_uvs.is_empty() {
-        warnings.push(format!(
-            "only some face vertices have texture coordinates in {}; those texture coordinates were dropped",
-            models_with_partial_uvs
-                .iter()
-                .map(|name| format!("'{name}'"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-    }
-    let uvs = if model_uvs.iter().any(Option::is_some) {
-        let counts = models.iter().map(|model| model.mesh.positions.len() / 3);
-        model_uvs
-            .into_iter()
-            .zip(counts)
-            .flat_map(|(uvs, count)| uvs.unwrap_or_else(|| vec![Vec2::ZERO; count]))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    Ok(MergedGeometry {
-        positions,
-        normals,
-        uvs,
-        triangles,
-        triangle_material_ids,
-    })
-}
-
-/// Sets the mesh's materials and per-triangle material indices from the libraries' materials
-/// (module documentation: "MTL to Material").
+/// The mesh's materials and per-triangle material indices from the libraries' materials
+/// (module documentation: "MTL to Material"); both empty when no face names a known material.
 fn assign_materials(
-    mesh: &mut Mesh,
     triangle_material_ids: &[Option<usize>],
     library_materials: &[tobj::Material],
     warnings: &mut Vec<String>,
-) {
+) -> (Vec<Material>, Vec<u32>) {
     let known = |id: &Option<usize>| id.filter(|&id| id < library_materials.len());
     if library_materials.is_empty() || triangle_material_ids.iter().all(|id| known(id).is_none()) {
-        return;
+        return (Vec::new(), Vec::new());
     }
-    mesh.materials = library_materials
+    let mut materials: Vec<Material> = library_materials
         .iter()
         .map(|material| material_from_mtl(material, warnings))
         .collect();
-    let default_index = mesh.materials.len() as u32;
-    mesh.triangle_materials = triangle_material_ids
+    let default_index = materials.len() as u32;
+    let triangle_materials: Vec<u32> = triangle_material_ids
         .iter()
         .map(|id| known(id).map_or(default_index, |id| id as u32))
         .collect();
-    if mesh.triangle_materials.contains(&default_index) {
-        mesh.materials.push(default_material());
+    if triangle_materials.contains(&default_index) {
+        materials.push(default_material());
     }
+    (materials, triangle_materials)
 }
 
 /// One MTL material as a [`Material`] (module documentation: "MTL to Material").
@@ -974,6 +717,8 @@ fn split_word(text: &str) -> (&str, &str) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::Mesh;
+    use glam::Vec2;
 
     fn asset(relative: &str) -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -19,8 +19,8 @@ use glam::{DMat4, DQuat, DVec3, EulerRot, Vec3};
 
 use crate::diag::{Diagnostic, Schema, SourceId, Sources, from_ron_error};
 use crate::mesh::{
-    ImportedCamera, ImportedLight, ImportedProjection, LoadedMesh, Mesh, MeshError, MeshOptions,
-    closed::is_closed, gltf::load_gltf, obj::load_obj, primitives, tangents::compute_tangents,
+    ImportedCamera, ImportedLight, ImportedProjection, LoadedMesh, Mesh, MeshError, ParsedMeshFile,
+    closed::is_closed, primitives, tangents::compute_tangents,
 };
 use crate::render::raster::SamplePattern;
 use crate::ron_path;
@@ -229,6 +229,7 @@ fn load_scene_with(
         diagnostics: Vec::new(),
         files_read: Vec::new(),
         cache,
+        parsed_files: HashMap::new(),
         meshes_reported: HashSet::new(),
         textures: Vec::new(),
         texture_paths: HashMap::new(),
@@ -265,12 +266,25 @@ struct Loader<'c> {
     diagnostics: Vec<Diagnostic>,
     files_read: Vec<PathBuf>,
     cache: &'c mut MeshCache,
+    /// The mesh files this load parsed (or failed to), by canonical path: objects naming a
+    /// file with another crease angle build their mesh from the same parse.
+    parsed_files: HashMap<PathBuf, ParseOutcome>,
     /// Meshes whose files and warnings this load has already reported (an object reusing a
     /// mesh does not repeat them).
     meshes_reported: HashSet<MeshKey>,
     /// Textures of the scene's own materials, and where each came from (to load each once).
     textures: Vec<Arc<Texture>>,
     texture_paths: HashMap<(PathBuf, bool), u32>,
+}
+
+/// A mesh file parsed, or why it could not be.
+type ParseOutcome = Result<Arc<ParsedMeshFile>, Arc<MeshFailure>>;
+
+/// Why a mesh file did not load, and the files it tried to read (a watcher follows them).
+#[derive(Debug)]
+struct MeshFailure {
+    error: MeshError,
+    attempted: Vec<PathBuf>,
 }
 
 /// A material defined in a table: where, so errors can point at it.
@@ -1424,15 +1438,26 @@ impl Loader<'_> {
                 // before failing (its MTL, `.bin`, images): the recording access keeps them, so
                 // that a watcher follows them and sees a missing one come back.
                 let (access, attempted) = self.access.recording();
-                let options = MeshOptions {
-                    crease_angle_degrees: crease_angle,
-                    access,
+                let parsed = match self.parsed_files.get(&canonical_path) {
+                    Some(parsed) => parsed.clone(),
+                    None => {
+                        self.cache.files_parsed += 1;
+                        let parsed = ParsedMeshFile::parse(path, is_obj, &access)
+                            .map(Arc::new)
+                            .map_err(|error| {
+                                let attempted = attempted.paths();
+                                Arc::new(MeshFailure { error, attempted })
+                            });
+                        self.parsed_files.insert(canonical_path.clone(), parsed.clone());
+                        parsed
+                    }
                 };
-                self.cache.files_parsed += 1;
-                let loaded = if is_obj {
-                    load_obj(path, &options)
-                } else {
-                    load_gltf(path, &options)
+                let loaded = match parsed {
+                    Ok(parsed) => parsed.build(crease_angle).map_err(|error| {
+                        let attempted = attempted.paths();
+                        Arc::new(MeshFailure { error, attempted })
+                    }),
+                    Err(failure) => Err(failure),
                 };
                 match loaded {
                     Ok(LoadedMesh {
@@ -1443,7 +1468,7 @@ impl Loader<'_> {
                         cameras,
                         crease_angle_used,
                     }) => {
-                        // Once per file: whether its back faces may be culled (render::geometry).
+                        // Once per mesh built: whether its back faces may be culled (render::geometry).
                         mesh.closed = is_closed(&mesh.positions, &mesh.triangles);
                         let mut stamped: Vec<PathBuf> = files_read.clone();
                         if !stamped.iter().any(|f| f == path) {
@@ -1468,10 +1493,10 @@ impl Loader<'_> {
                         );
                         key
                     }
-                    Err(error) => {
+                    Err(failure) => {
                         self.files_read.push(path.to_path_buf());
-                        self.files_read.extend(attempted.paths());
-                        self.mesh_error(error, at);
+                        self.files_read.extend(failure.attempted.iter().cloned());
+                        self.mesh_error(failure.error.clone(), at);
                         return None;
                     }
                 }
@@ -2477,11 +2502,17 @@ mod tests {
         assert_eq!(count, 1);
         let meshes: Vec<_> = loaded.scene.objects.iter().map(|o| o.mesh.clone()).collect();
         assert!(meshes.iter().all(|m| Arc::ptr_eq(m, &meshes[0])));
-        // Without normals the crease angle shapes the mesh: one parse per angle.
-        let (count, _) = parses(&scene(
-            r#"(mesh: Obj("bare.obj")), (mesh: Obj("bare.obj")), (mesh: Obj("bare.obj"), crease_angle: 10)"#,
-        ));
-        assert_eq!(count, 2);
+        // Without normals the crease angle shapes the mesh: one mesh per angle, built from
+        // one parse of the file; the same for a glTF file.
+        let triangle = asset("gltf/Triangle/glTF/Triangle.gltf");
+        let (count, loaded) = parses(&scene(&format!(
+            r#"(mesh: Obj("bare.obj")), (mesh: Obj("bare.obj")), (mesh: Obj("bare.obj"), crease_angle: 10),
+               (mesh: Gltf({triangle:?})), (mesh: Gltf({triangle:?}), crease_angle: 5)"#,
+        )));
+        assert_eq!(count, 2, "one parse per file");
+        let meshes: Vec<_> = loaded.scene.objects.iter().map(|o| o.mesh.clone()).collect();
+        assert!(Arc::ptr_eq(&meshes[0], &meshes[1]) && !Arc::ptr_eq(&meshes[1], &meshes[2]));
+        assert!(!Arc::ptr_eq(&meshes[3], &meshes[4]));
     }
 
     #[test]

@@ -1,0 +1,137 @@
+#!/usr/bin/env python3
+"""Writes benches/meshes/nefertiti-1m.obj: the nefertiti scan (assets/obj/nefertiti, 70,000
+triangles) refined by two levels of Loop subdivision into 1,120,000 triangles, the real-mesh bench
+scene of about a million triangles (benches/scenes/nefertiti-1m.ron, its llvmpipe anchor
+benches/anchors/s4_nefertiti_1m.json).
+
+The file is about 40 MB, so it is generated rather than committed (benches/meshes/ is ignored by
+git); benches/llvmpipe.py runs this script when the file is missing. Deterministic, standard
+library only, about half a minute:
+
+    python3 benches/gen_dense_scan.py
+
+Loop subdivision (Loop 1987, with Warren's weights): every triangle becomes four, its corners
+moved to (1 - n*b) v + b * (sum of the n neighbours), b = 3/(8n) (3/16 when n = 3), and a new
+vertex on each edge at 3/8 (a + b) + 1/8 (c + d) for the edge (a, b) between the triangles with
+third corners c and d. The scan is open: an edge with one triangle is a boundary, its new vertex
+at its midpoint, and a corner on exactly two boundary edges moves to 3/4 v + 1/8 (b1 + b2); an
+edge with more than two triangles (none in this scan) would count as a boundary, and a corner on
+it stays put. Each triangle's four children follow each other in the parent's place, so the file
+keeps the scan's order of triangles; the corners keep their numbers and the edge vertices follow
+in the order their first triangle meets them.
+"""
+import os
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SOURCE = os.path.join(ROOT, "assets", "obj", "nefertiti", "nefertiti-lowres.obj")
+TARGET = os.path.join(ROOT, "benches", "meshes", "nefertiti-1m.obj")
+LEVELS = 2
+
+
+def read_obj(path):
+    xs, ys, zs, faces = [], [], [], []
+    with open(path) as lines:
+        for line in lines:
+            words = line.split()
+            if not words:
+                continue
+            if words[0] == "v":
+                xs.append(float(words[1]))
+                ys.append(float(words[2]))
+                zs.append(float(words[3]))
+            elif words[0] == "f":
+                corners = [int(word.split("/")[0]) - 1 for word in words[1:]]
+                for k in range(1, len(corners) - 1):
+                    faces.append((corners[0], corners[k], corners[k + 1]))
+    return xs, ys, zs, faces
+
+
+def subdivide(xs, ys, zs, faces):
+    n = len(xs)
+    # Each edge (by its smaller and larger corner) with the third corners of its triangles.
+    opposite = {}
+    for a, b, c in faces:
+        for u, v, w in ((a, b, c), (b, c, a), (c, a, b)):
+            key = u * n + v if u < v else v * n + u
+            opposite.setdefault(key, []).append(w)
+
+    # Corners: neighbour sums over interior edges, boundary neighbours.
+    sx, sy, sz = [0.0] * n, [0.0] * n, [0.0] * n
+    neighbours = [0] * n
+    boundary = [[] for _ in range(n)]
+    pinned = [False] * n
+    for key, thirds in opposite.items():
+        u, v = divmod(key, n)
+        sx[u] += xs[v]; sy[u] += ys[v]; sz[u] += zs[v]
+        sx[v] += xs[u]; sy[v] += ys[u]; sz[v] += zs[u]
+        neighbours[u] += 1
+        neighbours[v] += 1
+        if len(thirds) == 1:
+            boundary[u].append(v)
+            boundary[v].append(u)
+        elif len(thirds) > 2:
+            pinned[u] = pinned[v] = True
+    nx, ny, nz = [], [], []
+    for i in range(n):
+        if pinned[i] or (boundary[i] and len(boundary[i]) != 2):
+            nx.append(xs[i]); ny.append(ys[i]); nz.append(zs[i])
+        elif boundary[i]:
+            p, q = boundary[i]
+            nx.append(0.75 * xs[i] + 0.125 * (xs[p] + xs[q]))
+            ny.append(0.75 * ys[i] + 0.125 * (ys[p] + ys[q]))
+            nz.append(0.75 * zs[i] + 0.125 * (zs[p] + zs[q]))
+        elif neighbours[i] == 0:
+            nx.append(xs[i]); ny.append(ys[i]); nz.append(zs[i])
+        else:
+            k = neighbours[i]
+            beta = 3.0 / 16.0 if k == 3 else 3.0 / (8.0 * k)
+            keep = 1.0 - k * beta
+            nx.append(keep * xs[i] + beta * sx[i])
+            ny.append(keep * ys[i] + beta * sy[i])
+            nz.append(keep * zs[i] + beta * sz[i])
+
+    # Edge vertices, numbered as the triangles meet them; then the children.
+    edge_vertex = {}
+    children = []
+    for a, b, c in faces:
+        mids = []
+        for u, v in ((a, b), (b, c), (c, a)):
+            key = u * n + v if u < v else v * n + u
+            vertex = edge_vertex.get(key)
+            if vertex is None:
+                vertex = len(nx)
+                edge_vertex[key] = vertex
+                thirds = opposite[key]
+                if len(thirds) == 2:
+                    p, q = thirds
+                    nx.append(0.375 * (xs[u] + xs[v]) + 0.125 * (xs[p] + xs[q]))
+                    ny.append(0.375 * (ys[u] + ys[v]) + 0.125 * (ys[p] + ys[q]))
+                    nz.append(0.375 * (zs[u] + zs[v]) + 0.125 * (zs[p] + zs[q]))
+                else:
+                    nx.append(0.5 * (xs[u] + xs[v]))
+                    ny.append(0.5 * (ys[u] + ys[v]))
+                    nz.append(0.5 * (zs[u] + zs[v]))
+            mids.append(vertex)
+        ab, bc, ca = mids
+        children += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+    return nx, ny, nz, children
+
+
+def main():
+    xs, ys, zs, faces = read_obj(SOURCE)
+    for _ in range(LEVELS):
+        xs, ys, zs, faces = subdivide(xs, ys, zs, faces)
+    os.makedirs(os.path.dirname(TARGET), exist_ok=True)
+    temporary = TARGET + ".partial"
+    with open(temporary, "w") as out:
+        out.write(f"# nefertiti-lowres.obj (assets/obj/nefertiti) after {LEVELS} levels of Loop subdivision;\n"
+                  "# written by benches/gen_dense_scan.py\n")
+        out.write("".join(f"v {x:.5f} {y:.5f} {z:.5f}\n" for x, y, z in zip(xs, ys, zs)))
+        out.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces))
+    os.replace(temporary, TARGET)
+    print(f"wrote {TARGET}: {len(xs):,} vertices, {len(faces):,} triangles", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
