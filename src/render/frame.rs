@@ -222,13 +222,7 @@ impl Frame {
         let material = if self.vertex_attributes.is_empty() {
             *material
         } else {
-            let tint = triangle
-                .vertices
-                .map(|v| self.attributes(v).tint)
-                .iter()
-                .sum::<Vec3>()
-                / 3.0;
-            tinted(material, tint)
+            tinted(material, self.flat_tint(triangle))
         };
         let (textured, rest) = self.light_material(
             &material,
@@ -242,6 +236,17 @@ impl Frame {
         } else {
             (Vec3::ZERO, textured + rest)
         }
+    }
+
+    /// The vertex colour of a flat-shaded triangle: its vertices' mean.
+    #[inline]
+    pub fn flat_tint(&self, triangle: &FrameTriangle) -> Vec3 {
+        triangle
+            .vertices
+            .map(|v| self.attributes(v).tint)
+            .iter()
+            .sum::<Vec3>()
+            / 3.0
     }
 
     /// Lights a surface point of an object with `style`, on its front or back side, and returns

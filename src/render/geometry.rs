@@ -33,6 +33,7 @@ use crate::render::raster::{
 };
 use crate::render::shade_fast::{FastLighting, FastPhong};
 use crate::render::shadow::ShadowMap;
+use crate::render::surface_lanes::SurfaceLanes;
 use crate::scene::presets::default_material;
 use crate::scene::{BackFaces, Camera, Light, Object, Projection, Scene, Shading};
 
@@ -273,7 +274,10 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
             // The fast lighting of the last (object, material) met, when it may take it.
             let mut fast: Option<(usize, u32, Option<FastLighting>)> = None;
             // Vertices waiting to be lit together by the fast lighting in `fast`.
-            let mut batch = LightingBatch::default();
+            let mut batch = LightingBatch {
+                chunk_start: first,
+                ..LightingBatch::default()
+            };
             for offset in 0..colors.len() {
                 if !seen[offset].load(Ordering::Relaxed) {
                     // Never read; written so that no value of an earlier frame is left.
@@ -305,7 +309,7 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                         Some((o, m, lighting)) if o == object && m == material => lighting,
                         _ => {
                             if let Some((.., Some(previous))) = fast {
-                                batch.flush(&previous, colors, vertices);
+                                batch.flush(&previous, colors, vertices, &mut textured_parts);
                             }
                             let lighting =
                                 FastLighting::new(lit_frame, material, style, Shading::Gouraud, false);
@@ -318,8 +322,14 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                         // The front side's normal is the vertex normal (`side_normal(n, false)`).
                         let vertex = &vertices[offset];
                         let normal = model_normal.unwrap_or(vertex.normal);
-                        if batch.push(offset, vertex.position, normal) {
-                            batch.flush(&lighting, colors, vertices);
+                        // Multiplying by white keeps every bit: untinted vertices take it.
+                        let tint = scene.objects[object]
+                            .mesh
+                            .colors
+                            .get(v)
+                            .map_or(Vec3::ONE, |tint| tint.truncate());
+                        if batch.push(offset, vertex.position, normal, tint) {
+                            batch.flush(&lighting, colors, vertices, &mut textured_parts);
                         }
                         continue;
                     }
@@ -344,7 +354,7 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                 };
             }
             if let Some((.., Some(lighting))) = fast {
-                batch.flush(&lighting, colors, vertices);
+                batch.flush(&lighting, colors, vertices, &mut textured_parts);
             }
             textured_parts
         })
@@ -365,11 +375,15 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
 /// their colours go in the chunk.
 #[derive(Default)]
 struct LightingBatch {
+    /// The frame's index of the chunk's first vertex.
+    chunk_start: usize,
     len: usize,
     slots: [usize; LANES],
     positions: [Vec3; LANES],
     /// Model normals when `normal_matrix` is set, else the vertices' normals.
     normals: [Vec3; LANES],
+    /// The mesh's vertex colours (white where it has none), which multiply `k_d`.
+    tints: [Vec3; LANES],
     /// The object's normal matrix when the batch sets its vertices' normals (`normal_when_lit`):
     /// they are transformed and normalised lane-wise, with the scalar path's bits.
     normal_matrix: Option<Mat3>,
@@ -377,24 +391,34 @@ struct LightingBatch {
 
 impl LightingBatch {
     /// Adds a vertex; true when the batch is full and must be flushed.
-    fn push(&mut self, slot: usize, position: Vec3, normal: Vec3) -> bool {
+    fn push(&mut self, slot: usize, position: Vec3, normal: Vec3, tint: Vec3) -> bool {
         self.slots[self.len] = slot;
         self.positions[self.len] = position;
         self.normals[self.len] = normal;
+        self.tints[self.len] = tint;
         self.len += 1;
         self.len == LANES
     }
 
     /// Lights the waiting vertices into `colors` (setting their normals in `vertices` first,
-    /// when the batch has a normal matrix) and empties the batch. The unused lanes of a
-    /// partial batch repeat its first vertex, and their results are dropped.
-    fn flush(&mut self, lighting: &FastLighting, colors: &mut [Vec3], vertices: &mut [FrameVertex]) {
+    /// when the batch has a normal matrix) and empties the batch. With a colour texture,
+    /// `colors` gets the part it does not multiply and `textured_parts` the rest, by vertex
+    /// index in the frame. The unused lanes of a partial batch repeat its first vertex, and
+    /// their results are dropped.
+    fn flush(
+        &mut self,
+        lighting: &FastLighting,
+        colors: &mut [Vec3],
+        vertices: &mut [FrameVertex],
+        textured_parts: &mut Vec<(usize, Vec3)>,
+    ) {
         if self.len == 0 {
             return;
         }
         for lane in self.len..LANES {
             self.positions[lane] = self.positions[0];
             self.normals[lane] = self.normals[0];
+            self.tints[lane] = self.tints[0];
         }
         let slots = &self.slots[..self.len];
         let mut normals = Vec3s::from_array(&self.normals);
@@ -404,9 +428,19 @@ impl LightingBatch {
                 vertices[slot].normal = normal;
             }
         }
-        let lit = lighting.light_lanes_of(Vec3s::from_array(&self.positions), normals);
-        for (&slot, &color) in slots.iter().zip(&lit) {
-            colors[slot] = color;
+        let mut surface = SurfaceLanes::of(lighting.material());
+        surface.diffuse = surface.diffuse * Vec3s::from_array(&self.tints);
+        let lit = lighting.light_surface_lanes(Vec3s::from_array(&self.positions), normals, &surface);
+        if has_color_texture(lighting.material()) {
+            let (textured, rest) = (lit.textured.to_array(), lit.rest.to_array());
+            for (lane, &slot) in slots.iter().enumerate() {
+                colors[slot] = rest[lane];
+                textured_parts.push((self.chunk_start + slot, textured[lane]));
+            }
+        } else {
+            for (&slot, &color) in slots.iter().zip(&(lit.textured + lit.rest).to_array()) {
+                colors[slot] = color;
+            }
         }
         self.len = 0;
     }

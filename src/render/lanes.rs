@@ -12,7 +12,7 @@
 
 use std::ops::{Add, Div, Mul, Neg, Not, Sub};
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 
 /// How many points are processed together. Eight fills an AVX register, or two SSE registers on
 /// the baseline x86-64 target.
@@ -422,6 +422,71 @@ impl Vec3s {
         let reciprocal = Floats::splat(1.0) / self.length();
         let usable = reciprocal.is_finite().and(reciprocal.gt(Floats::splat(0.0)));
         usable.select3(self.scale(reciprocal), Vec3s::splat(Vec3::ZERO))
+    }
+
+    /// `Vec3::cross`, each component's products in glam's order.
+    #[inline(always)]
+    pub fn cross(self, other: Self) -> Self {
+        Vec3s {
+            x: self.y * other.z - other.y * self.z,
+            y: self.z * other.x - other.z * self.x,
+            z: self.x * other.y - other.x * self.y,
+        }
+    }
+}
+
+/// One `Vec2` per lane (texture coordinates), stored as two lane arrays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Vec2s {
+    pub x: Floats,
+    pub y: Floats,
+}
+
+impl Vec2s {
+    /// The lanes from `vectors`.
+    #[inline(always)]
+    pub fn from_array(vectors: &[Vec2; LANES]) -> Self {
+        Vec2s {
+            x: Floats(vectors.map(|v| v.x)),
+            y: Floats(vectors.map(|v| v.y)),
+        }
+    }
+
+    /// Each component times the lane's `factor` (`Vec2 * f32`).
+    #[inline(always)]
+    pub fn scale(self, factor: Floats) -> Self {
+        Vec2s {
+            x: self.x * factor,
+            y: self.y * factor,
+        }
+    }
+
+    /// `Vec2::length`: `sqrt((x·x) + (y·y))`.
+    #[inline(always)]
+    pub fn length(self) -> Floats {
+        (self.x * self.x + self.y * self.y).sqrt()
+    }
+}
+
+impl Add for Vec2s {
+    type Output = Vec2s;
+    #[inline(always)]
+    fn add(self, other: Vec2s) -> Vec2s {
+        Vec2s {
+            x: self.x + other.x,
+            y: self.y + other.y,
+        }
+    }
+}
+
+impl Sub for Vec2s {
+    type Output = Vec2s;
+    #[inline(always)]
+    fn sub(self, other: Vec2s) -> Vec2s {
+        Vec2s {
+            x: self.x - other.x,
+            y: self.y - other.y,
+        }
     }
 }
 

@@ -28,6 +28,8 @@ pub mod raster;
 pub mod shade;
 pub mod shade_fast;
 pub mod shadow;
+pub mod surface_lanes;
+pub mod texture_lanes;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};

@@ -25,6 +25,7 @@ use crate::render::raster::{
     edge_values,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch};
+use crate::render::surface_lanes::{Footprint, SurfaceLanes, SurfacePoints, texture_colors};
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
 /// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
@@ -218,6 +219,29 @@ impl GouraudColors {
     }
 }
 
+/// A Gouraud triangle's colours split as for a colour texture: the part it multiplies and the
+/// rest, each interpolated as [`GouraudColors`].
+struct SplitGouraudColors {
+    textured: GouraudColors,
+    rest: GouraudColors,
+}
+
+impl SplitGouraudColors {
+    /// `colors` are the source triangle's vertex colours as (textured part, rest).
+    fn new(raster: &RasterTriangle, corners: &Corners, colors: [(Vec3, Vec3); 3]) -> Self {
+        SplitGouraudColors {
+            textured: GouraudColors::new(raster, corners, colors.map(|(textured, _)| textured)),
+            rest: GouraudColors::new(raster, corners, colors.map(|(_, rest)| rest)),
+        }
+    }
+
+    /// (textured part, rest) where the edge functions take the values `edges`.
+    #[inline]
+    fn at(&self, edges: [i64; 3]) -> (Vec3, Vec3) {
+        (self.textured.at(edges), self.rest.at(edges))
+    }
+}
+
 /// The fast-path flat triangles a tile shows, lit together once the tile's pixels are known.
 /// One at a time, each triangle waits on its own cache misses (its corners) and its own chain of
 /// square roots and divisions; together, the corner loads overlap and the arithmetic runs
@@ -270,10 +294,18 @@ impl<'f> FlatBatch<'f> {
             }
             // `Frame::face_normal`'s normalisation and `ObjectStyle::side_normal`, lane-wise.
             let face_normals = Vec3s::from_array(&crossed).normalize_or_zero();
-            let normals = Mask::from_bools(reversed)
-                .select3(-face_normals, face_normals)
-                .to_array();
-            let lit = lighting.light_lanes(&centroids, &normals);
+            let normals = Mask::from_bools(reversed).select3(-face_normals, face_normals);
+            let centroids = Vec3s::from_array(&centroids);
+            let lit = if frame.vertex_attributes.is_empty() {
+                lighting.light_lanes_of(centroids, normals)
+            } else {
+                // `Frame::flat_colors`' tinted material.
+                let mut surface = SurfaceLanes::of(lighting.material());
+                let tints = std::array::from_fn(|lane| frame.flat_tint(&waiting(lane).1));
+                surface.diffuse = surface.diffuse * Vec3s::from_array(&tints);
+                let lit = lighting.light_surface_lanes(centroids, normals, &surface);
+                (lit.textured + lit.rest).to_array()
+            };
             self.colors.extend_from_slice(&lit[..end - start]);
             start = end;
         }
@@ -399,6 +431,7 @@ fn shade_multisampled<'f>(
     flat_waiting.clear();
     let phong_allowed = FastPhong::frame_allows(frame);
     let mut phong = PhongBatch::default();
+    let mut modulated = ModulatedBatch::default();
     for local in 0..count {
         let mine = &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize];
         if mine.is_empty() {
@@ -428,6 +461,24 @@ fn shade_multisampled<'f>(
                     phong.push(&fast, weights, index as usize, colors);
                 }
             }
+            TriangleShader::Varying(shader) => {
+                let points = SampledPoints {
+                    raster,
+                    indices: mine,
+                    points,
+                };
+                let corners = frame.corner_weights(id);
+                shade_varying(
+                    frame,
+                    raster,
+                    &corners,
+                    shader,
+                    points,
+                    &mut phong,
+                    &mut modulated,
+                    colors,
+                );
+            }
             TriangleShader::General => {
                 let corners = frame.corner_weights(id);
                 for &index in mine {
@@ -437,6 +488,7 @@ fn shade_multisampled<'f>(
         }
     }
     phong.flush(colors);
+    modulated.flush(frame, colors);
     flat.light(frame);
     for &(local, batch_index) in flat_waiting.iter() {
         let color = flat.colors[usize::from(batch_index)];
@@ -635,6 +687,7 @@ fn shade_single_sample<'f>(
     // pixel are shaded at once; the others get their colour in `fills`.
     let phong_allowed = FastPhong::frame_allows(frame);
     let mut phong = PhongBatch::default();
+    let mut modulated = ModulatedBatch::default();
     for local in 0..count {
         if !seen[local] {
             continue;
@@ -682,6 +735,16 @@ fn shade_single_sample<'f>(
                 let weights = weights_from_edges(raster, &corners, edges);
                 phong.push(&fast, weights, offset, target.color);
             }),
+            TriangleShader::Varying(shader) => shade_varying(
+                frame,
+                raster,
+                &corners,
+                shader,
+                pixels,
+                &mut phong,
+                &mut modulated,
+                target.color,
+            ),
             TriangleShader::General => pixels.for_each(|offset, at, _| {
                 target.color[offset] = shade_sample(frame, raster, &corners, at, caches);
             }),
@@ -689,6 +752,7 @@ fn shade_single_sample<'f>(
         }
     }
     phong.flush(target.color);
+    modulated.flush(frame, target.color);
     flat.light(frame);
     for &(local, index) in flat_waiting.iter() {
         fills[local as usize] = flat.colors[usize::from(index)];
@@ -757,6 +821,77 @@ impl ShownPixels<'_> {
     }
 }
 
+/// The points a triangle's pixels are shaded at, for [`shade_varying`]: each with where its
+/// colour goes and the triangle's edge functions there.
+trait TrianglePoints {
+    fn visit(&self, visit: impl FnMut(usize, [i64; 3]));
+}
+
+impl TrianglePoints for ShownPixels<'_> {
+    #[inline]
+    fn visit(&self, mut visit: impl FnMut(usize, [i64; 3])) {
+        self.for_each(|offset, _, edges| visit(offset, edges));
+    }
+}
+
+/// A multisampled tile's points of one triangle (`indices` into `points`), each colour going
+/// to its index.
+struct SampledPoints<'p> {
+    raster: &'p RasterTriangle,
+    indices: &'p [u32],
+    points: &'p [ShadingPoint],
+}
+
+impl TrianglePoints for SampledPoints<'_> {
+    #[inline]
+    fn visit(&self, mut visit: impl FnMut(usize, [i64; 3])) {
+        for &index in self.indices {
+            let (x, y) = self.points[index as usize].at;
+            visit(index as usize, edge_values(self.raster, x, y));
+        }
+    }
+}
+
+/// Shades the `points` of a triangle whose surface varies (textures, vertex colours), each
+/// with its footprint: Phong pixels into `phong`, flat and Gouraud ones into `modulated`.
+/// Apart from the loops over the tile's triangles, which the common case keeps small.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn shade_varying<'f>(
+    frame: &Frame,
+    raster: &RasterTriangle,
+    corners: &Corners,
+    shader: VaryingShader<'f>,
+    points: impl TrianglePoints,
+    phong: &mut PhongBatch<'f>,
+    modulated: &mut ModulatedBatch<'f>,
+    color: &mut [Vec3],
+) {
+    let steps = EdgeSteps::of(raster);
+    let footprint = |edges| footprint_from_edges(raster, corners, edges, &steps);
+    match shader {
+        VaryingShader::Phong(fast) => points.visit(|offset, edges| {
+            phong.push_footprint(&fast, footprint(edges), offset, color);
+        }),
+        VaryingShader::Flat(modulation, colors) => points.visit(|offset, edges| {
+            modulated.push(frame, &modulation, colors, || footprint(edges), offset, color);
+        }),
+        VaryingShader::Gouraud(modulation, colors) => {
+            let colors = SplitGouraudColors::new(raster, corners, colors);
+            points.visit(|offset, edges| {
+                modulated.push(
+                    frame,
+                    &modulation,
+                    colors.at(edges),
+                    || footprint(edges),
+                    offset,
+                    color,
+                );
+            })
+        }
+    }
+}
+
 /// The centre of pixel row or column `p`, in 1/256 pixel.
 #[inline]
 fn pixel_centre(p: u32) -> i64 {
@@ -772,10 +907,25 @@ enum TriangleShader<'f> {
     FlatWaiting(u16),
     /// Gouraud shading without a colour texture: the three vertex colours, interpolated.
     Gouraud([Vec3; 3]),
-    /// Phong shading in the common case (see [`FastPhong`]).
+    /// Phong shading in the common case (see [`FastPhong`]), of a surface that does not vary.
     Phong(FastPhong<'f>),
+    /// A surface that textures or vertex colours vary pixel by pixel.
+    Varying(VaryingShader<'f>),
     /// Everything else.
     General,
+}
+
+/// How the pixels of a triangle whose surface varies are shaded: lane by lane, each pixel with
+/// its footprint ([`shade_varying`]).
+enum VaryingShader<'f> {
+    /// Phong shading (see [`FastPhong`]), the surface stage first.
+    Phong(FastPhong<'f>),
+    /// Flat shading with a colour texture: the triangle's colour as (the part the texture
+    /// multiplies, the rest), the texture applied per pixel.
+    Flat(Modulation<'f>, (Vec3, Vec3)),
+    /// Gouraud shading with a colour texture: each vertex's colour as (the part the texture
+    /// multiplies, the rest), both interpolated, the texture applied per pixel.
+    Gouraud(Modulation<'f>, [(Vec3, Vec3); 3]),
 }
 
 impl<'f> TriangleShader<'f> {
@@ -789,11 +939,14 @@ impl<'f> TriangleShader<'f> {
         let triangle = &raster.triangle;
         let style = &frame.objects[triangle.object as usize];
         let material = &frame.materials[triangle.material as usize];
-        let plain = frame.debug_view.is_none()
-            && material.textures.diffuse.is_none()
-            && material.textures.ambient.is_none();
+        let plain = frame.debug_view.is_none() && !has_color_texture(material);
+        let modulation = || Modulation {
+            vertices: triangle.vertices,
+            texture: material.textures.diffuse.as_ref(),
+        };
         match style.shading {
-            Shading::Constant if plain => {
+            // Textures do not reach constant colours.
+            Shading::Constant if frame.debug_view.is_none() => {
                 TriangleShader::Solid(frame.constant_colors[triangle.material as usize])
             }
             Shading::Flat if plain => {
@@ -814,6 +967,13 @@ impl<'f> TriangleShader<'f> {
                     .get_or_insert_with(raster.source, || frame.flat_colors(triangle, back_facing));
                 TriangleShader::Solid(rest)
             }
+            // With a colour texture (and no debug view).
+            Shading::Flat if phong_allowed => {
+                let colors = caches
+                    .flat
+                    .get_or_insert_with(raster.source, || frame.flat_colors(triangle, raster.back_facing));
+                TriangleShader::Varying(VaryingShader::Flat(modulation(), colors))
+            }
             Shading::Gouraud if plain && raster.back_facing => {
                 let colors = caches.back.get_or_insert_with(raster.source, || {
                     back_gouraud_colors(frame, triangle, material, style)
@@ -821,10 +981,113 @@ impl<'f> TriangleShader<'f> {
                 TriangleShader::Gouraud(colors.map(|(_, rest)| rest))
             }
             Shading::Gouraud if plain => TriangleShader::Gouraud(triangle.vertices.map(|v| frame.color(v))),
-            Shading::Phong if phong_allowed => FastPhong::new(frame, triangle, raster.back_facing)
-                .map_or(TriangleShader::General, TriangleShader::Phong),
+            Shading::Gouraud if phong_allowed => {
+                let colors = if raster.back_facing {
+                    caches.back.get_or_insert_with(raster.source, || {
+                        back_gouraud_colors(frame, triangle, material, style)
+                    })
+                } else {
+                    triangle.vertices.map(|v| {
+                        let colors = frame.colors(v);
+                        (colors.color_textured, colors.color)
+                    })
+                };
+                TriangleShader::Varying(VaryingShader::Gouraud(modulation(), colors))
+            }
+            Shading::Phong if phong_allowed => match FastPhong::new(frame, triangle, raster.back_facing) {
+                Some(fast) if fast.varies() => TriangleShader::Varying(VaryingShader::Phong(fast)),
+                Some(fast) => TriangleShader::Phong(fast),
+                None => TriangleShader::General,
+            },
             _ => TriangleShader::General,
         }
+    }
+}
+
+/// What multiplies the textured part of a flat or Gouraud pixel of a triangle with a colour
+/// texture: the diffuse texture through the triangle's texture coordinates, or nothing (white)
+/// when its only colour texture is an ambient one (flat and Gouraud pixels take no other).
+#[derive(Clone, Copy)]
+struct Modulation<'f> {
+    vertices: [u32; 3],
+    texture: Option<&'f TextureBinding>,
+}
+
+/// Pixels of flat and Gouraud triangles with a colour texture, waiting to be modulated
+/// [`LANES`] at a time: each pixel's colour is `rest + textured·texel`, the texel of the
+/// batch's texture at the pixel (`surface_lanes::texture_colors`). The pixels of one batch
+/// share the texture binding.
+#[derive(Default)]
+struct ModulatedBatch<'f> {
+    texture: Option<&'f TextureBinding>,
+    len: usize,
+    /// Where each pixel's colour goes.
+    offsets: [usize; LANES],
+    /// Each pixel's colour as (the part the texture multiplies, the rest).
+    colors: [(Vec3, Vec3); LANES],
+    vertices: [[u32; 3]; LANES],
+    footprints: [Footprint; LANES],
+}
+
+impl<'f> ModulatedBatch<'f> {
+    /// The pixel whose colour is `colors` (textured part, rest) at the point whose footprint
+    /// `footprint` gives: its colour goes to `color[offset]`, at once when nothing modulates it,
+    /// else when the batch is lit (full, another texture coming, or [`ModulatedBatch::flush`]).
+    #[inline]
+    fn push(
+        &mut self,
+        frame: &Frame,
+        modulation: &Modulation<'f>,
+        (textured, rest): (Vec3, Vec3),
+        footprint: impl FnOnce() -> Footprint,
+        offset: usize,
+        color: &mut [Vec3],
+    ) {
+        let Some(texture) = modulation.texture else {
+            color[offset] = rest + textured * Vec3::ONE;
+            return;
+        };
+        if self
+            .texture
+            .is_some_and(|waiting| !std::ptr::eq(waiting, texture))
+        {
+            self.flush(frame, color);
+        }
+        self.texture = Some(texture);
+        let lane = self.len;
+        self.offsets[lane] = offset;
+        self.colors[lane] = (textured, rest);
+        self.vertices[lane] = modulation.vertices;
+        self.footprints[lane] = footprint();
+        self.len += 1;
+        if self.len == LANES {
+            self.flush(frame, color);
+        }
+    }
+
+    /// Modulates the waiting pixels into `color` and empties the batch.
+    fn flush(&mut self, frame: &Frame, color: &mut [Vec3]) {
+        let Some(texture) = self.texture else {
+            return;
+        };
+        if self.len == 0 {
+            return;
+        }
+        // The lanes past the last pixel repeat it; their results are dropped.
+        for lane in self.len..LANES {
+            self.vertices[lane] = self.vertices[self.len - 1];
+            self.footprints[lane] = self.footprints[self.len - 1];
+        }
+        let points = SurfacePoints {
+            vertices: &self.vertices,
+            footprints: &self.footprints,
+        };
+        let texels = texture_colors(frame, texture, &points).to_array();
+        for lane in 0..self.len {
+            let (textured, rest) = self.colors[lane];
+            color[self.offsets[lane]] = rest + textured * texels[lane];
+        }
+        self.len = 0;
     }
 }
 
@@ -860,6 +1123,39 @@ pub fn source_weights(triangle: &RasterTriangle, corners: &Corners, at: (i64, i6
 #[inline]
 fn weights_from_edges(triangle: &RasterTriangle, corners: &Corners, edges: [i64; 3]) -> Vec3 {
     corners.apply(perspective_weights(triangle.inv_area, triangle.inv_w, edges))
+}
+
+/// How a raster triangle's edge functions change one pixel to the right and one pixel down.
+struct EdgeSteps {
+    right: [i64; 3],
+    down: [i64; 3],
+}
+
+impl EdgeSteps {
+    fn of(triangle: &RasterTriangle) -> Self {
+        EdgeSteps {
+            right: edge_steps_x(triangle),
+            down: edge_steps_y(triangle),
+        }
+    }
+}
+
+/// The texture footprint where the edge functions take the values `edges`: the source weights
+/// there and one pixel to the right and one down (what [`shade_sample`] computes for a
+/// textured material: the neighbours' edge functions are these plus a step, exactly).
+#[inline]
+fn footprint_from_edges(
+    triangle: &RasterTriangle,
+    corners: &Corners,
+    edges: [i64; 3],
+    steps: &EdgeSteps,
+) -> Footprint {
+    let moved = |step: [i64; 3]| std::array::from_fn(|k| edges[k] + step[k]);
+    Footprint {
+        at: weights_from_edges(triangle, corners, edges),
+        right: weights_from_edges(triangle, corners, moved(steps.right)),
+        down: weights_from_edges(triangle, corners, moved(steps.down)),
+    }
 }
 
 /// The perspective-correct weights of a raster triangle's corners where its edge functions
@@ -943,7 +1239,7 @@ fn shade_sample(
             let (textured_part, rest) = caches
                 .flat
                 .get_or_insert_with(raster.source, || frame.flat_colors(triangle, back));
-            if color_texture.is_some() {
+            if has_color_texture(material) {
                 rest + textured_part * modulation()
             } else {
                 rest
@@ -1109,15 +1405,66 @@ mod tests {
         scene
     }
     use crate::scene::{BackFaces, LightingModel};
+    use shade_fast::tests::Surfaces;
+
+    /// One point, for shading a single pixel through [`shade_varying`].
+    struct OnePoint {
+        edges: [i64; 3],
+    }
+
+    impl TrianglePoints for OnePoint {
+        fn visit(&self, mut visit: impl FnMut(usize, [i64; 3])) {
+            visit(0, self.edges);
+        }
+    }
+
+    /// The colour [`shade_varying`] gives the one point of `raster` at `at`, through batches of
+    /// one.
+    fn shade_one_varying<'f>(
+        frame: &'f Frame,
+        raster: &RasterTriangle,
+        corners: &Corners,
+        shader: VaryingShader<'f>,
+        at: (i64, i64),
+    ) -> Vec3 {
+        let mut color = [Vec3::NAN];
+        let (mut phong, mut modulated) = (PhongBatch::default(), ModulatedBatch::default());
+        let point = OnePoint {
+            edges: edge_values(raster, at.0, at.1),
+        };
+        shade_varying(
+            frame,
+            raster,
+            corners,
+            shader,
+            point,
+            &mut phong,
+            &mut modulated,
+            &mut color,
+        );
+        phong.flush(&mut color);
+        modulated.flush(frame, &mut color);
+        color[0]
+    }
+
+    /// The surfaces the tests shade: the fast path's plain materials, and those varied by
+    /// vertex colours, textures and normal maps.
+    const SURFACES: [Option<Surfaces>; 4] = [
+        None,
+        Some(Surfaces::Tinted),
+        Some(Surfaces::Textured),
+        Some(Surfaces::AmbientOrNormalOnly),
+    ];
 
     /// Every visible pixel, shaded by the per-run shaders and by the general `shade_sample`:
-    /// the same bits, for each shading mode, back-face mode and light set.
+    /// the same bits, for each shading mode, back-face mode, light set and surface.
     #[test]
     fn triangle_shaders_equal_the_general_path_bit_for_bit() {
         let modes = [Shading::Constant, Shading::Flat, Shading::Gouraud, Shading::Phong];
-        for (shading, lights) in modes
+        for ((shading, lights), surfaces) in modes
             .into_iter()
             .flat_map(|m| shade_fast::tests::LIGHTS.map(|l| (m, l)))
+            .flat_map(|c| SURFACES.map(|s| (c, s)))
         {
             for (back_faces, view) in [
                 (BackFaces::ReverseLit, None),
@@ -1128,6 +1475,9 @@ mod tests {
             ] {
                 let mut scene =
                     shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces, lights);
+                if let Some(surfaces) = surfaces {
+                    shade_fast::tests::vary_surfaces(&mut scene, surfaces);
+                }
                 scene.override_shading(shading);
                 // Cut the spheres open so that back faces are seen too.
                 scene.camera.projection = crate::scene::Projection::Perspective {
@@ -1144,7 +1494,7 @@ mod tests {
                 };
                 let (mut run_caches, mut general_caches) = (new_caches(), new_caches());
                 let mut flat = FlatBatch::default();
-                let mut flat_lit = 0;
+                let (mut flat_lit, mut varying) = (0, 0);
                 let (mut shaded, mut back_seen) = (0, 0);
                 for tile in 0..frame.tiles.count() {
                     let rect = frame.tiles.rect(tile);
@@ -1179,11 +1529,17 @@ mod tests {
                             TriangleShader::Gouraud(colors) => GouraudColors::new(raster, &corners, colors)
                                 .at(edge_values(raster, at.0, at.1)),
                             TriangleShader::Phong(fast) => fast.shade(source_weights(raster, &corners, at)),
+                            TriangleShader::Varying(shader) => {
+                                varying += 1;
+                                shade_one_varying(&frame, raster, &corners, shader, at)
+                            }
                             TriangleShader::General => continue,
                         };
                         assert_eq!(
-                            run, general,
-                            "{shading:?} {back_faces:?} {view:?} {lights:?} at {px}, {py}"
+                            run.to_array().map(f32::to_bits),
+                            general.to_array().map(f32::to_bits),
+                            "{shading:?} {back_faces:?} {view:?} {lights:?} {surfaces:?} at {px}, {py}: \
+                             {run} against {general}"
                         );
                         shaded += 1;
                         back_seen += usize::from(raster.back_facing);
@@ -1193,10 +1549,22 @@ mod tests {
                     continue;
                 }
                 assert!(shaded > 100, "{shading:?} {lights:?}: {shaded} pixels compared");
+                // Textured flat and Gouraud pixels, and varying Phong ones, are shaded in lanes.
+                let lanes_expected = match surfaces {
+                    Some(Surfaces::Tinted) => shading == Shading::Phong,
+                    Some(_) => shading != Shading::Constant,
+                    None => false,
+                };
+                if lanes_expected && back_faces != BackFaces::Unlit {
+                    assert!(
+                        varying > 100,
+                        "{shading:?} {surfaces:?}: {varying} pixels with varying surfaces compared"
+                    );
+                }
                 if shading == Shading::Flat && back_faces != BackFaces::Unlit {
                     assert!(
-                        flat_lit > 100,
-                        "{back_faces:?}: {flat_lit} flat pixels lit in lanes"
+                        flat_lit + varying > 100,
+                        "{back_faces:?}: {flat_lit} flat pixels lit in lanes, {varying} modulated"
                     );
                 }
                 // Culled back faces are not drawn; unlit Phong back faces take the general path.
@@ -1227,18 +1595,21 @@ mod tests {
             (Gouraud, Gouraud),
             (Flat, Flat),
         ];
-        for (first, second) in modes {
+        for ((first, second), surfaces) in modes.into_iter().flat_map(|m| SURFACES.map(|s| (m, s))) {
             for (back_faces, lights) in [BackFaces::ReverseLit, BackFaces::Lit]
                 .into_iter()
                 .flat_map(|b| shade_fast::tests::LIGHTS.map(|l| (b, l)))
             {
-                let scene = cut_open_scene(
+                let mut scene = cut_open_scene(
                     LightingModel::BlinnPhong,
                     back_faces,
                     lights,
                     [first, second],
                     (260, 140),
                 );
+                if let Some(surfaces) = surfaces {
+                    shade_fast::tests::vary_surfaces(&mut scene, surfaces);
+                }
                 let background = scene.image.background;
                 let frame = shade_fast::tests::frame_of(&scene, None);
                 let width = scene.image.width as usize;
@@ -1280,7 +1651,8 @@ mod tests {
                         assert_eq!(
                             bits(color[offset]),
                             bits(expected),
-                            "{first:?}/{second:?} {back_faces:?} {lights:?} at {px}, {py}: {} against {expected}",
+                            "{first:?}/{second:?} {back_faces:?} {lights:?} {surfaces:?} at {px}, {py}: {} \
+                             against {expected}",
                             color[offset]
                         );
                         assert_eq!(covered[offset], id != NO_TRIANGLE);
@@ -1387,9 +1759,14 @@ mod tests {
         ];
         for samples in [2, 4, 8, 16] {
             let pattern = SamplePattern::new(samples).expect("a sample count");
-            for (first, second, model, back_faces, view) in cases {
+            for ((first, second, model, back_faces, view), surfaces) in
+                cases.into_iter().flat_map(|c| SURFACES.map(|s| (c, s)))
+            {
                 for lights in shade_fast::tests::LIGHTS {
-                    let scene = cut_open_scene(model, back_faces, lights, [first, second], (130, 70));
+                    let mut scene = cut_open_scene(model, back_faces, lights, [first, second], (130, 70));
+                    if let Some(surfaces) = surfaces {
+                        shade_fast::tests::vary_surfaces(&mut scene, surfaces);
+                    }
                     let background = scene.image.background;
                     let frame = shade_fast::tests::frame_sampled(&scene, pattern, view);
                     let width = scene.image.width as usize;
@@ -1431,7 +1808,7 @@ mod tests {
                                 bits(color[offset]),
                                 bits(expected),
                                 "{samples} samples {first:?}/{second:?} {model:?} {back_faces:?} {view:?} \
-                                 {lights:?} at {px}, {py}: {} against {expected}",
+                                 {lights:?} {surfaces:?} at {px}, {py}: {} against {expected}",
                                 color[offset]
                             );
                             assert_eq!(covered[offset], general.is_some());

@@ -45,9 +45,19 @@ use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::shade::renormalize_or_else;
 use crate::render::shadow::shadow_visibility_lanes;
+use crate::render::surface_lanes::{Footprint, SurfaceLanes, SurfacePoints, surface_lanes, varies};
 use crate::scene::{
     Attenuation, BackFaces, LightingComponent, LightingModel, Material, NormalInterpolation, Shading,
 };
+
+/// Eight points lit, split as `Frame::light_material` splits a point's light: the part a
+/// colour texture multiplies (ambient and diffuse) and the rest (specular and emission). Their
+/// sum is the colour.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LitLanes {
+    pub textured: Vec3s,
+    pub rest: Vec3s,
+}
 
 /// A lighting model the fast path evaluates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -67,13 +77,17 @@ pub struct FastLighting<'f> {
     frame: &'f Frame,
     material: &'f Material,
     specular: Specular,
+    /// Whether vertex colours or textures make the material's `k_a`, `k_d` or normal vary
+    /// from point to point (`surface_lanes::varies`).
+    varies: bool,
 }
 
 impl<'f> FastLighting<'f> {
     /// The fast lighting of `material` on an object of `style` shaded with `shading`, or `None`
-    /// when it needs the general path: a Phong or Blinn-Phong material without textures, all
-    /// lighting components, and a side that is lit. Only for frames that
-    /// [`FastPhong::frame_allows`].
+    /// when it needs the general path: a Phong or Blinn-Phong material, all lighting
+    /// components, and a side that is lit. Textures and vertex colours are the caller's: it
+    /// lights the surface they make ([`FastLighting::light_surface_lanes`]). Only for frames
+    /// that [`FastPhong::frame_allows`].
     pub fn new(
         frame: &'f Frame,
         material: u32,
@@ -83,9 +97,6 @@ impl<'f> FastLighting<'f> {
     ) -> Option<Self> {
         debug_assert!(FastPhong::frame_allows(frame));
         let material = &frame.materials[material as usize];
-        let textured = material.textures.diffuse.is_some()
-            || material.textures.ambient.is_some()
-            || material.textures.normal.is_some();
         let specular = match material.model {
             _ if material.specular == Vec3::ZERO => Specular::None,
             LightingModel::Phong => Specular::Phong,
@@ -95,13 +106,19 @@ impl<'f> FastLighting<'f> {
         let eligible = style.shading == shading
             && style.component == LightingComponent::All
             && matches!(material.model, LightingModel::Phong | LightingModel::BlinnPhong)
-            && !textured
             && !(back_facing && style.back_faces == BackFaces::Unlit);
         eligible.then_some(FastLighting {
             frame,
             material,
             specular,
+            varies: varies(frame, material),
         })
+    }
+
+    /// The material lit.
+    #[inline]
+    pub fn material(&self) -> &'f Material {
+        self.material
     }
 
     /// Whether `other` lights exactly as `self` does (the same material, so points of both may
@@ -134,29 +151,51 @@ impl<'f> FastLighting<'f> {
     /// [`FastLighting::light_lanes`] of points already in lanes.
     #[inline]
     pub fn light_lanes_of(&self, position: Vec3s, normal: Vec3s) -> [Vec3; LANES] {
-        let to_viewer = match self.frame.viewer {
+        let surface = SurfaceLanes::of(self.material);
+        let to_viewer = self.viewer_directions(position);
+        let lit = match self.specular {
+            Specular::None => self.light_model_lanes::<0>(position, normal, to_viewer, &surface),
+            Specular::Phong => self.light_model_lanes::<1>(position, normal, to_viewer, &surface),
+            Specular::BlinnPhong => self.light_model_lanes::<2>(position, normal, to_viewer, &surface),
+        };
+        (lit.textured + lit.rest).to_array()
+    }
+
+    /// `Viewer::to_viewer` of each lane's position.
+    #[inline(always)]
+    fn viewer_directions(&self, position: Vec3s) -> Vec3s {
+        match self.frame.viewer {
             Viewer::Local => (-position).normalize_or_zero(),
             Viewer::Infinite { to_viewer } => Vec3s::splat(to_viewer),
-        };
-        let lit = match self.specular {
-            Specular::None => self.light_model_lanes::<0>(position, normal, to_viewer),
-            Specular::Phong => self.light_model_lanes::<1>(position, normal, to_viewer),
-            Specular::BlinnPhong => self.light_model_lanes::<2>(position, normal, to_viewer),
-        };
-        lit.to_array()
+        }
+    }
+
+    /// The lighting of points whose `k_a` and `k_d` vary from lane to lane (vertex colours,
+    /// textures: `surface_lanes`), in `Frame::light_material`'s two parts; each lane has the
+    /// bits of the general path's lighting of the material it sees.
+    #[inline]
+    pub fn light_surface_lanes(&self, position: Vec3s, normal: Vec3s, surface: &SurfaceLanes) -> LitLanes {
+        let to_viewer = self.viewer_directions(position);
+        match self.specular {
+            Specular::None => self.light_model_lanes::<0>(position, normal, to_viewer, surface),
+            Specular::Phong => self.light_model_lanes::<1>(position, normal, to_viewer, surface),
+            Specular::BlinnPhong => self.light_model_lanes::<2>(position, normal, to_viewer, surface),
+        }
     }
 
     /// [`FastLighting::light_model`] lane by lane: the same operations in the same order, its
-    /// `continue`s turned into masks (a masked-off lane keeps its sums untouched, not `+ 0`).
-    #[inline]
+    /// `continue`s turned into masks (a masked-off lane keeps its sums untouched, not `+ 0`),
+    /// with each lane's own `k_a` and `k_d` (`surface`).
+    #[inline(always)]
     fn light_model_lanes<const SPECULAR: u8>(
         &self,
         position: Vec3s,
         normal: Vec3s,
         to_viewer: Vec3s,
-    ) -> Vec3s {
+        surface: &SurfaceLanes,
+    ) -> LitLanes {
         let material = self.material;
-        let ambient = material.ambient * self.frame.ambient_light;
+        let ambient = surface.ambient * Vec3s::splat(self.frame.ambient_light);
         let mut diffuse = Vec3s::splat(Vec3::ZERO);
         let mut specular = Vec3s::splat(Vec3::ZERO);
         for (index, light) in self.frame.lights.iter().enumerate() {
@@ -207,7 +246,7 @@ impl<'f> FastLighting<'f> {
             }
             let color = Vec3s::splat(light.color);
             let irradiance = color.scale(strength).scale(n_dot_l);
-            diffuse = lit.select3(diffuse + Vec3s::splat(material.diffuse) * irradiance, diffuse);
+            diffuse = lit.select3(diffuse + surface.diffuse * irradiance, diffuse);
             if SPECULAR != 0 {
                 let cosine = if SPECULAR == 2 {
                     normal.dot((to_light + to_viewer).normalize_or_zero())
@@ -221,7 +260,10 @@ impl<'f> FastLighting<'f> {
                 specular = lit.select3(added, specular);
             }
         }
-        (Vec3s::splat(ambient) + diffuse) + (specular + Vec3s::splat(material.emission))
+        LitLanes {
+            textured: ambient + diffuse,
+            rest: specular + Vec3s::splat(material.emission),
+        }
     }
 
     /// `illuminate_with_visibility` for a Phong or Blinn-Phong material, then
@@ -322,7 +364,9 @@ pub struct FastPhong<'f> {
 
 /// Up to [`LANES`] pixels of fast-path Phong triangles with the same lighting, waiting to be lit
 /// together by [`FastLighting::light_lanes`]: [`FastPhong::shade`] for each, with the same bits,
-/// but the square roots, divisions and lighting done lane-wise.
+/// but the square roots, divisions and lighting done lane-wise; and where vertex colours or
+/// textures make the surface vary, its `k_a`, `k_d` and normal per pixel through the surface
+/// stage (`surface_lanes`).
 #[derive(Default)]
 pub struct PhongBatch<'f> {
     lighting: Option<FastLighting<'f>>,
@@ -334,14 +378,40 @@ pub struct PhongBatch<'f> {
     normals: [Vec3; LANES],
     triangles: [Option<&'f FrameTriangle>; LANES],
     reversed: [bool; LANES],
+    /// The source weights of each pixel (`at`), and for textured materials at its neighbours.
+    footprints: [Footprint; LANES],
 }
 
 impl<'f> PhongBatch<'f> {
     /// Queues the pixel with source-triangle weights `weights` of `phong`'s triangle; its
     /// colour goes to `color[offset]` when the batch is lit (when full, when a pixel with other
-    /// lighting comes, or on [`PhongBatch::flush`]).
+    /// lighting comes, or on [`PhongBatch::flush`]). For a triangle whose surface does not vary
+    /// (`!phong.varies()`; else [`PhongBatch::push_footprint`]).
     #[inline]
     pub fn push(&mut self, phong: &FastPhong<'f>, weights: Vec3, offset: usize, color: &mut [Vec3]) {
+        self.queue(phong, weights, offset, color);
+        self.close_lane(color);
+    }
+
+    /// [`PhongBatch::push`] for a triangle whose surface varies: the pixel's weights and its
+    /// neighbours' (for a texture's footprint).
+    #[inline]
+    pub fn push_footprint(
+        &mut self,
+        phong: &FastPhong<'f>,
+        footprint: Footprint,
+        offset: usize,
+        color: &mut [Vec3],
+    ) {
+        let lane = self.queue(phong, footprint.at, offset, color);
+        self.footprints[lane] = footprint;
+        self.close_lane(color);
+    }
+
+    /// Fills the next lane but its footprint (flushing first if `phong` lights otherwise than
+    /// the waiting pixels) and returns it.
+    #[inline(always)]
+    fn queue(&mut self, phong: &FastPhong<'f>, weights: Vec3, offset: usize, color: &mut [Vec3]) -> usize {
         if let Some(lighting) = self.lighting
             && !lighting.same_as(&phong.lighting)
         {
@@ -355,6 +425,12 @@ impl<'f> PhongBatch<'f> {
         self.normals[lane] = interpolate(phong.normals);
         self.triangles[lane] = Some(phong.triangle);
         self.reversed[lane] = phong.style.reverses_normal(phong.back_facing);
+        lane
+    }
+
+    /// Counts the lane just filled, and lights the batch when it is full.
+    #[inline(always)]
+    fn close_lane(&mut self, color: &mut [Vec3]) {
         self.len += 1;
         if self.len == LANES {
             self.flush(color);
@@ -375,6 +451,7 @@ impl<'f> PhongBatch<'f> {
             self.normals[lane] = self.normals[self.len - 1];
             self.triangles[lane] = self.triangles[self.len - 1];
             self.reversed[lane] = self.reversed[self.len - 1];
+            self.footprints[lane] = self.footprints[self.len - 1];
         }
         // `renormalize_or_else`, lane-wise: `v / |v|` where `|v|² > 1e-12`, else the face normal.
         let interpolated = Vec3s::from_array(&self.normals);
@@ -389,29 +466,50 @@ impl<'f> PhongBatch<'f> {
             }
         }
         let normals = Vec3s::from_array(&normals);
-        let normals = Mask::from_bools(self.reversed)
-            .select3(-normals, normals)
-            .to_array();
-        let lit = lighting.light_lanes(&self.positions, &normals);
+        let lit = if lighting.varies {
+            self.light_varying_surface(&lighting, normals)
+        } else {
+            let normals = Mask::from_bools(self.reversed)
+                .select3(-normals, normals)
+                .to_array();
+            lighting.light_lanes(&self.positions, &normals)
+        };
         for (&offset, &lit) in self.offsets[..self.len].iter().zip(&lit) {
             color[offset] = lit;
         }
         self.len = 0;
     }
+
+    /// The lighting of the waiting pixels where vertex colours or textures make the surface
+    /// vary: the surface stage first (`surface_lanes`), whose normal map perturbs the front
+    /// normals `normals` before the side is chosen.
+    #[inline(never)]
+    fn light_varying_surface(&self, lighting: &FastLighting, normals: Vec3s) -> [Vec3; LANES] {
+        let vertices = self
+            .triangles
+            .map(|triangle| triangle.expect("every lane holds a pixel").vertices);
+        let points = SurfacePoints {
+            vertices: &vertices,
+            footprints: &self.footprints,
+        };
+        let (surface, normals) = surface_lanes(lighting.frame, lighting.material, &points, normals);
+        let normals = Mask::from_bools(self.reversed).select3(-normals, normals);
+        let lit = lighting.light_surface_lanes(Vec3s::from_array(&self.positions), normals, &surface);
+        (lit.textured + lit.rest).to_array()
+    }
 }
 
 impl<'f> FastPhong<'f> {
-    /// Whether any triangle of `frame` may take the fast path: no debug view, no vertex
-    /// attributes (tints, texture coordinates). Every light kind, shadowed or not, is lit in
-    /// lanes.
-    /// Asked once per tile.
+    /// Whether any triangle of `frame` may take the fast path: no debug view. Every light
+    /// kind, shadowed or not, is lit in lanes, and textures, vertex colours and normal maps
+    /// applied in lanes. Asked once per tile.
     pub fn frame_allows(frame: &Frame) -> bool {
-        frame.debug_view.is_none() && frame.vertex_attributes.is_empty()
+        frame.debug_view.is_none()
     }
 
     /// The fast path for `triangle` seen from the front or the back, or `None` when it needs the
-    /// general path: another shading mode or model, a texture, Slerp, or a single lighting
-    /// component (see [`FastLighting::new`]). Only for frames that [`FastPhong::frame_allows`].
+    /// general path: another shading mode or model, Slerp, or a single lighting component (see
+    /// [`FastLighting::new`]). Only for frames that [`FastPhong::frame_allows`].
     pub fn new(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Self> {
         let style = &frame.objects[triangle.object as usize];
         if style.normal_interpolation != NormalInterpolation::Nlerp {
@@ -429,12 +527,22 @@ impl<'f> FastPhong<'f> {
         })
     }
 
+    /// Whether vertex colours or textures make the triangle's surface vary: its pixels are
+    /// queued with their footprints ([`PhongBatch::push_footprint`]).
+    #[inline]
+    pub fn varies(&self) -> bool {
+        self.lighting.varies
+    }
+
     /// The colour at the point with source-triangle weights `weights`: what [`PhongBatch`]
     /// computes for each pixel it queues (the renderer shades through the batch; tests hold the
-    /// two, and this and the general path, together bit for bit).
+    /// two, and this and the general path, together bit for bit). For a surface that does not
+    /// vary (no texture, no vertex colours; tests hold the batches of the others to the general
+    /// path).
     #[inline]
     pub fn shade(&self, weights: Vec3) -> Vec3 {
         let frame = self.lighting.frame;
+        debug_assert!(!self.lighting.varies);
         let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
         let position = interpolate(self.positions);
         let normal = renormalize_or_else(interpolate(self.normals), || frame.face_normal(self.triangle));
@@ -448,15 +556,17 @@ impl<'f> FastPhong<'f> {
 pub(crate) mod tests {
     use std::sync::Arc;
 
-    use glam::DVec3;
+    use glam::{DVec3, Vec2, Vec4};
 
     use super::*;
     use crate::mesh::primitives;
+    use crate::render::frame::{has_color_texture, tinted};
     use crate::render::raster::SamplePattern;
     use crate::render::{RenderOptions, geometry::build_frame, render};
     use crate::scene::{
-        Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene, ShadowSettings,
+        Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene, ShadowSettings, TextureBinding,
     };
+    use crate::texture::{Sampler, Texture, Wrap};
 
     /// The lightings the fast path specialises: Phong, Blinn-Phong, and no specular term.
     const MODELS: [(LightingModel, Vec3); 3] = [
@@ -707,6 +817,80 @@ pub(crate) mod tests {
         }
     }
 
+    /// What varies the surface of the two spheres of [`scene`] (made so by [`vary_surfaces`]).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    pub(crate) enum Surfaces {
+        /// Vertex colours (glTF `COLOR_0`) on both spheres, no texture.
+        Tinted,
+        /// The left sphere: a diffuse texture (repeated, minified) and a normal map; the right
+        /// one: vertex colours, a diffuse texture of a size that is no power of two (mirrored
+        /// and clamped, magnified) and an ambient texture through the second UV set.
+        Textured,
+        /// The left sphere: only an ambient texture; the right one: only a normal map.
+        AmbientOrNormalOnly,
+    }
+
+    /// A texture whose every component changes from texel to texel, in [0, 1].
+    fn pattern(width: u32, height: u32, seed: f32) -> Arc<Texture> {
+        let texels = (0..width * height)
+            .map(|i| {
+                let (x, y) = ((i % width) as f32, (i / width) as f32);
+                let wave = |a: f32, b: f32| 0.5 + 0.5 * (x * a + y * b + seed).sin();
+                Vec4::new(wave(0.9, 0.3), wave(-0.4, 1.1), wave(0.2, -0.7), 1.0)
+            })
+            .collect();
+        Arc::new(Texture::from_texels(width, height, texels).unwrap_or_else(|e| panic!("{e}")))
+    }
+
+    /// `scene`'s spheres with texture coordinates (two sets), tangents, and the textures and
+    /// vertex colours `surfaces` asks for.
+    pub(crate) fn vary_surfaces(scene: &mut Scene, surfaces: Surfaces) {
+        scene.textures = vec![
+            pattern(256, 128, 0.0),
+            pattern(37, 23, 1.0),
+            pattern(64, 64, 2.0),
+            // A normal map: tangent-space normals around +Z.
+            pattern(48, 48, 3.0),
+        ];
+        let binding = |texture: u32, uv_set: u8, wrap: [Wrap; 2], scale: f32| TextureBinding {
+            texture,
+            uv_set,
+            sampler: Sampler {
+                wrap_s: wrap[0],
+                wrap_t: wrap[1],
+            },
+            scale,
+        };
+        let repeat = [Wrap::Repeat, Wrap::Repeat];
+        for (index, object) in scene.objects.iter_mut().enumerate() {
+            let mut mesh = primitives::textured_sphere(24);
+            mesh.uvs1 = mesh.uvs.iter().map(|uv| *uv * 3.7 - Vec2::splat(1.2)).collect();
+            let tinted = surfaces == Surfaces::Tinted || (surfaces == Surfaces::Textured && index == 1);
+            if tinted {
+                mesh.colors = mesh
+                    .positions
+                    .iter()
+                    .map(|p| (p.abs() * 0.6 + Vec3::splat(0.4)).extend(1.0))
+                    .collect();
+            }
+            object.mesh = Arc::new(mesh);
+            let textures = &mut object.material.as_mut().expect("a material").textures;
+            match (surfaces, index) {
+                (Surfaces::Tinted, _) => {}
+                (Surfaces::Textured, 0) => {
+                    textures.diffuse = Some(binding(0, 0, repeat, 1.0));
+                    textures.normal = Some(binding(3, 0, repeat, 0.7));
+                }
+                (Surfaces::Textured, _) => {
+                    textures.diffuse = Some(binding(1, 0, [Wrap::MirroredRepeat, Wrap::ClampToEdge], 1.0));
+                    textures.ambient = Some(binding(2, 1, [Wrap::MirroredRepeat, Wrap::Repeat], 1.0));
+                }
+                (Surfaces::AmbientOrNormalOnly, 0) => textures.ambient = Some(binding(2, 1, repeat, 1.0)),
+                (Surfaces::AmbientOrNormalOnly, _) => textures.normal = Some(binding(3, 0, repeat, -1.3)),
+            }
+        }
+    }
+
     /// Every visible pixel of the fast path's scenes against the general path (`Frame::light`
     /// with the same interpolated normal), bit for bit, per model and light set.
     #[test]
@@ -844,8 +1028,16 @@ pub(crate) mod tests {
     /// `Frame::light_material`, bit for bit; and only vertices of rasterized triangles are lit.
     #[test]
     fn gouraud_vertices_lit_by_the_fast_path_equal_the_general_lighting_bit_for_bit() {
-        for ((model, specular), lights) in MODELS.into_iter().flat_map(|m| LIGHTS.map(|l| (m, l))) {
+        let surfaces = [None, Some(Surfaces::Tinted), Some(Surfaces::Textured)];
+        for (((model, specular), lights), surfaces) in MODELS
+            .into_iter()
+            .flat_map(|m| LIGHTS.map(|l| (m, l)))
+            .flat_map(|c| surfaces.map(|s| (c, s)))
+        {
             let mut scene = scene(model, specular, BackFaces::ReverseLit, lights);
+            if let Some(surfaces) = surfaces {
+                vary_surfaces(&mut scene, surfaces);
+            }
             for object in &mut scene.objects {
                 object.shading = Shading::Gouraud;
             }
@@ -861,10 +1053,26 @@ pub(crate) mod tests {
                     }
                     let vertex = frame.vertices[v as usize];
                     let style = &frame.objects[triangle.object as usize];
-                    let material = &frame.materials[triangle.material as usize];
+                    // The mesh's vertex colour (white, which changes no bit, where it has
+                    // none) multiplies `k_d`; a colour texture's part is kept apart.
+                    let material = tinted(
+                        &frame.materials[triangle.material as usize],
+                        frame.attributes(v).tint,
+                    );
                     let (textured, rest) =
-                        frame.light_material(material, style, vertex.position, vertex.normal, false);
-                    assert_eq!(color, textured + rest, "{model:?} {lights:?}");
+                        frame.light_material(&material, style, vertex.position, vertex.normal, false);
+                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                    if has_color_texture(&material) {
+                        assert_eq!(bits(color), bits(rest), "{model:?} {lights:?} {surfaces:?}");
+                        let textured_part = frame.vertex_colors_textured[v as usize];
+                        assert_eq!(bits(textured_part), bits(textured), "{model:?} {lights:?}");
+                    } else {
+                        assert_eq!(
+                            bits(color),
+                            bits(textured + rest),
+                            "{model:?} {lights:?} {surfaces:?}"
+                        );
+                    }
                     points.push((vertex.position, vertex.normal));
                     lit += 1;
                 }
@@ -882,13 +1090,14 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn textures_slerp_and_debug_views_take_the_general_path() {
+    fn slerp_and_debug_views_take_the_general_path_and_textures_do_not() {
         let mut scene = scene(
             LightingModel::Phong,
             Vec3::ONE,
             BackFaces::ReverseLit,
             Lights::DirectionalAndPoint,
         );
+        vary_surfaces(&mut scene, Surfaces::Textured);
         scene.objects[0].normal_interpolation = NormalInterpolation::Slerp;
         let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
         assert!(FastPhong::frame_allows(&frame));
@@ -896,7 +1105,8 @@ pub(crate) mod tests {
         let first = &triangles[0];
         assert!(FastPhong::new(&frame, first, false).is_none());
         let last = triangles.last().expect("triangles");
-        assert!(FastPhong::new(&frame, last, false).is_some());
+        let textured = FastPhong::new(&frame, last, false).expect("textures take the fast path");
+        assert!(textured.varies());
         let debug = build_frame(
             &scene,
             SamplePattern::SINGLE,

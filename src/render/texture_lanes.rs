@@ -1,0 +1,313 @@
+//! Texture sampling eight points at a time: [`Texture::sample`] lane by lane, with its bits.
+//!
+//! `Texture::sample` is the specification (`texture`'s module block derives the level of
+//! detail, the filtering and the wrapping); [`sample_lanes`] computes the same IEEE operations
+//! for each lane, and a test holds the two together bit for bit. What differs is how:
+//!
+//! - The footprint `ρ` and the choice between magnification and minification are lane-wise.
+//!   `λ = log₂ ρ` is at most 0 exactly where `ρ ≤ 1` (`log2f` is exact at 1, and its error,
+//!   below one unit in the last place, cannot change the sign of a logarithm whose magnitude
+//!   is at least 2⁻²⁴/ln 2), so only minified lanes call `log2f`, which has no lane-wise form
+//!   with its bits.
+//! - Texel coordinates are the specification's `f64` ones, `x = u·w − ½` (exact: 24 by 32
+//!   significant bits), but its `floor` and the wrap's `rem_euclid`, library calls that were
+//!   two thirds of the scalar sampler's instructions, are integer operations here. For a whole
+//!   `f64` below 2⁵³ in magnitude `floor`, `rem_euclid` (`fmod` is exact), the mirrored
+//!   reflection and the clamp are exact, so the integers name the same texels; for a
+//!   power-of-two size `rem_euclid` is a mask. With |u| < 2²⁰ and sizes below 2³², |x| stays
+//!   below 2⁵² + ½; a lane with a coordinate beyond that (far outside any real texture
+//!   coordinate) is sampled by `Texture::sample` itself.
+//!
+//! The texel fetches and the filter (`a + (b − a)·f`, then the blend between levels) stay per
+//! lane, in `Vec4`s: each lane reads its own texels, at its own level.
+
+use glam::{Vec2, Vec4};
+
+use crate::render::lanes::{Floats, LANES, Mask, Vec2s};
+use crate::texture::{MipLevel, Sampler, Texture, Wrap};
+
+/// Texture coordinates at least this far from 0 are sampled by the specification: below it,
+/// texel coordinates on any level (fewer than 2³² texels a side) are whole `f64`s below 2⁵²,
+/// where the integer floor and wrap are exact.
+const INTEGER_RANGE: f32 = (1u32 << 20) as f32;
+
+/// [`Texture::sample`] of each lane: the filtered value at `uv` for a pixel whose footprint
+/// spans `uv_dx` and `uv_dy`, with the bits of the scalar call on the lane's inputs.
+pub fn sample_lanes(
+    texture: &Texture,
+    uv: Vec2s,
+    uv_dx: Vec2s,
+    uv_dy: Vec2s,
+    sampler: &Sampler,
+) -> [Vec4; LANES] {
+    let Some(base) = texture.levels.first() else {
+        return [Vec4::ZERO; LANES];
+    };
+    let at = finite_or_zero(uv);
+    let size = Vec2s {
+        x: Floats::splat(base.width as f32),
+        y: Floats::splat(base.height as f32),
+    };
+    let scaled = |d: Vec2s| {
+        let d = finite_or_zero(d);
+        Vec2s {
+            x: d.x * size.x,
+            y: d.y * size.y,
+        }
+    };
+    let footprint = scaled(uv_dx).length().max(scaled(uv_dy).length());
+    let last_level = texture.levels.len() - 1;
+    let minified = if last_level == 0 {
+        !Mask::ALL
+    } else {
+        footprint.gt(Floats::splat(1.0))
+    };
+    let limit = Floats::splat(INTEGER_RANGE);
+    let within = |t: Floats| limit.gt(t).and(t.gt(-limit));
+    let integral = within(at.x).and(within(at.y));
+    std::array::from_fn(|lane| {
+        let point = Vec2::new(at.x.0[lane], at.y.0[lane]);
+        if !integral.lane(lane) {
+            let pick = |v: Vec2s| Vec2::new(v.x.0[lane], v.y.0[lane]);
+            return texture.sample(pick(uv), pick(uv_dx), pick(uv_dy), sampler);
+        }
+        if !minified.lane(lane) {
+            return bilinear(base, point, sampler);
+        }
+        // From here on `Texture::sample` for a footprint above one texel.
+        let lod = footprint.0[lane].log2();
+        if lod.is_nan() || lod <= 0.0 {
+            return bilinear(base, point, sampler);
+        }
+        let lod = lod.min(last_level as f32);
+        let lower = (lod.floor() as usize).min(last_level);
+        let fraction = lod - lower as f32;
+        let near = bilinear(&texture.levels[lower], point, sampler);
+        match texture.levels.get(lower + 1) {
+            Some(upper) if fraction > 0.0 => near + (bilinear(upper, point, sampler) - near) * fraction,
+            _ => near,
+        }
+    })
+}
+
+/// Each component where it is finite, else 0 (`texture::finite_or_zero`).
+#[inline(always)]
+fn finite_or_zero(v: Vec2s) -> Vec2s {
+    let zero = Floats::splat(0.0);
+    Vec2s {
+        x: v.x.is_finite().select(v.x, zero),
+        y: v.y.is_finite().select(v.y, zero),
+    }
+}
+
+/// `texture::bilinear` for coordinates below [`INTEGER_RANGE`]: the same texels, weights and
+/// filter, the texel pairs found in integers.
+#[inline(always)]
+fn bilinear(level: &MipLevel, uv: Vec2, sampler: &Sampler) -> Vec4 {
+    let (x0, x1, fx) = texel_pair(uv.x, level.width, sampler.wrap_s);
+    let (y0, y1, fy) = texel_pair(uv.y, level.height, sampler.wrap_t);
+    let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
+    let top = lerp(level.texel(x0, y0), level.texel(x1, y0), fx);
+    let bottom = lerp(level.texel(x0, y1), level.texel(x1, y1), fx);
+    lerp(top, bottom, fy)
+}
+
+/// `texture::texel_pair` for |t| < [`INTEGER_RANGE`]: the two texel indices around `t` on an
+/// axis of `size` texels, wrapped, and the weight of the second.
+#[inline(always)]
+fn texel_pair(t: f32, size: u32, wrap: Wrap) -> (usize, usize, f32) {
+    let x = f64::from(t) * f64::from(size) - 0.5;
+    // |x| < 2⁵² + ½: truncation is exact, and one above `x` only where `x` is negative and
+    // not whole, where the floor is one less.
+    let truncated = x as i64;
+    let first = truncated - i64::from(truncated as f64 > x);
+    let fraction = (x - first as f64) as f32;
+    let size = i64::from(size.max(1));
+    (
+        wrap_index(first, size, wrap),
+        wrap_index(first + 1, size, wrap),
+        fraction,
+    )
+}
+
+/// `texture::wrap_index` of a whole index below 2⁵³ in magnitude, in integers.
+#[inline(always)]
+fn wrap_index(index: i64, size: i64, wrap: Wrap) -> usize {
+    let wrapped = match wrap {
+        Wrap::Repeat => modulo(index, size),
+        Wrap::MirroredRepeat => {
+            let period = modulo(index, 2 * size);
+            if period >= size {
+                2 * size - 1 - period
+            } else {
+                period
+            }
+        }
+        Wrap::ClampToEdge => index.clamp(0, size - 1),
+    };
+    wrapped as usize
+}
+
+/// `index.rem_euclid(size)` for `size ≥ 1`: a mask when `size` is a power of two (two's
+/// complement makes it the Euclidean remainder of negative indices too).
+#[inline(always)]
+fn modulo(index: i64, size: i64) -> i64 {
+    if size & (size - 1) == 0 {
+        index & (size - 1)
+    } else {
+        index.rem_euclid(size)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A texture of `width`×`height` texels whose every component differs from its
+    /// neighbours', so that any wrong texel or weight shows.
+    fn texture(width: u32, height: u32) -> Texture {
+        let texels = (0..width * height)
+            .map(|i| {
+                let (x, y) = ((i % width) as f32, (i / width) as f32);
+                Vec4::new(
+                    (x * 0.37 + y * 0.11).sin(),
+                    (x * 0.05 - y * 0.29).cos(),
+                    x / width as f32 + 0.01 * y,
+                    1.0 - y / height as f32,
+                )
+            })
+            .collect();
+        Texture::from_texels(width, height, texels).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn same_bits(a: Vec4, b: Vec4) -> bool {
+        a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
+    }
+
+    /// The lanes against `Texture::sample`, lane by lane, for `points` (uv, uv_dx, uv_dy),
+    /// eight at a time (the last group padded with the first points).
+    fn check(texture: &Texture, sampler: &Sampler, points: &[(Vec2, Vec2, Vec2)], what: &str) {
+        for group in points.chunks(LANES) {
+            let point = |lane: usize| group.get(lane).copied().unwrap_or(points[lane % points.len()]);
+            let lanes = |pick: fn((Vec2, Vec2, Vec2)) -> Vec2| {
+                Vec2s::from_array(&std::array::from_fn(|lane| pick(point(lane))))
+            };
+            let sampled = sample_lanes(texture, lanes(|p| p.0), lanes(|p| p.1), lanes(|p| p.2), sampler);
+            for (lane, &value) in sampled.iter().enumerate() {
+                let (uv, dx, dy) = point(lane);
+                let expected = texture.sample(uv, dx, dy, sampler);
+                assert!(
+                    same_bits(value, expected),
+                    "{what} {sampler:?}: uv {uv} dx {dx} dy {dy}: {value} against {expected}"
+                );
+            }
+        }
+    }
+
+    const WRAPS: [Wrap; 3] = [Wrap::Repeat, Wrap::MirroredRepeat, Wrap::ClampToEdge];
+
+    /// Coordinates inside, on texel centres and edges, just outside, far outside and beyond
+    /// the integer range, negative ones, and non-finite ones.
+    fn coordinates(size: u32) -> Vec<f32> {
+        let n = size as f32;
+        let mut values = vec![
+            0.0,
+            -0.0,
+            0.5,
+            1.0,
+            0.999_999_94,
+            1.000_000_1,
+            -1e-9,
+            0.5 / n,
+            1.5 / n,
+            (n - 0.5) / n,
+            -0.25 / n,
+            0.3,
+            -0.7,
+            2.25,
+            -3.6,
+            17.0 + 0.5 / n,
+            -1234.567,
+            1e6 + 0.3,
+            INTEGER_RANGE * 0.999,
+            -INTEGER_RANGE * 0.999,
+            INTEGER_RANGE,
+            -INTEGER_RANGE,
+            3e7,
+            1e30,
+            -1e30,
+            f32::MAX,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        values.extend((0..40).map(|i| (i as f32 - 13.3) * 0.173));
+        values
+    }
+
+    /// Footprints (per pixel step) from far magnified through exactly one texel to far
+    /// minified, huge and non-finite, scaled to a texture of `size` texels.
+    fn derivatives(size: u32) -> Vec<f32> {
+        let texel = 1.0 / size as f32;
+        let mut values: Vec<f32> = [
+            0.0, 0.01, 0.5, 0.999_999, 1.0, 1.000_001, 1.5, 2.0, 3.7, 8.0, 100.0, 1e4,
+        ]
+        .map(|texels| texels * texel)
+        .to_vec();
+        values.extend([1e20, f32::MAX, f32::NAN, f32::INFINITY, -0.3, -1e-7]);
+        values
+    }
+
+    #[test]
+    fn lanes_equal_the_scalar_sampler_bit_for_bit() {
+        // Powers of two and not, square and not, a single texel, a single row.
+        let sizes = [(8, 8), (16, 4), (5, 3), (7, 12), (1, 1), (33, 1), (64, 64)];
+        for (width, height) in sizes {
+            let texture = texture(width, height);
+            let us = coordinates(width);
+            let vs = coordinates(height);
+            let ds = derivatives(width.max(height));
+            for wrap_s in WRAPS {
+                for wrap_t in WRAPS {
+                    let sampler = Sampler { wrap_s, wrap_t };
+                    let mut points = Vec::new();
+                    for (i, &u) in us.iter().enumerate() {
+                        for (j, &v) in vs.iter().enumerate().step_by(3) {
+                            let d = ds[(i + j) % ds.len()];
+                            let e = ds[(i * 7 + j) % ds.len()];
+                            // Isotropic, along one axis, and skewed footprints.
+                            points.push((Vec2::new(u, v), Vec2::new(d, 0.0), Vec2::new(0.0, e)));
+                            points.push((Vec2::new(v, u), Vec2::new(d, e), Vec2::new(-e, d * 0.5)));
+                        }
+                    }
+                    check(&texture, &sampler, &points, &format!("{width}×{height}"));
+                }
+            }
+        }
+    }
+
+    /// Every level of a mip chain is reached, and the blend between two levels is taken,
+    /// in lanes that each pick their own level.
+    #[test]
+    fn lanes_at_different_levels_equal_the_scalar_sampler() {
+        let texture = texture(64, 32);
+        let sampler = Sampler {
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::MirroredRepeat,
+        };
+        let points: Vec<_> = (0..200)
+            .map(|i| {
+                let footprint = 2f32.powf(i as f32 * 0.047) / 64.0;
+                let uv = Vec2::new(i as f32 * 0.0137 - 0.4, 0.9 - i as f32 * 0.011);
+                (uv, Vec2::new(footprint, 0.0), Vec2::new(0.0, footprint * 0.5))
+            })
+            .collect();
+        check(&texture, &sampler, &points, "levels");
+        let empty = Texture { levels: Vec::new() };
+        let zero = Vec2s::from_array(&[Vec2::ZERO; LANES]);
+        assert_eq!(
+            sample_lanes(&empty, zero, zero, zero, &sampler),
+            [Vec4::ZERO; LANES]
+        );
+    }
+}
