@@ -35,6 +35,7 @@
 use crate::render::TILE_SIZE;
 use crate::render::bin::{RasterChunk, raster_id};
 use glam::Vec3;
+use std::cmp::Ordering;
 
 /// Fractional bits of the fixed-point screen coordinates.
 pub const SUBPIXEL_BITS: u32 = 8;
@@ -782,7 +783,9 @@ impl FarthestInBlocks {
             let blocks = &mut farthest[row / DEPTH_BLOCK as usize * TILE_BLOCKS..][..TILE_BLOCKS];
             for (block, texels) in blocks.iter_mut().zip(texels.chunks(DEPTH_BLOCK as usize)) {
                 // `<` and not `f32::min`, so that the loop vectorises (no NaN is stored).
-                *block = texels.iter().fold(*block, |least, &d| if d < least { d } else { least });
+                *block = texels
+                    .iter()
+                    .fold(*block, |least, &d| if d < least { d } else { least });
             }
         }
         FarthestInBlocks { farthest }
@@ -796,11 +799,23 @@ impl FarthestInBlocks {
             return false;
         };
         let bound = depth_bound(triangle);
-        let (bx0, bx1) = ((area.x0 - rect.x0) / DEPTH_BLOCK, (area.x1 - 1 - rect.x0) / DEPTH_BLOCK);
-        let (by0, by1) = ((area.y0 - rect.y0) / DEPTH_BLOCK, (area.y1 - 1 - rect.y0) / DEPTH_BLOCK);
+        let (bx0, bx1) = (
+            (area.x0 - rect.x0) / DEPTH_BLOCK,
+            (area.x1 - 1 - rect.x0) / DEPTH_BLOCK,
+        );
+        let (by0, by1) = (
+            (area.y0 - rect.y0) / DEPTH_BLOCK,
+            (area.y1 - 1 - rect.y0) / DEPTH_BLOCK,
+        );
         (by0..=by1).any(|by| {
             let row = &self.farthest[by as usize * TILE_BLOCKS..][..TILE_BLOCKS];
-            row[bx0 as usize..=bx1 as usize].iter().any(|&farthest| !(farthest >= bound))
+            // "Not at least as far as the bound", NaN included.
+            row[bx0 as usize..=bx1 as usize].iter().any(|&farthest| {
+                !matches!(
+                    farthest.partial_cmp(&bound),
+                    Some(Ordering::Greater | Ordering::Equal)
+                )
+            })
         })
     }
 }
