@@ -124,12 +124,19 @@ pub fn scene_memory(image: &ImageSettings, lights: &[Light], objects: &[Object])
         .map(|&(resolution, cube)| if cube { resolution / 2 } else { resolution })
         .max()
         .unwrap_or(0);
-    // A map is rendered straight into its own depths, a tile per thread at a time (see
-    // `render::shadow`): the maps themselves are what they need.
+    // A map is rendered straight into its own depths (see `render::shadow`); the depth-only
+    // pass's working arrays (per-block depth bounds, the back faces it defers, arrays kept for
+    // the next frame) are bounded by one more face of the largest size (tests/memory.rs holds
+    // the estimate above the measured peak).
     let shadow_maps = shadow_faces
         .iter()
         .map(|&(resolution, cube)| shadow_map_bytes(resolution, cube))
-        .fold(0, u64::saturating_add);
+        .fold(0, u64::saturating_add)
+        .saturating_add(if shadow_faces.is_empty() {
+            0
+        } else {
+            shadow_map_bytes(largest_face, false)
+        });
     let triangles: u64 = objects
         .iter()
         .map(|object| object.mesh.triangle_count() as u64)
