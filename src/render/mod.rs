@@ -254,7 +254,7 @@ fn render_frame(
     // Every worker takes the next band from the queue until it is empty; a band's pixels do not
     // depend on which worker renders it, so the image is the same for any thread count and any
     // timing.
-    rayon::broadcast(|_| {
+    let work_through_the_queue = || {
         let mut scratch = shade::TileScratch::default();
         let mut visibility = raster::Visibility::new();
         while let Some(tile_row) = queue.next() {
@@ -289,6 +289,17 @@ fn render_frame(
             }
             *lock(&band_results[tile_row]) = times;
         }
+    };
+    // One worker per pool thread, the calling thread among them. Spawned in a scope rather than
+    // broadcast: a broadcast waits until every thread of the pool has run its share, so inside
+    // `check`'s pool (one render per thread) each render would wait for the others to finish,
+    // and a thread waiting for it would start other scenes meanwhile; a scope's jobs that no
+    // other thread has taken are run by the caller itself (they find the queue empty).
+    rayon::in_place_scope(|scope| {
+        for _ in 1..rayon::current_num_threads() {
+            scope.spawn(|_| work_through_the_queue());
+        }
+        work_through_the_queue();
     });
     let band_results: Vec<BandTimes> = band_results
         .into_iter()
@@ -373,7 +384,7 @@ impl BandQueue {
 }
 
 /// The value behind `mutex`, whether or not a worker panicked holding it (the panic is
-/// re-raised by `rayon::broadcast` anyway).
+/// re-raised by the scope anyway).
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
