@@ -1,10 +1,12 @@
 //! The common case of per-pixel shading, without the general path's branches per pixel.
 //!
-//! Most pixels of most scenes are Phong-shaded (interpolated normals, lit per pixel) with a plain
-//! Phong or Blinn-Phong material and no texture. For those, everything
-//! that does not change from pixel to pixel is decided once per triangle ([`FastPhong::new`]
-//! returns `None` for anything else, and the general path in `shade` handles it), and the
-//! lighting loop is specialised per light kind and model.
+//! Most pixels of most scenes are Phong-shaded (interpolated normals, lit per pixel) with a
+//! Phong or Blinn-Phong material. For those, everything that does not change from pixel to
+//! pixel is decided once per triangle ([`FastPhong::new`] returns `None` for anything else, and
+//! the general path in `shade` handles it), and the lighting loop is specialised per light kind
+//! and model. Textures, vertex colours and normal maps are not the lighting's business: the
+//! surface stage (`surface_lanes`) turns them into each lane's `k_a`, `k_d` and normal first
+//! ([`SurfaceBatch`], [`FastLighting::light_surface_lanes`]).
 //!
 //! The arithmetic is the general path's (`lighting::illuminate_with_visibility` followed by the
 //! split of `Frame::light_material`), operation for operation and in the same order, so a pixel
@@ -77,9 +79,6 @@ pub struct FastLighting<'f> {
     frame: &'f Frame,
     material: &'f Material,
     specular: Specular,
-    /// Whether vertex colours or textures make the material's `k_a`, `k_d` or normal vary
-    /// from point to point (`surface_lanes::varies`).
-    varies: bool,
 }
 
 impl<'f> FastLighting<'f> {
@@ -111,7 +110,6 @@ impl<'f> FastLighting<'f> {
             frame,
             material,
             specular,
-            varies: varies(frame, material),
         })
     }
 
@@ -368,6 +366,9 @@ fn specular_power_lanes(base: Floats, exponent: f32, wanted: Mask) -> Floats {
 /// One Phong-shaded triangle, ready to shade pixel after pixel.
 pub struct FastPhong<'f> {
     lighting: FastLighting<'f>,
+    /// Whether vertex colours or textures make the material's `k_a`, `k_d` or normal vary
+    /// from point to point (`surface_lanes::varies`).
+    varies: bool,
     triangle: &'f FrameTriangle,
     style: &'f ObjectStyle,
     positions: [Vec3; 3],
@@ -618,6 +619,7 @@ impl<'f> FastPhong<'f> {
         let vertices = triangle.vertices.map(|v| &frame.vertices[v as usize]);
         Some(FastPhong {
             lighting,
+            varies: varies(frame, lighting.material),
             triangle,
             style,
             positions: vertices.map(|v| v.position),
@@ -630,7 +632,7 @@ impl<'f> FastPhong<'f> {
     /// shaded through a [`SurfaceBatch`], not a [`PhongBatch`].
     #[inline]
     pub fn varies(&self) -> bool {
-        self.lighting.varies
+        self.varies
     }
 
     /// The colour at the point with source-triangle weights `weights`: what [`PhongBatch`]
@@ -641,7 +643,7 @@ impl<'f> FastPhong<'f> {
     #[inline]
     pub fn shade(&self, weights: Vec3) -> Vec3 {
         let frame = self.lighting.frame;
-        debug_assert!(!self.lighting.varies);
+        debug_assert!(!self.varies);
         let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
         let position = interpolate(self.positions);
         let normal = renormalize_or_else(interpolate(self.normals), || frame.face_normal(self.triangle));
