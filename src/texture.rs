@@ -55,6 +55,8 @@
 //! `u·w` cannot overflow and the modulo is exact, so very large coordinates still wrap
 //! correctly. Non-finite UVs or derivatives are taken as 0. Sampling is a pure function of
 //! its inputs (the image is bit-identical for any thread count) and cannot panic.
+//! [`Texture::sample`] is the specification: the renderer samples eight points at a time with
+//! `render::texture_lanes`, which a test holds to it bit for bit.
 //!
 //! Rejected for now: anisotropic filtering (several probes along the footprint's major axis:
 //! sharper at grazing angles, but several times the cost, and isotropic trilinear is what the

@@ -315,6 +315,7 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                                 FastLighting::new(lit_frame, material, style, Shading::Gouraud, false);
                             fast = Some((object, material, lighting));
                             batch.normal_matrix = place.normal_when_lit.then_some(place.normal_matrix);
+                            batch.tinted = !scene.objects[object].mesh.colors.is_empty();
                             lighting
                         }
                     };
@@ -384,6 +385,8 @@ struct LightingBatch {
     normals: [Vec3; LANES],
     /// The mesh's vertex colours (white where it has none), which multiply `k_d`.
     tints: [Vec3; LANES],
+    /// Whether the object's mesh has vertex colours (else `tints` are not read).
+    tinted: bool,
     /// The object's normal matrix when the batch sets its vertices' normals (`normal_when_lit`):
     /// they are transformed and normalised lane-wise, with the scalar path's bits.
     normal_matrix: Option<Mat3>,
@@ -429,7 +432,9 @@ impl LightingBatch {
             }
         }
         let mut surface = SurfaceLanes::of(lighting.material());
-        surface.diffuse = surface.diffuse * Vec3s::from_array(&self.tints);
+        if self.tinted {
+            surface.diffuse = surface.diffuse * Vec3s::from_array(&self.tints);
+        }
         let lit = lighting.light_surface_lanes(Vec3s::from_array(&self.positions), normals, &surface);
         if has_color_texture(lighting.material()) {
             let (textured, rest) = (lit.textured.to_array(), lit.rest.to_array());

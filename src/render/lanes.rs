@@ -27,10 +27,25 @@ pub struct Floats(pub [f32; LANES]);
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Mask([u32; LANES]);
 
+/// One `i32` per lane (texel indices), with wrapping arithmetic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Ints(pub [i32; LANES]);
+
 impl Floats {
     #[inline(always)]
     pub fn splat(value: f32) -> Self {
         Floats([value; LANES])
+    }
+
+    /// Each lane's `value` of the entry of `items` in that lane (read in place: mapping the
+    /// array by value would copy it for every call).
+    #[inline(always)]
+    pub fn gather<T>(items: &[T; LANES], value: impl Fn(&T) -> f32) -> Self {
+        let mut lanes = [0.0; LANES];
+        for (lane, item) in lanes.iter_mut().zip(items) {
+            *lane = value(item);
+        }
+        Floats(lanes)
     }
 
     #[inline(always)]
@@ -61,6 +76,41 @@ impl Floats {
     #[inline(always)]
     pub fn is_finite(self) -> Mask {
         backend::is_finite(self)
+    }
+
+    /// Each lane's bits, as an integer (`f32::to_bits`).
+    #[inline(always)]
+    pub fn to_bits(self) -> Ints {
+        Ints(bytemuck::cast(self.0))
+    }
+}
+
+impl Ints {
+    #[inline(always)]
+    pub fn splat(value: i32) -> Self {
+        Ints([value; LANES])
+    }
+
+    /// Each lane's `value` of the entry of `items` in that lane (see [`Floats::gather`]).
+    #[inline(always)]
+    pub fn gather<T>(items: &[T; LANES], value: impl Fn(&T) -> i32) -> Self {
+        let mut lanes = [0; LANES];
+        for (lane, item) in lanes.iter_mut().zip(items) {
+            *lane = value(item);
+        }
+        Ints(lanes)
+    }
+
+    /// `&` per lane.
+    #[inline(always)]
+    pub fn and(self, other: Self) -> Self {
+        backend::and_ints(self, other)
+    }
+
+    /// `>` per lane.
+    #[inline(always)]
+    pub fn gt(self, other: Self) -> Mask {
+        backend::gt_ints(self, other)
     }
 }
 
@@ -94,10 +144,34 @@ impl Mask {
         backend::any(self)
     }
 
+    /// Whether the condition holds in every lane.
+    #[inline(always)]
+    pub fn all(self) -> bool {
+        !(!self).any()
+    }
+
     /// Per lane, `if_true` where the mask holds and `if_false` elsewhere (bit for bit).
     #[inline(always)]
     pub fn select(self, if_true: Floats, if_false: Floats) -> Floats {
         backend::select(self, if_true, if_false)
+    }
+
+    /// Per lane, `if_true` where the mask holds and `if_false` elsewhere.
+    #[inline(always)]
+    pub fn select_ints(self, if_true: Ints, if_false: Ints) -> Ints {
+        Ints(bytemuck::cast(
+            self.select(
+                Floats(bytemuck::cast(if_true.0)),
+                Floats(bytemuck::cast(if_false.0)),
+            )
+            .0,
+        ))
+    }
+
+    /// −1 where the mask holds, 0 elsewhere (its bits, as integers).
+    #[inline(always)]
+    pub fn to_ints(self) -> Ints {
+        Ints(bytemuck::cast(self.0))
     }
 
     #[inline(always)]
@@ -146,7 +220,7 @@ use portable as backend;
 /// it).
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 mod portable {
-    use super::{Floats, Mask};
+    use super::{Floats, Ints, Mask};
 
     #[inline(always)]
     fn zip(a: Floats, b: Floats, f: impl Fn(f32, f32) -> f32) -> Floats {
@@ -226,6 +300,26 @@ mod portable {
             f32::from_bits((if_true.0[i].to_bits() & mask.0[i]) | (if_false.0[i].to_bits() & !mask.0[i]))
         }))
     }
+
+    #[inline(always)]
+    pub fn add_ints(a: Ints, b: Ints) -> Ints {
+        Ints(std::array::from_fn(|i| a.0[i].wrapping_add(b.0[i])))
+    }
+
+    #[inline(always)]
+    pub fn sub_ints(a: Ints, b: Ints) -> Ints {
+        Ints(std::array::from_fn(|i| a.0[i].wrapping_sub(b.0[i])))
+    }
+
+    #[inline(always)]
+    pub fn and_ints(a: Ints, b: Ints) -> Ints {
+        Ints(std::array::from_fn(|i| a.0[i] & b.0[i]))
+    }
+
+    #[inline(always)]
+    pub fn gt_ints(a: Ints, b: Ints) -> Mask {
+        Mask(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
+    }
 }
 
 /// The lane operations as SSE instructions on the two four-lane halves of the arrays. SSE and
@@ -237,12 +331,12 @@ mod portable {
 #[allow(unsafe_code)]
 mod sse {
     use std::arch::x86_64::{
-        __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps, _mm_cmpgt_ps, _mm_cmple_ps,
-        _mm_cmplt_epi32, _mm_div_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps,
-        _mm_sub_ps,
+        __m128, __m128i, _mm_add_epi32, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps,
+        _mm_cmpgt_epi32, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_div_ps, _mm_movemask_ps,
+        _mm_mul_ps, _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps, _mm_sub_epi32, _mm_sub_ps,
     };
 
-    use super::{Floats, LANES, Mask};
+    use super::{Floats, Ints, LANES, Mask};
 
     const _: () = assert!(LANES == 8, "the lanes are two SSE registers");
 
@@ -256,6 +350,36 @@ mod sse {
         }};
         (@call $op:ident, $args:ident, $i:ident, $a:expr) => { $op($args.0[$i]) };
         (@call $op:ident, $args:ident, $i:ident, $a:expr, $b:expr) => { $op($args.0[$i], $args.1[$i]) };
+    }
+
+    /// Applies an SSE2 integer operation to both halves of two integer lane arrays.
+    macro_rules! int_halves {
+        ($op:ident($a:expr, $b:expr)) => {{
+            let (a, b): ([__m128i; 2], [__m128i; 2]) = (bytemuck::cast($a.0), bytemuck::cast($b.0));
+            // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+            let pair = |i: usize| unsafe { $op(a[i], b[i]) };
+            bytemuck::cast([pair(0), pair(1)])
+        }};
+    }
+
+    #[inline(always)]
+    pub fn add_ints(a: Ints, b: Ints) -> Ints {
+        Ints(int_halves!(_mm_add_epi32(a, b)))
+    }
+
+    #[inline(always)]
+    pub fn sub_ints(a: Ints, b: Ints) -> Ints {
+        Ints(int_halves!(_mm_sub_epi32(a, b)))
+    }
+
+    #[inline(always)]
+    pub fn and_ints(a: Ints, b: Ints) -> Ints {
+        Ints(int_halves!(_mm_and_si128(a, b)))
+    }
+
+    #[inline(always)]
+    pub fn gt_ints(a: Ints, b: Ints) -> Mask {
+        Mask(int_halves!(_mm_cmpgt_epi32(a, b)))
     }
 
     #[inline(always)]
@@ -370,6 +494,17 @@ impl Vec3s {
         }
     }
 
+    /// Each lane's `value` of the entry of `items` in that lane (see [`Floats::gather`]).
+    #[inline(always)]
+    pub fn gather<T>(items: &[T; LANES], value: impl Fn(&T) -> Vec3) -> Self {
+        let mut lanes = Vec3s::splat(Vec3::ZERO);
+        for (lane, item) in items.iter().enumerate() {
+            let v = value(item);
+            (lanes.x.0[lane], lanes.y.0[lane], lanes.z.0[lane]) = (v.x, v.y, v.z);
+        }
+        lanes
+    }
+
     #[inline(always)]
     pub fn to_array(self) -> [Vec3; LANES] {
         std::array::from_fn(|i| Vec3::new(self.x.0[i], self.y.0[i], self.z.0[i]))
@@ -446,10 +581,21 @@ impl Vec2s {
     /// The lanes from `vectors`.
     #[inline(always)]
     pub fn from_array(vectors: &[Vec2; LANES]) -> Self {
-        Vec2s {
-            x: Floats(vectors.map(|v| v.x)),
-            y: Floats(vectors.map(|v| v.y)),
+        Vec2s::gather(vectors, |v| *v)
+    }
+
+    /// Each lane's `value` of the entry of `items` in that lane (see [`Floats::gather`]).
+    #[inline(always)]
+    pub fn gather<T>(items: &[T; LANES], value: impl Fn(&T) -> Vec2) -> Self {
+        let mut lanes = Vec2s {
+            x: Floats::splat(0.0),
+            y: Floats::splat(0.0),
+        };
+        for (lane, item) in items.iter().enumerate() {
+            let v = value(item);
+            (lanes.x.0[lane], lanes.y.0[lane]) = (v.x, v.y);
         }
+        lanes
     }
 
     /// Each component times the lane's `factor` (`Vec2 * f32`).
@@ -487,6 +633,24 @@ impl Sub for Vec2s {
             x: self.x - other.x,
             y: self.y - other.y,
         }
+    }
+}
+
+/// `i32::wrapping_add` per lane.
+impl Add for Ints {
+    type Output = Ints;
+    #[inline(always)]
+    fn add(self, other: Ints) -> Ints {
+        backend::add_ints(self, other)
+    }
+}
+
+/// `i32::wrapping_sub` per lane.
+impl Sub for Ints {
+    type Output = Ints;
+    #[inline(always)]
+    fn sub(self, other: Ints) -> Ints {
+        backend::sub_ints(self, other)
     }
 }
 
@@ -586,6 +750,11 @@ mod tests {
         let negated_dots = -la.dot(lb);
         let matrix = Mat3::from_cols(a[0], a[7], b[3]);
         let transformed = lb.transformed_by(matrix).to_array();
+        let crossed = la.cross(lb).to_array();
+        let planar_a = Vec2s::gather(&a, |v| v.truncate());
+        let planar_b = Vec2s::from_array(&b.map(|v| v.truncate()));
+        let planar_lengths = planar_a.length();
+        let planar = planar_a + planar_b.scale(Floats::splat(2.0)) - planar_a;
         for i in 0..LANES {
             assert_eq!(dots.0[i].to_bits(), a[i].dot(b[i]).to_bits(), "dot, lane {i}");
             assert_eq!(
@@ -609,7 +778,48 @@ mod tests {
                 "negated dot, lane {i}"
             );
             assert!(same_bits(transformed[i], matrix * b[i]), "transform, lane {i}");
+            assert!(same_bits(crossed[i], a[i].cross(b[i])), "cross, lane {i}");
+            let (u, v) = (a[i].truncate(), b[i].truncate());
+            assert_eq!(
+                planar_lengths.0[i].to_bits(),
+                u.length().to_bits(),
+                "Vec2 length, lane {i}"
+            );
+            let combined = (u + v * 2.0 - u).to_array().map(f32::to_bits);
+            assert_eq!(
+                [planar.x.0[i], planar.y.0[i]].map(f32::to_bits),
+                combined,
+                "Vec2 arithmetic, lane {i}"
+            );
         }
+    }
+
+    /// Integer lanes wrap as `i32::wrapping_*` does, compare as signed integers, and select
+    /// bit for bit; a mask holds in all lanes or not.
+    #[test]
+    fn integer_lanes_and_masks() {
+        let a = Ints([0, -1, i32::MAX, i32::MIN, 7, -8, 1 << 20, 3]);
+        let b = Ints([1, 1, 1, 1, -7, 8, 12, -3]);
+        let mask = a.gt(b);
+        for i in 0..LANES {
+            assert_eq!((a + b).0[i], a.0[i].wrapping_add(b.0[i]));
+            assert_eq!((a - b).0[i], a.0[i].wrapping_sub(b.0[i]));
+            assert_eq!(a.and(b).0[i], a.0[i] & b.0[i]);
+            assert_eq!(mask.lane(i), a.0[i] > b.0[i]);
+            assert_eq!(
+                mask.select_ints(a, b).0[i],
+                if a.0[i] > b.0[i] { a.0[i] } else { b.0[i] }
+            );
+            assert_eq!(mask.to_ints().0[i], -i32::from(a.0[i] > b.0[i]));
+        }
+        assert_eq!(Floats::splat(1.5).to_bits(), Ints::splat(1.5f32.to_bits() as i32));
+        assert!(Mask::ALL.all() && !mask.all() && !(!Mask::ALL).all());
+        let items = [3u32, 1, 4, 1, 5, 9, 2, 6];
+        assert_eq!(
+            Ints::gather(&items, |&n| n as i32 * 2).0,
+            items.map(|n| n as i32 * 2)
+        );
+        assert_eq!(Floats::gather(&items, |&n| n as f32).0, items.map(|n| n as f32));
     }
 
     /// The backend in use against the portable loops, operation by operation, on awkward
@@ -641,6 +851,11 @@ mod tests {
             assert_eq!(m.or(n), portable::or(m, n), "or");
             assert_eq!(m.any(), portable::any(m), "any");
             assert_eq!(bits(m.select(x, y)), bits(portable::select(m, x, y)), "select");
+            let (i, j) = (x.to_bits(), y.to_bits());
+            assert_eq!(i + j, portable::add_ints(i, j), "add_ints");
+            assert_eq!(i - j, portable::sub_ints(i, j), "sub_ints");
+            assert_eq!(i.and(j), portable::and_ints(i, j), "and_ints");
+            assert_eq!(i.gt(j), portable::gt_ints(i, j), "gt_ints");
         }
     }
 

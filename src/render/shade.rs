@@ -24,8 +24,8 @@ use crate::render::raster::{
     Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_steps_y,
     edge_values,
 };
-use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch};
-use crate::render::surface_lanes::{Footprint, SurfaceLanes, SurfacePoints, texture_colors};
+use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch, SurfaceBatch};
+use crate::render::surface_lanes::{RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, texture_colors};
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
 /// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
@@ -431,6 +431,7 @@ fn shade_multisampled<'f>(
     flat_waiting.clear();
     let phong_allowed = FastPhong::frame_allows(frame);
     let mut phong = PhongBatch::default();
+    let mut surface = SurfaceBatch::default();
     let mut modulated = ModulatedBatch::default();
     for local in 0..count {
         let mine = &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize];
@@ -474,7 +475,7 @@ fn shade_multisampled<'f>(
                     &corners,
                     shader,
                     points,
-                    &mut phong,
+                    &mut surface,
                     &mut modulated,
                     colors,
                 );
@@ -488,6 +489,7 @@ fn shade_multisampled<'f>(
         }
     }
     phong.flush(colors);
+    surface.flush(colors);
     modulated.flush(frame, colors);
     flat.light(frame);
     for &(local, batch_index) in flat_waiting.iter() {
@@ -687,6 +689,7 @@ fn shade_single_sample<'f>(
     // pixel are shaded at once; the others get their colour in `fills`.
     let phong_allowed = FastPhong::frame_allows(frame);
     let mut phong = PhongBatch::default();
+    let mut surface = SurfaceBatch::default();
     let mut modulated = ModulatedBatch::default();
     for local in 0..count {
         if !seen[local] {
@@ -741,7 +744,7 @@ fn shade_single_sample<'f>(
                 &corners,
                 shader,
                 pixels,
-                &mut phong,
+                &mut surface,
                 &mut modulated,
                 target.color,
             ),
@@ -752,6 +755,7 @@ fn shade_single_sample<'f>(
         }
     }
     phong.flush(target.color);
+    surface.flush(target.color);
     modulated.flush(frame, target.color);
     flat.light(frame);
     for &(local, index) in flat_waiting.iter() {
@@ -853,8 +857,9 @@ impl TrianglePoints for SampledPoints<'_> {
 }
 
 /// Shades the `points` of a triangle whose surface varies (textures, vertex colours), each
-/// with its footprint: Phong pixels into `phong`, flat and Gouraud ones into `modulated`.
-/// Apart from the loops over the tile's triangles, which the common case keeps small.
+/// with where it lies in the triangle: Phong pixels into `surface`, flat and Gouraud ones into
+/// `modulated`. Apart from the loops over the tile's triangles, which the common case keeps
+/// small.
 #[inline(never)]
 #[allow(clippy::too_many_arguments)]
 fn shade_varying<'f>(
@@ -863,31 +868,29 @@ fn shade_varying<'f>(
     corners: &Corners,
     shader: VaryingShader<'f>,
     points: impl TrianglePoints,
-    phong: &mut PhongBatch<'f>,
+    surface: &mut SurfaceBatch<'f>,
     modulated: &mut ModulatedBatch<'f>,
     color: &mut [Vec3],
 ) {
-    let steps = EdgeSteps::of(raster);
-    let footprint = |edges| footprint_from_edges(raster, corners, edges, &steps);
+    let plane = RasterPlane {
+        steps: [edge_steps_x(raster), edge_steps_y(raster)],
+        inv_area: raster.inv_area,
+        inv_w: raster.inv_w,
+        corners: *corners,
+    };
     match shader {
-        VaryingShader::Phong(fast) => points.visit(|offset, edges| {
-            phong.push_footprint(&fast, footprint(edges), offset, color);
-        }),
-        VaryingShader::Flat(modulation, colors) => points.visit(|offset, edges| {
-            modulated.push(frame, &modulation, colors, || footprint(edges), offset, color);
-        }),
+        VaryingShader::Phong(fast) => {
+            surface.begin(&fast, plane, color);
+            points.visit(|offset, edges| surface.push(edges, offset, color));
+        }
+        VaryingShader::Flat(modulation, colors) => {
+            modulated.begin(frame, modulation, plane, color);
+            points.visit(|offset, edges| modulated.push(frame, colors, edges, offset, color));
+        }
         VaryingShader::Gouraud(modulation, colors) => {
+            modulated.begin(frame, modulation, plane, color);
             let colors = SplitGouraudColors::new(raster, corners, colors);
-            points.visit(|offset, edges| {
-                modulated.push(
-                    frame,
-                    &modulation,
-                    colors.at(edges),
-                    || footprint(edges),
-                    offset,
-                    color,
-                );
-            })
+            points.visit(|offset, edges| modulated.push(frame, colors.at(edges), edges, offset, color));
         }
     }
 }
@@ -1016,7 +1019,8 @@ struct Modulation<'f> {
 /// Pixels of flat and Gouraud triangles with a colour texture, waiting to be modulated
 /// [`LANES`] at a time: each pixel's colour is `rest + textured·texel`, the texel of the
 /// batch's texture at the pixel (`surface_lanes::texture_colors`). The pixels of one batch
-/// share the texture binding.
+/// share the texture binding; the pixels of a triangle come after
+/// [`ModulatedBatch::begin`] names it.
 #[derive(Default)]
 struct ModulatedBatch<'f> {
     texture: Option<&'f TextureBinding>,
@@ -1025,40 +1029,72 @@ struct ModulatedBatch<'f> {
     offsets: [usize; LANES],
     /// Each pixel's colour as (the part the texture multiplies, the rest).
     colors: [(Vec3, Vec3); LANES],
+    /// Each pixel's raster triangle's edge functions there.
+    edges: [[i64; 3]; LANES],
+    /// Each pixel's triangle, in `triangles` and `vertices`.
+    triangle_of: [u8; LANES],
+    triangles: [RasterPlane; LANES],
     vertices: [[u32; 3]; LANES],
-    footprints: [Footprint; LANES],
+    triangle_count: usize,
+    /// The triangle of the pixels to come (its plane, its vertices, its modulation), and its
+    /// entry once one of its pixels waits.
+    current: Option<(RasterPlane, Modulation<'f>)>,
+    current_entry: Option<u8>,
 }
 
 impl<'f> ModulatedBatch<'f> {
-    /// The pixel whose colour is `colors` (textured part, rest) at the point whose footprint
-    /// `footprint` gives: its colour goes to `color[offset]`, at once when nothing modulates it,
-    /// else when the batch is lit (full, another texture coming, or [`ModulatedBatch::flush`]).
+    /// Names the triangle the next pixels are of: its `modulation`, its raster triangle
+    /// `plane` (flushing the waiting pixels into `color` first if it samples another texture).
+    #[inline]
+    fn begin(&mut self, frame: &Frame, modulation: Modulation<'f>, plane: RasterPlane, color: &mut [Vec3]) {
+        if let (Some(waiting), Some(texture)) = (self.texture, modulation.texture)
+            && !std::ptr::eq(waiting, texture)
+        {
+            self.flush(frame, color);
+        }
+        if modulation.texture.is_some() {
+            self.texture = modulation.texture;
+        }
+        self.current = Some((plane, modulation));
+        self.current_entry = None;
+    }
+
+    /// The pixel of the current triangle whose colour is `colors` (textured part, rest), where
+    /// its edge functions take the values `edges`: its colour goes to `color[offset]`, at once
+    /// when nothing modulates it, else when the batch is lit (full, another texture coming,
+    /// or [`ModulatedBatch::flush`]).
     #[inline]
     fn push(
         &mut self,
         frame: &Frame,
-        modulation: &Modulation<'f>,
         (textured, rest): (Vec3, Vec3),
-        footprint: impl FnOnce() -> Footprint,
+        edges: [i64; 3],
         offset: usize,
         color: &mut [Vec3],
     ) {
-        let Some(texture) = modulation.texture else {
-            color[offset] = rest + textured * Vec3::ONE;
+        let Some((plane, modulation)) = self.current else {
             return;
         };
-        if self
-            .texture
-            .is_some_and(|waiting| !std::ptr::eq(waiting, texture))
-        {
-            self.flush(frame, color);
+        if modulation.texture.is_none() {
+            color[offset] = rest + textured * Vec3::ONE;
+            return;
         }
-        self.texture = Some(texture);
+        let entry = match self.current_entry {
+            Some(entry) => entry,
+            None => {
+                self.triangles[self.triangle_count] = plane;
+                self.vertices[self.triangle_count] = modulation.vertices;
+                self.triangle_count += 1;
+                let entry = (self.triangle_count - 1) as u8;
+                self.current_entry = Some(entry);
+                entry
+            }
+        };
         let lane = self.len;
         self.offsets[lane] = offset;
         self.colors[lane] = (textured, rest);
-        self.vertices[lane] = modulation.vertices;
-        self.footprints[lane] = footprint();
+        self.edges[lane] = edges;
+        self.triangle_of[lane] = entry;
         self.len += 1;
         if self.len == LANES {
             self.flush(frame, color);
@@ -1075,12 +1111,15 @@ impl<'f> ModulatedBatch<'f> {
         }
         // The lanes past the last pixel repeat it; their results are dropped.
         for lane in self.len..LANES {
-            self.vertices[lane] = self.vertices[self.len - 1];
-            self.footprints[lane] = self.footprints[self.len - 1];
+            self.edges[lane] = self.edges[self.len - 1];
+            self.triangle_of[lane] = self.triangle_of[self.len - 1];
         }
+        let entries = self.triangle_of.map(usize::from);
+        let planes: [&RasterPlane; LANES] = std::array::from_fn(|lane| &self.triangles[entries[lane]]);
+        let vertices: [[u32; 3]; LANES] = std::array::from_fn(|lane| self.vertices[entries[lane]]);
         let points = SurfacePoints {
-            vertices: &self.vertices,
-            footprints: &self.footprints,
+            vertices: &vertices,
+            weights: &WeightLanes::of(&self.edges, &planes),
         };
         let texels = texture_colors(frame, texture, &points).to_array();
         for lane in 0..self.len {
@@ -1088,6 +1127,8 @@ impl<'f> ModulatedBatch<'f> {
             color[self.offsets[lane]] = rest + textured * texels[lane];
         }
         self.len = 0;
+        self.triangle_count = 0;
+        self.current_entry = None;
     }
 }
 
@@ -1123,39 +1164,6 @@ pub fn source_weights(triangle: &RasterTriangle, corners: &Corners, at: (i64, i6
 #[inline]
 fn weights_from_edges(triangle: &RasterTriangle, corners: &Corners, edges: [i64; 3]) -> Vec3 {
     corners.apply(perspective_weights(triangle.inv_area, triangle.inv_w, edges))
-}
-
-/// How a raster triangle's edge functions change one pixel to the right and one pixel down.
-struct EdgeSteps {
-    right: [i64; 3],
-    down: [i64; 3],
-}
-
-impl EdgeSteps {
-    fn of(triangle: &RasterTriangle) -> Self {
-        EdgeSteps {
-            right: edge_steps_x(triangle),
-            down: edge_steps_y(triangle),
-        }
-    }
-}
-
-/// The texture footprint where the edge functions take the values `edges`: the source weights
-/// there and one pixel to the right and one down (what [`shade_sample`] computes for a
-/// textured material: the neighbours' edge functions are these plus a step, exactly).
-#[inline]
-fn footprint_from_edges(
-    triangle: &RasterTriangle,
-    corners: &Corners,
-    edges: [i64; 3],
-    steps: &EdgeSteps,
-) -> Footprint {
-    let moved = |step: [i64; 3]| std::array::from_fn(|k| edges[k] + step[k]);
-    Footprint {
-        at: weights_from_edges(triangle, corners, edges),
-        right: weights_from_edges(triangle, corners, moved(steps.right)),
-        down: weights_from_edges(triangle, corners, moved(steps.down)),
-    }
 }
 
 /// The perspective-correct weights of a raster triangle's corners where its edge functions
@@ -1428,7 +1436,7 @@ mod tests {
         at: (i64, i64),
     ) -> Vec3 {
         let mut color = [Vec3::NAN];
-        let (mut phong, mut modulated) = (PhongBatch::default(), ModulatedBatch::default());
+        let (mut surface, mut modulated) = (SurfaceBatch::default(), ModulatedBatch::default());
         let point = OnePoint {
             edges: edge_values(raster, at.0, at.1),
         };
@@ -1438,11 +1446,11 @@ mod tests {
             corners,
             shader,
             point,
-            &mut phong,
+            &mut surface,
             &mut modulated,
             &mut color,
         );
-        phong.flush(&mut color);
+        surface.flush(&mut color);
         modulated.flush(frame, &mut color);
         color[0]
     }

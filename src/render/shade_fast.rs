@@ -1,10 +1,12 @@
 //! The common case of per-pixel shading, without the general path's branches per pixel.
 //!
-//! Most pixels of most scenes are Phong-shaded (interpolated normals, lit per pixel) with a plain
-//! Phong or Blinn-Phong material and no texture. For those, everything
-//! that does not change from pixel to pixel is decided once per triangle ([`FastPhong::new`]
-//! returns `None` for anything else, and the general path in `shade` handles it), and the
-//! lighting loop is specialised per light kind and model.
+//! Most pixels of most scenes are Phong-shaded (interpolated normals, lit per pixel) with a
+//! Phong or Blinn-Phong material. For those, everything that does not change from pixel to
+//! pixel is decided once per triangle ([`FastPhong::new`] returns `None` for anything else, and
+//! the general path in `shade` handles it), and the lighting loop is specialised per light kind
+//! and model. Textures, vertex colours and normal maps are not the lighting's business: the
+//! surface stage (`surface_lanes`) turns them into each lane's `k_a`, `k_d` and normal first
+//! ([`SurfaceBatch`], [`FastLighting::light_surface_lanes`]).
 //!
 //! The arithmetic is the general path's (`lighting::illuminate_with_visibility` followed by the
 //! split of `Frame::light_material`), operation for operation and in the same order, so a pixel
@@ -45,7 +47,9 @@ use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::shade::renormalize_or_else;
 use crate::render::shadow::shadow_visibility_lanes;
-use crate::render::surface_lanes::{Footprint, SurfaceLanes, SurfacePoints, surface_lanes, varies};
+use crate::render::surface_lanes::{
+    RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, surface_lanes, varies,
+};
 use crate::scene::{
     Attenuation, BackFaces, LightingComponent, LightingModel, Material, NormalInterpolation, Shading,
 };
@@ -77,9 +81,6 @@ pub struct FastLighting<'f> {
     frame: &'f Frame,
     material: &'f Material,
     specular: Specular,
-    /// Whether vertex colours or textures make the material's `k_a`, `k_d` or normal vary
-    /// from point to point (`surface_lanes::varies`).
-    varies: bool,
 }
 
 impl<'f> FastLighting<'f> {
@@ -111,7 +112,6 @@ impl<'f> FastLighting<'f> {
             frame,
             material,
             specular,
-            varies: varies(frame, material),
         })
     }
 
@@ -355,6 +355,9 @@ fn specular_power_lanes(base: Floats, exponent: f32, wanted: Mask) -> Floats {
 /// One Phong-shaded triangle, ready to shade pixel after pixel.
 pub struct FastPhong<'f> {
     lighting: FastLighting<'f>,
+    /// Whether vertex colours or textures make the material's `k_a`, `k_d` or normal vary
+    /// from point to point (`surface_lanes::varies`).
+    varies: bool,
     triangle: &'f FrameTriangle,
     style: &'f ObjectStyle,
     positions: [Vec3; 3],
@@ -364,9 +367,8 @@ pub struct FastPhong<'f> {
 
 /// Up to [`LANES`] pixels of fast-path Phong triangles with the same lighting, waiting to be lit
 /// together by [`FastLighting::light_lanes`]: [`FastPhong::shade`] for each, with the same bits,
-/// but the square roots, divisions and lighting done lane-wise; and where vertex colours or
-/// textures make the surface vary, its `k_a`, `k_d` and normal per pixel through the surface
-/// stage (`surface_lanes`).
+/// but the square roots, divisions and lighting done lane-wise. For surfaces that do not vary
+/// (else [`SurfaceBatch`]).
 #[derive(Default)]
 pub struct PhongBatch<'f> {
     lighting: Option<FastLighting<'f>>,
@@ -378,40 +380,15 @@ pub struct PhongBatch<'f> {
     normals: [Vec3; LANES],
     triangles: [Option<&'f FrameTriangle>; LANES],
     reversed: [bool; LANES],
-    /// The source weights of each pixel (`at`), and for textured materials at its neighbours.
-    footprints: [Footprint; LANES],
 }
 
 impl<'f> PhongBatch<'f> {
     /// Queues the pixel with source-triangle weights `weights` of `phong`'s triangle; its
     /// colour goes to `color[offset]` when the batch is lit (when full, when a pixel with other
-    /// lighting comes, or on [`PhongBatch::flush`]). For a triangle whose surface does not vary
-    /// (`!phong.varies()`; else [`PhongBatch::push_footprint`]).
+    /// lighting comes, or on [`PhongBatch::flush`]).
     #[inline]
     pub fn push(&mut self, phong: &FastPhong<'f>, weights: Vec3, offset: usize, color: &mut [Vec3]) {
-        self.queue(phong, weights, offset, color);
-        self.close_lane(color);
-    }
-
-    /// [`PhongBatch::push`] for a triangle whose surface varies: the pixel's weights and its
-    /// neighbours' (for a texture's footprint).
-    #[inline]
-    pub fn push_footprint(
-        &mut self,
-        phong: &FastPhong<'f>,
-        footprint: Footprint,
-        offset: usize,
-        color: &mut [Vec3],
-    ) {
-        let lane = self.queue(phong, footprint.at, offset, color);
-        self.footprints[lane] = footprint;
-        self.close_lane(color);
-    }
-
-    /// Fills the next lane but its footprint (flushing first if `phong` lights otherwise than
-    /// the waiting pixels) and returns it.
-    #[inline(always)]
-    fn queue(&mut self, phong: &FastPhong<'f>, weights: Vec3, offset: usize, color: &mut [Vec3]) -> usize {
+        debug_assert!(!phong.varies());
         if let Some(lighting) = self.lighting
             && !lighting.same_as(&phong.lighting)
         {
@@ -425,12 +402,6 @@ impl<'f> PhongBatch<'f> {
         self.normals[lane] = interpolate(phong.normals);
         self.triangles[lane] = Some(phong.triangle);
         self.reversed[lane] = phong.style.reverses_normal(phong.back_facing);
-        lane
-    }
-
-    /// Counts the lane just filled, and lights the batch when it is full.
-    #[inline(always)]
-    fn close_lane(&mut self, color: &mut [Vec3]) {
         self.len += 1;
         if self.len == LANES {
             self.flush(color);
@@ -451,51 +422,169 @@ impl<'f> PhongBatch<'f> {
             self.normals[lane] = self.normals[self.len - 1];
             self.triangles[lane] = self.triangles[self.len - 1];
             self.reversed[lane] = self.reversed[self.len - 1];
-            self.footprints[lane] = self.footprints[self.len - 1];
         }
-        // `renormalize_or_else`, lane-wise: `v / |v|` where `|v|² > 1e-12`, else the face normal.
-        let interpolated = Vec3s::from_array(&self.normals);
-        let length_squared = interpolated.dot(interpolated);
-        let usable = length_squared.gt(Floats::splat(1e-12));
-        let mut normals = interpolated.divide(length_squared.sqrt()).to_array();
-        for (lane, (normal, triangle)) in normals.iter_mut().zip(self.triangles).enumerate() {
-            if !usable.lane(lane) {
-                *normal = lighting
-                    .frame
-                    .face_normal(triangle.expect("every lane holds a pixel"));
-            }
-        }
-        let normals = Vec3s::from_array(&normals);
-        let lit = if lighting.varies {
-            self.light_varying_surface(&lighting, normals)
-        } else {
-            let normals = Mask::from_bools(self.reversed)
-                .select3(-normals, normals)
-                .to_array();
-            lighting.light_lanes(&self.positions, &normals)
-        };
+        let normals = renormalize_lanes(lighting.frame, Vec3s::from_array(&self.normals), &self.triangles);
+        let normals = Mask::from_bools(self.reversed)
+            .select3(-normals, normals)
+            .to_array();
+        let lit = lighting.light_lanes(&self.positions, &normals);
         for (&offset, &lit) in self.offsets[..self.len].iter().zip(&lit) {
             color[offset] = lit;
         }
         self.len = 0;
     }
+}
 
-    /// The lighting of the waiting pixels where vertex colours or textures make the surface
-    /// vary: the surface stage first (`surface_lanes`), whose normal map perturbs the front
-    /// normals `normals` before the side is chosen.
-    #[inline(never)]
-    fn light_varying_surface(&self, lighting: &FastLighting, normals: Vec3s) -> [Vec3; LANES] {
-        let vertices = self
-            .triangles
-            .map(|triangle| triangle.expect("every lane holds a pixel").vertices);
+/// `renormalize_or_else` lane-wise: `v / |v|` where `|v|² > 1e-12`, else the face normal of the
+/// lane's triangle.
+#[inline(always)]
+fn renormalize_lanes(
+    frame: &Frame,
+    interpolated: Vec3s,
+    triangles: &[Option<&FrameTriangle>; LANES],
+) -> Vec3s {
+    let length_squared = interpolated.dot(interpolated);
+    let usable = length_squared.gt(Floats::splat(1e-12));
+    let mut normals = interpolated.divide(length_squared.sqrt()).to_array();
+    for (lane, (normal, triangle)) in normals.iter_mut().zip(triangles).enumerate() {
+        if !usable.lane(lane) {
+            *normal = frame.face_normal(triangle.expect("every lane holds a pixel"));
+        }
+    }
+    Vec3s::from_array(&normals)
+}
+
+/// Up to [`LANES`] pixels of fast-path Phong triangles whose surface varies (textures, vertex
+/// colours, normal maps) with the same lighting, waiting to be shaded together: each pixel's
+/// edge functions and triangle, from which its weights, position and normal are interpolated
+/// lane-wise, then the surface stage (`surface_lanes`) and the lighting
+/// ([`FastLighting::light_surface_lanes`]). Each pixel gets the bits `shade::shade_sample`
+/// gives it. The pixels of a triangle come after [`SurfaceBatch::begin`] names it.
+#[derive(Default)]
+pub struct SurfaceBatch<'f> {
+    lighting: Option<FastLighting<'f>>,
+    len: usize,
+    /// Where each pixel's colour goes.
+    offsets: [usize; LANES],
+    /// Each pixel's raster triangle's edge functions there.
+    edges: [[i64; 3]; LANES],
+    /// Each pixel's triangle, in `triangles`.
+    triangle_of: [u8; LANES],
+    /// The triangles of the waiting pixels.
+    triangles: [SurfaceTriangle<'f>; LANES],
+    triangle_count: usize,
+    /// The triangle of the pixels to come, and its entry in `triangles` once one waits.
+    current: SurfaceTriangle<'f>,
+    current_entry: Option<u8>,
+}
+
+/// `FastPhong::shade`'s interpolation, lane-wise: per lane the `corner`s of its triangle
+/// weighted by `weights`.
+#[inline(always)]
+fn interpolate_corners<T>(
+    triangles: &[&T; LANES],
+    weights: &[Floats; 3],
+    corner: impl Fn(&T, usize) -> Vec3,
+) -> Vec3s {
+    let at = |k: usize| Vec3s::gather(triangles, |triangle| corner(triangle, k));
+    at(0).scale(weights[0]) + at(1).scale(weights[1]) + at(2).scale(weights[2])
+}
+
+/// A triangle of a [`SurfaceBatch`]'s pixels: what their interpolation reads of it.
+#[derive(Clone, Copy, Default)]
+struct SurfaceTriangle<'f> {
+    triangle: Option<&'f FrameTriangle>,
+    plane: RasterPlane,
+    positions: [Vec3; 3],
+    normals: [Vec3; 3],
+    /// Whether the lit side's normal is the reversed one (`ObjectStyle::reverses_normal`).
+    reversed: bool,
+}
+
+impl<'f> SurfaceBatch<'f> {
+    /// Names the triangle the next pixels are of: `phong`'s, whose raster triangle is `plane`
+    /// (flushing the waiting pixels into `color` first if it lights otherwise).
+    #[inline]
+    pub fn begin(&mut self, phong: &FastPhong<'f>, plane: RasterPlane, color: &mut [Vec3]) {
+        if let Some(lighting) = self.lighting
+            && !lighting.same_as(&phong.lighting)
+        {
+            self.flush(color);
+        }
+        self.lighting = Some(phong.lighting);
+        self.current = SurfaceTriangle {
+            triangle: Some(phong.triangle),
+            plane,
+            positions: phong.positions,
+            normals: phong.normals,
+            reversed: phong.style.reverses_normal(phong.back_facing),
+        };
+        self.current_entry = None;
+    }
+
+    /// Queues the pixel of the current triangle where its edge functions take the values
+    /// `edges`; its colour goes to `color[offset]` when the batch is shaded (when full, when a
+    /// triangle with other lighting begins, or on [`SurfaceBatch::flush`]).
+    #[inline]
+    pub fn push(&mut self, edges: [i64; 3], offset: usize, color: &mut [Vec3]) {
+        let entry = match self.current_entry {
+            Some(entry) => entry,
+            None => {
+                self.triangles[self.triangle_count] = self.current;
+                self.triangle_count += 1;
+                let entry = (self.triangle_count - 1) as u8;
+                self.current_entry = Some(entry);
+                entry
+            }
+        };
+        let lane = self.len;
+        self.offsets[lane] = offset;
+        self.edges[lane] = edges;
+        self.triangle_of[lane] = entry;
+        self.len += 1;
+        if self.len == LANES {
+            self.flush(color);
+        }
+    }
+
+    /// Shades the waiting pixels into `color` and empties the batch.
+    pub fn flush(&mut self, color: &mut [Vec3]) {
+        let Some(lighting) = self.lighting else {
+            return;
+        };
+        if self.len == 0 {
+            return;
+        }
+        // The lanes past the last pixel repeat it; their results are dropped.
+        for lane in self.len..LANES {
+            self.edges[lane] = self.edges[self.len - 1];
+            self.triangle_of[lane] = self.triangle_of[self.len - 1];
+        }
+        let frame = lighting.frame;
+        let triangles: [&SurfaceTriangle; LANES] =
+            std::array::from_fn(|lane| &self.triangles[usize::from(self.triangle_of[lane])]);
+        let weights = WeightLanes::of(&self.edges, &triangles.map(|triangle| &triangle.plane));
+        let frame_triangles = triangles.map(|triangle| triangle.triangle);
+        let vertices = frame_triangles.map(|triangle| triangle.expect("every lane holds a pixel").vertices);
+        let positions = interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.positions[k]);
+        let normals = interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.normals[k]);
+        let normals = renormalize_lanes(frame, normals, &frame_triangles);
+        // The normal map perturbs the front normal, before the side is chosen.
         let points = SurfacePoints {
             vertices: &vertices,
-            footprints: &self.footprints,
+            weights: &weights,
         };
-        let (surface, normals) = surface_lanes(lighting.frame, lighting.material, &points, normals);
-        let normals = Mask::from_bools(self.reversed).select3(-normals, normals);
-        let lit = lighting.light_surface_lanes(Vec3s::from_array(&self.positions), normals, &surface);
-        (lit.textured + lit.rest).to_array()
+        let (surface, normals) = surface_lanes(frame, lighting.material, &points, normals);
+        let reversed = Mask::from_bools(triangles.map(|triangle| triangle.reversed));
+        let normals = reversed.select3(-normals, normals);
+        let lit = lighting.light_surface_lanes(positions, normals, &surface);
+        let lit = (lit.textured + lit.rest).to_array();
+        for (&offset, &lit) in self.offsets[..self.len].iter().zip(&lit) {
+            color[offset] = lit;
+        }
+        self.len = 0;
+        self.triangle_count = 0;
+        self.current_entry = None;
     }
 }
 
@@ -519,6 +608,7 @@ impl<'f> FastPhong<'f> {
         let vertices = triangle.vertices.map(|v| &frame.vertices[v as usize]);
         Some(FastPhong {
             lighting,
+            varies: varies(frame, lighting.material),
             triangle,
             style,
             positions: vertices.map(|v| v.position),
@@ -528,10 +618,10 @@ impl<'f> FastPhong<'f> {
     }
 
     /// Whether vertex colours or textures make the triangle's surface vary: its pixels are
-    /// queued with their footprints ([`PhongBatch::push_footprint`]).
+    /// shaded through a [`SurfaceBatch`], not a [`PhongBatch`].
     #[inline]
     pub fn varies(&self) -> bool {
-        self.lighting.varies
+        self.varies
     }
 
     /// The colour at the point with source-triangle weights `weights`: what [`PhongBatch`]
@@ -542,7 +632,7 @@ impl<'f> FastPhong<'f> {
     #[inline]
     pub fn shade(&self, weights: Vec3) -> Vec3 {
         let frame = self.lighting.frame;
-        debug_assert!(!self.lighting.varies);
+        debug_assert!(!self.varies);
         let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
         let position = interpolate(self.positions);
         let normal = renormalize_or_else(interpolate(self.normals), || frame.face_normal(self.triangle));

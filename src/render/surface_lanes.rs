@@ -6,9 +6,10 @@
 //! attributes), then `k_d`, and `k_a` when there is no ambient texture, times the diffuse
 //! texture's texel, `k_a` times the ambient texture's, and the interpolated normal perturbed by
 //! the normal map (`shade::perturb_normal`). Here the same operations run on eight points at
-//! once. Each point brings its source triangle's vertices and its [`Footprint`] (the source
-//! weights at it and one pixel to the right and one down, from which the texture coordinates'
-//! derivatives follow); the stage gathers the vertex attributes, interpolates them lane-wise,
+//! once. Each point brings its source triangle's vertices and its weights and those of its
+//! neighbours one pixel to the right and one down ([`WeightLanes`], from its raster triangle's
+//! edge functions and [`RasterPlane`]), from which the texture coordinates' derivatives
+//! follow; the stage gathers the vertex attributes, interpolates them,
 //! samples each texture through `texture_lanes::sample_lanes`, and hands the lighting `k_a` and
 //! `k_d` per lane ([`SurfaceLanes`]) and the perturbed normals. Flat and Gouraud pixels take
 //! only the diffuse texture's modulation from here ([`texture_colors`]).
@@ -19,7 +20,8 @@
 use glam::Vec3;
 
 use crate::render::frame::{Frame, VertexAttributes};
-use crate::render::lanes::{Floats, LANES, Vec2s, Vec3s};
+use crate::render::lanes::{Floats, LANES, Mask, Vec2s, Vec3s};
+use crate::render::raster::Corners;
 use crate::render::texture_lanes::sample_lanes;
 use crate::scene::{Material, TextureBinding};
 
@@ -41,13 +43,87 @@ impl SurfaceLanes {
     }
 }
 
-/// The source-triangle weights of a shading point (`at`) and of the points one pixel to its
-/// right and one pixel below (`shade::source_weights` there): the texture footprint.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Footprint {
-    pub at: Vec3,
-    pub right: Vec3,
-    pub down: Vec3,
+/// A raster triangle, for interpolating lane-wise at its pixels: how its edge functions change
+/// one pixel to the right and one pixel down (exact integers, so a pixel's neighbours have its
+/// edge functions plus a step: the texture footprint's points), and its `1/area`, `1/w` and
+/// corner weights, which turn edge functions into source weights (`shade::weights_from_edges`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RasterPlane {
+    /// One pixel right, one pixel down.
+    pub steps: [[i64; 3]; 2],
+    pub inv_area: f32,
+    pub inv_w: [f32; 3],
+    pub corners: Corners,
+}
+
+impl Default for RasterPlane {
+    fn default() -> Self {
+        RasterPlane {
+            steps: [[0; 3]; 2],
+            inv_area: 0.0,
+            inv_w: [0.0; 3],
+            corners: Corners::Identity,
+        }
+    }
+}
+
+/// The source weights of eight points (`at`) and of their neighbours one pixel right and one
+/// down, one lane array per vertex of their triangles.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WeightLanes {
+    pub at: [Floats; 3],
+    pub right: [Floats; 3],
+    pub down: [Floats; 3],
+}
+
+impl WeightLanes {
+    /// `shade::weights_from_edges` at each point, where the edge functions of its raster
+    /// triangle `planes[lane]` take the values `edges[lane]`, and at its two neighbours:
+    /// lane-wise, `perspective_weights`' operations in its order (from the edge functions
+    /// converted to `f32`, its first step), then the corner weights (`Corners::apply`: a swap
+    /// of two lane arrays where setup swapped corners, the sum lane by lane where a triangle
+    /// was clipped).
+    pub fn of(edges: &[[i64; 3]; LANES], planes: &[&RasterPlane; LANES]) -> Self {
+        let inv_area = Floats::gather(planes, |p| p.inv_area);
+        let inv_w: [Floats; 3] = std::array::from_fn(|k| Floats::gather(planes, |p| p.inv_w[k]));
+        let swapped = Mask::from_bools(std::array::from_fn(|lane| {
+            matches!(planes[lane].corners, Corners::Swapped)
+        }));
+        let clipped = planes.iter().any(|p| matches!(p.corners, Corners::Clipped(_)));
+        // The edge functions at each point and its two neighbours, converted to `f32`.
+        let mut converted = [[[0.0; LANES]; 3]; 3];
+        for (lane, (edges, plane)) in edges.iter().zip(planes).enumerate() {
+            for k in 0..3 {
+                converted[0][k][lane] = edges[k] as f32;
+                converted[1][k][lane] = (edges[k] + plane.steps[0][k]) as f32;
+                converted[2][k][lane] = (edges[k] + plane.steps[1][k]) as f32;
+            }
+        }
+        let weights = |edges: &[[f32; LANES]; 3]| -> [Floats; 3] {
+            let screen = edges.map(|edge| Floats(edge) * inv_area);
+            let over_w = [screen[0] * inv_w[0], screen[1] * inv_w[1], screen[2] * inv_w[2]];
+            let sum = over_w[0] + over_w[1] + over_w[2];
+            let positive = sum.gt(Floats::splat(0.0));
+            let [x, y, z]: [Floats; 3] = std::array::from_fn(|k| positive.select(over_w[k] / sum, screen[k]));
+            let (y, z) = (swapped.select(z, y), swapped.select(y, z));
+            if !clipped {
+                return [x, y, z];
+            }
+            let mut lanes = Vec3s { x, y, z }.to_array();
+            for (weights, plane) in lanes.iter_mut().zip(planes) {
+                if let Corners::Clipped(_) = plane.corners {
+                    *weights = plane.corners.apply(*weights);
+                }
+            }
+            let lanes = Vec3s::from_array(&lanes);
+            [lanes.x, lanes.y, lanes.z]
+        };
+        WeightLanes {
+            at: weights(&converted[0]),
+            right: weights(&converted[1]),
+            down: weights(&converted[2]),
+        }
+    }
 }
 
 /// Whether the surface of `material` varies over a triangle of `frame` (a texture, or vertex
@@ -57,83 +133,113 @@ pub fn varies(frame: &Frame, material: &Material) -> bool {
     !frame.vertex_attributes.is_empty() || has_texture(material)
 }
 
-/// Whether `material` samples a texture, so that its points need a [`Footprint`] beyond `at`.
+/// Whether `material` samples a texture.
 #[inline]
 fn has_texture(material: &Material) -> bool {
     let textures = &material.textures;
     textures.diffuse.is_some() || textures.ambient.is_some() || textures.normal.is_some()
 }
 
-/// Eight shading points: per lane its source triangle's vertices and its footprint (only
-/// `at` is read unless the material has a texture).
+/// Eight shading points: per lane its source triangle's vertices, and the weights of the
+/// point and its neighbours.
 pub struct SurfacePoints<'a> {
     pub vertices: &'a [[u32; 3]; LANES],
-    pub footprints: &'a [Footprint; LANES],
+    pub weights: &'a WeightLanes,
 }
 
-/// The vertex attributes of the points' triangles, and the points' weights, in lanes.
-struct Gathered {
-    attributes: [[VertexAttributes; 3]; LANES],
-    at: [Floats; 3],
+/// A texture's coordinates at eight points, and their changes one pixel right and one down.
+#[derive(Clone, Copy)]
+struct UvFootprint {
+    at: Vec2s,
+    right: Vec2s,
+    down: Vec2s,
 }
 
-impl Gathered {
-    fn new(frame: &Frame, points: &SurfacePoints) -> Self {
+/// What the stage reads of eight points, gathered into lanes as it is first needed: weights,
+/// each vertex attribute, each texture coordinate set.
+struct Gathered<'a> {
+    points: &'a SurfacePoints<'a>,
+    /// The frame's vertex attributes (empty when no mesh has any: every vertex then has
+    /// `VertexAttributes::default()`, as `Frame::attributes` gives).
+    attributes: &'a [VertexAttributes],
+    /// Per texture coordinate set, once a texture asks for it.
+    uvs: [Option<UvFootprint>; 2],
+}
+
+impl<'a> Gathered<'a> {
+    fn new(frame: &'a Frame, points: &'a SurfacePoints<'a>) -> Self {
         Gathered {
-            attributes: points
-                .vertices
-                .map(|vertices| vertices.map(|v| frame.attributes(v))),
-            at: weight_lanes(points.footprints, |footprint| footprint.at),
+            points,
+            attributes: &frame.vertex_attributes,
+            uvs: [None, None],
         }
     }
 
-    /// A `Vec3` attribute interpolated with `weights`: `a·w₀ + b·w₁ + c·w₂`, as `Vec3`s.
-    fn interpolate3(&self, weights: &[Floats; 3], attribute: impl Fn(&VertexAttributes) -> Vec3) -> Vec3s {
-        let corner = |k: usize| Vec3s::from_array(&self.attributes.map(|vertices| attribute(&vertices[k])));
-        corner(0).scale(weights[0]) + corner(1).scale(weights[1]) + corner(2).scale(weights[2])
-    }
-
-    /// A texture's coordinates interpolated with `weights`, as `Vec2`s.
-    fn uv(&self, weights: &[Floats; 3], binding: &TextureBinding) -> Vec2s {
-        let corner = |k: usize| {
-            Vec2s::from_array(&self.attributes.map(|vertices| {
-                let vertex = &vertices[k];
-                if binding.uv_set == 1 {
-                    vertex.uv1
-                } else {
-                    vertex.uv
-                }
-            }))
+    /// The attributes of each point's triangle's vertex `k`.
+    #[inline(always)]
+    fn vertex(&self, vertices: &[u32; 3], k: usize) -> &VertexAttributes {
+        const DEFAULT: &VertexAttributes = &VertexAttributes {
+            uv: glam::Vec2::ZERO,
+            uv1: glam::Vec2::ZERO,
+            tint: Vec3::ONE,
+            tangent: glam::Vec4::ZERO,
         };
+        self.attributes.get(vertices[k] as usize).unwrap_or(DEFAULT)
+    }
+
+    /// A `Vec3` attribute interpolated with `weights`: `a·w₀ + b·w₁ + c·w₂`, as `Vec3`s.
+    #[inline(always)]
+    fn interpolate3(&self, weights: &[Floats; 3], attribute: impl Fn(&VertexAttributes) -> Vec3) -> Vec3s {
+        let corner = |k: usize| Vec3s::gather(self.points.vertices, |v| attribute(self.vertex(v, k)));
         corner(0).scale(weights[0]) + corner(1).scale(weights[1]) + corner(2).scale(weights[2])
     }
 
-    /// The texel of `binding` at each point: its coordinates and their changes one pixel
-    /// right and one down, sampled lane by lane (the general path's `sample`).
-    fn sample(&self, frame: &Frame, points: &SurfacePoints, binding: &TextureBinding) -> Vec3s {
-        let uv = self.uv(&self.at, binding);
-        let right = self.uv(&weight_lanes(points.footprints, |f| f.right), binding);
-        let down = self.uv(&weight_lanes(points.footprints, |f| f.down), binding);
+    /// The tangents' `w` (the bitangent's handedness) interpolated with `weights`, the fourth
+    /// component of the general path's `Vec4` interpolation.
+    #[inline(always)]
+    fn interpolate_w(&self, weights: &[Floats; 3]) -> Floats {
+        let corner = |k: usize| Floats::gather(self.points.vertices, |v| self.vertex(v, k).tangent.w);
+        corner(0) * weights[0] + corner(1) * weights[1] + corner(2) * weights[2]
+    }
+
+    /// The coordinates of set `uv_set` and their footprint (the general path's `uv_at` at the
+    /// point and its neighbours, less the point's).
+    fn uv(&mut self, uv_set: u8) -> UvFootprint {
+        let set = usize::from(uv_set == 1);
+        if let Some(uv) = self.uvs[set] {
+            return uv;
+        }
+        let corner = |k: usize| {
+            Vec2s::gather(self.points.vertices, |v| {
+                let vertex = self.vertex(v, k);
+                if set == 1 { vertex.uv1 } else { vertex.uv }
+            })
+        };
+        let corners = [corner(0), corner(1), corner(2)];
+        let at = |w: &[Floats; 3]| corners[0].scale(w[0]) + corners[1].scale(w[1]) + corners[2].scale(w[2]);
+        let weights = self.points.weights;
+        let uv = at(&weights.at);
+        let footprint = UvFootprint {
+            at: uv,
+            right: at(&weights.right) - uv,
+            down: at(&weights.down) - uv,
+        };
+        self.uvs[set] = Some(footprint);
+        footprint
+    }
+
+    /// The texel of `binding` at each point (the general path's `sample`), its RGB.
+    fn sample(&mut self, frame: &Frame, binding: &TextureBinding) -> Vec3s {
+        let uv = self.uv(binding.uv_set);
         let texels = sample_lanes(
             &frame.textures[binding.texture as usize],
-            uv,
-            right - uv,
-            down - uv,
+            uv.at,
+            uv.right,
+            uv.down,
             &binding.sampler,
         );
         Vec3s::from_array(&texels.map(|texel| texel.truncate()))
     }
-}
-
-/// The weights of each footprint's point `which`, one lane array per vertex.
-#[inline(always)]
-fn weight_lanes(footprints: &[Footprint; LANES], which: impl Fn(&Footprint) -> Vec3) -> [Floats; 3] {
-    let weights = footprints.map(|footprint| which(&footprint));
-    [
-        Floats(weights.map(|w| w.x)),
-        Floats(weights.map(|w| w.y)),
-        Floats(weights.map(|w| w.z)),
-    ]
 }
 
 /// The surface of `material` at `points` of `frame`, whose interpolated and renormalised
@@ -149,26 +255,26 @@ pub fn surface_lanes(
     if !varies(frame, material) {
         return (surface, normals);
     }
-    let gathered = Gathered::new(frame, points);
+    let mut gathered = Gathered::new(frame, points);
     if !frame.vertex_attributes.is_empty() {
-        surface.diffuse = surface.diffuse * gathered.interpolate3(&gathered.at, |v| v.tint);
+        surface.diffuse = surface.diffuse * gathered.interpolate3(&points.weights.at, |v| v.tint);
     }
     let textures = &material.textures;
     if let Some(binding) = textures.diffuse {
-        let texel = gathered.sample(frame, points, &binding);
+        let texel = gathered.sample(frame, &binding);
         surface.diffuse = surface.diffuse * texel;
         if textures.ambient.is_none() {
             surface.ambient = surface.ambient * texel;
         }
     }
     if let Some(binding) = textures.ambient {
-        surface.ambient = surface.ambient * gathered.sample(frame, points, &binding);
+        surface.ambient = surface.ambient * gathered.sample(frame, &binding);
     }
     let normals = match textures.normal {
         Some(binding) => {
-            let tangent = gathered.interpolate3(&gathered.at, |v| v.tangent.truncate());
-            let handedness = gathered.interpolate_w(&gathered.at);
-            let texel = gathered.sample(frame, points, &binding);
+            let tangent = gathered.interpolate3(&points.weights.at, |v| v.tangent.truncate());
+            let handedness = gathered.interpolate_w(&points.weights.at);
+            let texel = gathered.sample(frame, &binding);
             perturb_normal_lanes(normals, tangent, handedness, texel, binding.scale)
         }
         None => normals,
@@ -176,19 +282,10 @@ pub fn surface_lanes(
     (surface, normals)
 }
 
-impl Gathered {
-    /// The tangents' `w` (the bitangent's handedness) interpolated with `weights`, the fourth
-    /// component of the general path's `Vec4` interpolation.
-    fn interpolate_w(&self, weights: &[Floats; 3]) -> Floats {
-        let corner = |k: usize| Floats(self.attributes.map(|vertices| vertices[k].tangent.w));
-        corner(0) * weights[0] + corner(1) * weights[1] + corner(2) * weights[2]
-    }
-}
-
 /// The diffuse texture's colour (its texel's RGB) at each point: what multiplies the textured
 /// part of a flat or Gouraud pixel.
 pub fn texture_colors(frame: &Frame, binding: &TextureBinding, points: &SurfacePoints) -> Vec3s {
-    Gathered::new(frame, points).sample(frame, points, binding)
+    Gathered::new(frame, points).sample(frame, binding)
 }
 
 /// `shade::perturb_normal` lane-wise: the tangent `tangent` (its `w`, the handedness, apart)

@@ -23,12 +23,12 @@
 
 use glam::{Vec2, Vec4};
 
-use crate::render::lanes::{Floats, LANES, Mask, Vec2s};
-use crate::texture::{MipLevel, Sampler, Texture, Wrap};
+use crate::render::lanes::{Floats, Ints, LANES, Mask, Vec2s};
+use crate::texture::{Sampler, Texture, Wrap};
 
 /// Texture coordinates at least this far from 0 are sampled by the specification: below it,
 /// texel coordinates on any level (fewer than 2³² texels a side) are whole `f64`s below 2⁵²,
-/// where the integer floor and wrap are exact.
+/// where the floor by truncation and the integer wrap are exact.
 const INTEGER_RANGE: f32 = (1u32 << 20) as f32;
 
 /// [`Texture::sample`] of each lane: the filtered value at `uv` for a pixel whose footprint
@@ -62,32 +62,52 @@ pub fn sample_lanes(
     } else {
         footprint.gt(Floats::splat(1.0))
     };
+    // Per lane, `Texture::sample`'s choice of levels: bilinear in `lower`, and where `blend`
+    // is above 0 in `lower + 1` too, blended by it. `log2f` is called for minified lanes only;
+    // the rest is lane-wise: λ's clamp to the last level (`f32::min`, λ not NaN), its floor
+    // by the rounding of `texel_pairs` (λ is below 2²²), and the fraction left.
+    let zero = Floats::splat(0.0);
+    let mut lod = zero;
+    for lane in 0..LANES {
+        if minified.lane(lane) {
+            lod.0[lane] = footprint.0[lane].log2();
+        }
+    }
+    let minified = lod.gt(zero);
+    let last = Floats::splat(last_level as f32);
+    let lod = lod.gt(last).select(last, lod);
+    let (floor, level) = floor_lanes(lod);
+    let fraction = lod - floor;
+    let last_index = Ints::splat(last_level as i32);
+    let lower = minified.select_ints(level, Ints::splat(0));
+    let blended = minified.and(last_index.gt(lower)).and(fraction.gt(zero));
+    // Lanes beyond the integer range are sampled by `Texture::sample`; the lanes take 0 there.
     let limit = Floats::splat(INTEGER_RANGE);
     let within = |t: Floats| limit.gt(t).and(t.gt(-limit));
     let integral = within(at.x).and(within(at.y));
-    std::array::from_fn(|lane| {
-        let point = Vec2::new(at.x.0[lane], at.y.0[lane]);
+    let at = Vec2s {
+        x: integral.select(at.x, zero),
+        y: integral.select(at.y, zero),
+    };
+    let mut near = [Vec4::ZERO; LANES];
+    bilinear_lanes(texture, lower, at, sampler, &mut near);
+    if blended.any() {
+        let upper = blended.select_ints(lower + Ints::splat(1), lower);
+        let mut far = [Vec4::ZERO; LANES];
+        bilinear_lanes(texture, upper, at, sampler, &mut far);
+        for (lane, (near, far)) in near.iter_mut().zip(&far).enumerate() {
+            if blended.lane(lane) {
+                *near = *near + (*far - *near) * fraction.0[lane];
+            }
+        }
+    }
+    for (lane, value) in near.iter_mut().enumerate() {
         if !integral.lane(lane) {
             let pick = |v: Vec2s| Vec2::new(v.x.0[lane], v.y.0[lane]);
-            return texture.sample(pick(uv), pick(uv_dx), pick(uv_dy), sampler);
+            *value = texture.sample(pick(uv), pick(uv_dx), pick(uv_dy), sampler);
         }
-        if !minified.lane(lane) {
-            return bilinear(base, point, sampler);
-        }
-        // From here on `Texture::sample` for a footprint above one texel.
-        let lod = footprint.0[lane].log2();
-        if lod.is_nan() || lod <= 0.0 {
-            return bilinear(base, point, sampler);
-        }
-        let lod = lod.min(last_level as f32);
-        let lower = (lod.floor() as usize).min(last_level);
-        let fraction = lod - lower as f32;
-        let near = bilinear(&texture.levels[lower], point, sampler);
-        match texture.levels.get(lower + 1) {
-            Some(upper) if fraction > 0.0 => near + (bilinear(upper, point, sampler) - near) * fraction,
-            _ => near,
-        }
-    })
+    }
+    near
 }
 
 /// Each component where it is finite, else 0 (`texture::finite_or_zero`).
@@ -100,25 +120,194 @@ fn finite_or_zero(v: Vec2s) -> Vec2s {
     }
 }
 
-/// `texture::bilinear` for coordinates below [`INTEGER_RANGE`]: the same texels, weights and
-/// filter, the texel pairs found in integers.
+/// `1.5·2²³`: added to an `f32` below 2²² in magnitude, the sum lies in [2²³, 2²⁴), whose
+/// spacing is 1, so the addition rounds the value to a whole number (ties to even), which
+/// subtracting it again leaves exact, and which the sum's low bits hold as an integer.
+const ROUND: f32 = 12_582_912.0;
+
+/// The floor of each lane (below 2²² in magnitude), as a float and as an integer: the value
+/// rounded by [`ROUND`], one less where that rounded up.
 #[inline(always)]
-fn bilinear(level: &MipLevel, uv: Vec2, sampler: &Sampler) -> Vec4 {
-    let (x0, x1, fx) = texel_pair(uv.x, level.width, sampler.wrap_s);
-    let (y0, y1, fy) = texel_pair(uv.y, level.height, sampler.wrap_t);
-    let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
-    let top = lerp(level.texel(x0, y0), level.texel(x1, y0), fx);
-    let bottom = lerp(level.texel(x0, y1), level.texel(x1, y1), fx);
-    lerp(top, bottom, fy)
+fn floor_lanes(x: Floats) -> (Floats, Ints) {
+    let sum = x + Floats::splat(ROUND);
+    let nearest = sum - Floats::splat(ROUND);
+    let above = nearest.gt(x);
+    let floor = above.select(nearest - Floats::splat(1.0), nearest);
+    // `above` is −1 where it holds.
+    let integer = sum.to_bits() - Ints::splat(ROUND.to_bits() as i32) + above.to_ints();
+    (floor, integer)
 }
 
-/// `texture::texel_pair` for |t| < [`INTEGER_RANGE`]: the two texel indices around `t` on an
-/// axis of `size` texels, wrapped, and the weight of the second.
+/// `texture::bilinear` of each lane at `uv` in its level `levels.0[lane]` of `texture`, into
+/// `out`: the same texels, weights and filter, the texel pairs found lane-wise
+/// ([`texel_pairs`]). Lanes with coordinates beyond [`INTEGER_RANGE`] get a value that is not
+/// used.
+#[inline(always)]
+fn bilinear_lanes(texture: &Texture, levels: Ints, uv: Vec2s, sampler: &Sampler, out: &mut [Vec4; LANES]) {
+    let level = |lane: usize| &texture.levels[levels.0[lane] as usize];
+    let (mut widths, mut heights) = ([0; LANES], [0; LANES]);
+    let same_level = levels.0.iter().all(|&l| l == levels.0[0]);
+    let (xs, ys) = if same_level {
+        let level = level(0);
+        (widths, heights) = ([level.width; LANES], [level.height; LANES]);
+        (
+            texel_pairs(uv.x, Sizes::splat(level.width), sampler.wrap_s),
+            texel_pairs(uv.y, Sizes::splat(level.height), sampler.wrap_t),
+        )
+    } else {
+        for lane in 0..LANES {
+            (widths[lane], heights[lane]) = (level(lane).width, level(lane).height);
+        }
+        (
+            texel_pairs(uv.x, Sizes::of(&widths), sampler.wrap_s),
+            texel_pairs(uv.y, Sizes::of(&heights), sampler.wrap_t),
+        )
+    };
+    let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
+    if same_level && xs.exact.and(ys.exact).all() {
+        // The common case: one level, every index wrapped into it lane-wise, so each texel
+        // is at `y·width + x` (`MipLevel::texel` without its test of `x`, which the wrap
+        // makes true).
+        let level = level(0);
+        let (width, texels) = (level.width as usize, &level.texels[..]);
+        let texel = |index: usize| texels.get(index).copied().unwrap_or(Vec4::ZERO);
+        for (lane, value) in out.iter_mut().enumerate() {
+            let ((x0, x1, fx), (y0, y1, fy)) = (xs.exact_lane(lane), ys.exact_lane(lane));
+            let (row0, row1) = (y0 * width, y1 * width);
+            let top = lerp(texel(row0 + x0), texel(row0 + x1), fx);
+            let bottom = lerp(texel(row1 + x0), texel(row1 + x1), fx);
+            *value = lerp(top, bottom, fy);
+        }
+        return;
+    }
+    for (lane, value) in out.iter_mut().enumerate() {
+        let level = level(lane);
+        let (x0, x1, fx) = xs.lane(lane, uv.x, &widths, sampler.wrap_s);
+        let (y0, y1, fy) = ys.lane(lane, uv.y, &heights, sampler.wrap_t);
+        let top = lerp(level.texel(x0, y0), level.texel(x1, y0), fx);
+        let bottom = lerp(level.texel(x0, y1), level.texel(x1, y1), fx);
+        *value = lerp(top, bottom, fy);
+    }
+}
+
+/// The sizes of an axis of each lane's level, as integers (those above 2²⁴, which are not
+/// exact as `f32`, marked as no power of two) and as floats.
+#[derive(Clone, Copy)]
+struct Sizes {
+    integers: Ints,
+    floats: Floats,
+}
+
+impl Sizes {
+    #[inline(always)]
+    fn integer(size: u32) -> i32 {
+        if size <= 1 << 24 { size as i32 } else { 3 }
+    }
+
+    #[inline(always)]
+    fn splat(size: u32) -> Self {
+        Sizes {
+            integers: Ints::splat(Sizes::integer(size)),
+            floats: Floats::splat(size as f32),
+        }
+    }
+
+    #[inline(always)]
+    fn of(sizes: &[u32; LANES]) -> Self {
+        Sizes {
+            integers: Ints::gather(sizes, |&size| Sizes::integer(size)),
+            floats: Floats::gather(sizes, |&size| size as f32),
+        }
+    }
+}
+
+/// Texel pairs on one axis, lane-wise ([`texel_pairs`]): the two wrapped indices and the
+/// weight of the second where `exact`.
+struct TexelPairs {
+    first: Ints,
+    second: Ints,
+    fraction: Floats,
+    exact: Mask,
+}
+
+impl TexelPairs {
+    /// `texture::texel_pair` of `lane`, whose coordinate is in `t` and size in `sizes`.
+    #[inline(always)]
+    fn lane(&self, lane: usize, t: Floats, sizes: &[u32; LANES], wrap: Wrap) -> (usize, usize, f32) {
+        if self.exact.lane(lane) {
+            self.exact_lane(lane)
+        } else {
+            texel_pair(t.0[lane], sizes[lane], wrap)
+        }
+    }
+
+    /// The pair of `lane`, where it is `exact`.
+    #[inline(always)]
+    fn exact_lane(&self, lane: usize) -> (usize, usize, f32) {
+        (
+            self.first.0[lane] as usize,
+            self.second.0[lane] as usize,
+            self.fraction.0[lane],
+        )
+    }
+}
+
+/// `texture::texel_pair` of each lane for |t| < [`INTEGER_RANGE`]: the two texel indices
+/// around `t` on an axis of `sizes` texels, wrapped, and the weight of the second.
+///
+/// The specification computes `x = t·size − ½` in `f64` (exactly), its floor `F`, and the
+/// fraction `x − F` rounded to `f32`. Where the size is a power of two and `1 ≤ t·size < 2²²`,
+/// the same is exact in `f32`, lane-wise: `t·size` only moves the exponent, `x` is a multiple
+/// of the product's spacing (at most ¼) not below ½, so representable; `(x + 1.5·2²³) −
+/// 1.5·2²³` rounds it to a whole number (the sum's spacing is 1), one less where that rounded
+/// up is the floor, and `x − F`, the fractional part of a non-negative float, is exact too: the
+/// specification's value, with its bits. The sum's low bits hold the rounded value as an
+/// integer, and for a power of two the wrap is a mask. The other lanes (negative or tiny
+/// coordinates, sizes that are no power of two) are not `exact`: they take the
+/// specification's steps lane by lane ([`texel_pair`]).
+#[inline(always)]
+fn texel_pairs(t: Floats, sizes: Sizes, wrap: Wrap) -> TexelPairs {
+    let Sizes {
+        integers: size,
+        floats,
+    } = sizes;
+    let product = t * floats;
+    let x = product - Floats::splat(0.5);
+    let (floor, first) = floor_lanes(x);
+    let fraction = x - floor;
+    let one = Ints::splat(1);
+    let zero = Ints::splat(0);
+    let last = size - one;
+    let power_of_two = !size.and(last).gt(zero);
+    let exact = Floats::splat(1.0)
+        .le(product)
+        .and(Floats::splat((1u32 << 22) as f32).gt(product))
+        .and(power_of_two);
+    let wrapped = |index: Ints| match wrap {
+        Wrap::Repeat => index.and(last),
+        Wrap::MirroredRepeat => {
+            let twice = size + last;
+            let period = index.and(twice);
+            period.gt(last).select_ints(twice - period, period)
+        }
+        Wrap::ClampToEdge => {
+            let below = index.gt(last).select_ints(last, index);
+            zero.gt(below).select_ints(zero, below)
+        }
+    };
+    TexelPairs {
+        first: wrapped(first),
+        second: wrapped(first + one),
+        fraction,
+        exact,
+    }
+}
+
+/// `texture::texel_pair` for |t| < [`INTEGER_RANGE`], one lane: the specification's `f64`
+/// coordinate, its floor by truncation (exact below 2⁵³), the wrap in integers.
 #[inline(always)]
 fn texel_pair(t: f32, size: u32, wrap: Wrap) -> (usize, usize, f32) {
     let x = f64::from(t) * f64::from(size) - 0.5;
-    // |x| < 2⁵² + ½: truncation is exact, and one above `x` only where `x` is negative and
-    // not whole, where the floor is one less.
     let truncated = x as i64;
     let first = truncated - i64::from(truncated as f64 > x);
     let fraction = (x - first as f64) as f32;
