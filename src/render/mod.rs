@@ -20,6 +20,7 @@
 
 pub mod bin;
 pub mod clip;
+pub mod depth;
 pub mod frame;
 pub mod geometry;
 pub mod lanes;

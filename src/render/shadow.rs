@@ -1,7 +1,7 @@
 //! Shadow maps: the seeds' shadow term `S_i` (seed 001), one depth image per shadow-casting light.
 //!
-//! Each map is rendered with the same geometry stage and tiled rasterizer as the image (depth
-//! only: nothing lit, nothing culled), from the light's point of view:
+//! Each map is rendered by the depth pass (`depth`: the image's clipping, setup and coverage
+//! loop, depth only, nothing culled), from the light's point of view:
 //! - a directional light looks along its direction with an orthographic projection that just
 //!   contains the bounding sphere of every object;
 //! - a spot light looks down its axis with a perspective projection covering its cone (up to a
@@ -14,7 +14,10 @@
 //! on slopes without the detached shadows, "peter-panning", of a large depth offset), projected
 //! into the light's clip space, and compared with the (2r+1)² nearest texels
 //! (percentage-closer filtering): the share of texels that do not hold a nearer surface is the
-//! light's visibility, between 0 and 1. Points outside a map are lit.
+//! light's visibility, between 0 and 1. Points outside a map are lit. The lane lighting looks
+//! eight points up at once ([`ShadowMap::visibility_lanes`]: the projection and the tests that
+//! a point is in the map lane-wise, the block's compares per lane), with the bits of the
+//! one-point lookup.
 //!
 //! Depth is reversed (1 at the light's near plane), so "nearer to the light" is "greater".
 //! Everything is computed in the frame's eye-relative space, and the maps are deterministic
@@ -23,12 +26,10 @@
 use std::sync::Arc;
 
 use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
-use rayon::prelude::*;
 
-use crate::render::TILE_SIZE;
-use crate::render::geometry::{CameraSetup, SpareBuffers, build_depth_frame};
+use crate::render::depth::{DepthBuffers, render_depth};
+use crate::render::geometry::CameraSetup;
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
-use crate::render::raster::rasterize_depth_only;
 use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
 
 /// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
@@ -265,11 +266,11 @@ impl ShadowFace {
 
 /// The arrays of the last frame's shadow maps and of their depth-only frames, to render the next
 /// frame's maps in (see `geometry::SpareBuffers`): a stream of frames then allocates nothing
-/// big for its maps after the first. Which arrays are reused changes no texel: every texel of a
-/// map is written by its tile.
+/// big for its maps after the first. Which arrays are reused changes no texel: the depth pass
+/// writes every texel.
 #[derive(Default)]
 pub struct ShadowBuffers {
-    geometry: SpareBuffers,
+    depth: DepthBuffers,
     texels: Vec<Vec<f32>>,
 }
 
@@ -384,7 +385,7 @@ fn lit_in_block<const SIDE: usize>(map: &[f32], first: usize, stride: usize, dep
 }
 
 /// The cameras (and map sizes) a light's shadow map is rendered from.
-fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32) -> Vec<(Camera, u32)> {
+pub(crate) fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32) -> Vec<(Camera, u32)> {
     let cube = |position: DVec3| -> Vec<(Camera, u32)> {
         let reach = (bounds.center - position).length() + bounds.radius;
         [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z]
@@ -455,23 +456,9 @@ fn render_face(
     frame_eye: DVec3,
     buffers: &mut ShadowBuffers,
 ) -> ShadowFace {
-    let frame = build_depth_frame(scene, camera, size, &mut buffers.geometry);
-    let grid = frame.tiles;
-    // As the image's tiles are: bands of tile rows in parallel, each band's tiles in order,
-    // each tile rasterized straight into the band's rows (depth only: no triangle numbers, no
-    // tile buffer, nothing copied). Every texel is written by its tile.
     let side = size as usize;
     let mut depth = buffers.texels(side * side);
-    depth
-        .par_chunks_mut(TILE_SIZE as usize * side)
-        .enumerate()
-        .for_each(|(tile_row, band)| {
-            for column in 0..grid.columns as usize {
-                let index = tile_row * grid.columns as usize + column;
-                rasterize_depth_only(grid.rect(index), &frame.raster, index, band, side);
-            }
-        });
-    buffers.geometry.keep(frame);
+    render_depth(scene, camera, size, &mut depth, &mut buffers.depth);
     let setup = CameraSetup::new(camera, 1.0);
     let clip_from_frame = setup.clip_from_world * DMat4::from_translation(frame_eye - camera.eye);
     let (texel_size, perspective) = match camera.projection {
@@ -493,13 +480,13 @@ fn render_face(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A shadow-casting light of each kind and map shape: directional (orthographic), a narrow
     /// spot (one perspective face), a wide spot and a point light (six cube faces); filters of
     /// radius 0, 1 and 2.
-    fn shadowed_lights() -> Vec<Light> {
+    pub(crate) fn shadowed_lights() -> Vec<Light> {
         use crate::scene::Attenuation;
         let settings = |filter_radius| {
             Some(ShadowSettings {
