@@ -30,7 +30,7 @@ use crate::render::TILE_SIZE;
 use crate::render::bin::{RasterChunk, TileGrid};
 use crate::render::frame::FrameTriangle;
 use crate::render::geometry::{
-    CameraSetup, ObjectTransforms, ProjectedVertex, RasterOutput, TRIANGLE_CHUNK, Viewport,
+    CameraSetup, ObjectTransforms, ProjectedVertex, RasterOutput, SpareBuffers, TRIANGLE_CHUNK, Viewport,
     homogeneous_facing, set_up_raster_triangles,
 };
 use crate::render::raster::{
@@ -41,32 +41,19 @@ use crate::scene::{Camera, Scene};
 /// Vertices per parallel work item of the vertex pass.
 const VERTEX_CHUNK: usize = 4096;
 
-/// The arrays of the last pass, to run the next one in: a stream of frames then allocates
-/// nothing big for its shadow maps after the first. Which arrays are reused changes nothing.
-#[derive(Default)]
-pub struct DepthBuffers {
-    projected: Vec<ProjectedVertex>,
-    /// Per chunk of the scene's triangle stream, its raster triangles, binned.
-    chunks: Vec<RasterChunk>,
-}
-
 /// Renders the depth of `scene` as `camera` sees it into the `size`² texels of `depth`
-/// (row-major from the top; −∞ where nothing is), in the arrays of `buffers`.
-pub fn render_depth(
-    scene: &Scene,
-    camera: &Camera,
-    size: u32,
-    depth: &mut [f32],
-    buffers: &mut DepthBuffers,
-) {
+/// (row-major from the top; −∞ where nothing is), in the image's spare arrays (which arrays are
+/// reused changes nothing: every element the pass reads, it wrote).
+pub fn render_depth(scene: &Scene, camera: &Camera, size: u32, depth: &mut [f32], spare: &mut SpareBuffers) {
     let camera = CameraSetup::new(camera, 1.0);
     let viewport = Viewport::new(size, size, SamplePattern::SINGLE);
     let side = size as usize;
     debug_assert_eq!(depth.len(), side * side);
-    let mirrored = project_vertices(scene, &camera, &viewport, &mut buffers.projected);
-    set_up_triangles(scene, &mirrored, &viewport, buffers);
+    let (chunks, projected) = spare.depth_pass_arrays();
+    let mirrored = project_vertices(scene, &camera, &viewport, projected);
+    set_up_triangles(scene, &mirrored, &viewport, projected, chunks);
     let grid = TileGrid::new(size, size);
-    let chunks = &buffers.chunks;
+    let chunks = &*chunks;
     depth
         .par_chunks_mut(TILE_SIZE as usize * side)
         .enumerate()
@@ -113,10 +100,17 @@ fn project_vertices(
     mirrored
 }
 
-/// Per chunk of the scene's triangle stream (in parallel), its triangles set up and binned
-/// into `buffers.chunks`, each marked with the side the light sees. Edge-on, degenerate and
-/// non-finite triangles are dropped, as the image's geometry drops them; none is culled.
-fn set_up_triangles(scene: &Scene, mirrored: &[bool], viewport: &Viewport, buffers: &mut DepthBuffers) {
+/// Per chunk of the scene's triangle stream (in parallel), its triangles (corners in
+/// `projected`) set up and binned into `chunks`, each marked with the side the light sees.
+/// Edge-on, degenerate and non-finite triangles are dropped, as the image's geometry drops
+/// them; none is culled.
+fn set_up_triangles(
+    scene: &Scene,
+    mirrored: &[bool],
+    viewport: &Viewport,
+    projected: &[ProjectedVertex],
+    chunks: &mut Vec<RasterChunk>,
+) {
     // Where each object's triangles and vertices start.
     let mut starts = Vec::with_capacity(scene.objects.len() + 1);
     let (mut triangles, mut vertices) = (0usize, 0u32);
@@ -126,13 +120,10 @@ fn set_up_triangles(scene: &Scene, mirrored: &[bool], viewport: &Viewport, buffe
         vertices += object.mesh.positions.len() as u32;
     }
     starts.push((triangles, vertices));
-    buffers
-        .chunks
-        .resize_with(triangles.div_ceil(TRIANGLE_CHUNK), RasterChunk::default);
+    // Exactly one per chunk: a longer list from a larger frame would add stale triangles.
+    chunks.resize_with(triangles.div_ceil(TRIANGLE_CHUNK), RasterChunk::default);
     let grid = TileGrid::new(viewport.width, viewport.height);
-    let projected = &buffers.projected;
-    buffers
-        .chunks
+    chunks
         .par_iter_mut()
         .enumerate()
         .for_each(|(chunk, raster_chunk)| {
@@ -316,14 +307,15 @@ mod tests {
         views.push((near_cut, 80));
         let (mut back_faces, mut skipped, mut covered) = (0, 0, 0);
         for (camera, size) in views {
-            let mut buffers = DepthBuffers::default();
+            let mut spare = SpareBuffers::default();
             let mut depth = vec![f32::NAN; (size * size) as usize];
-            render_depth(&scene, &camera, size, &mut depth, &mut buffers);
+            render_depth(&scene, &camera, size, &mut depth, &mut spare);
 
             // Every raster triangle, in the stream's order (the chunks are in that order).
             let grid = TileGrid::new(size, size);
-            let every: Vec<RasterTriangle> = buffers
-                .chunks
+            let every: Vec<RasterTriangle> = spare
+                .depth_pass_arrays()
+                .0
                 .iter()
                 .flat_map(|chunk| chunk.triangles.iter().copied())
                 .collect();

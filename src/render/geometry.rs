@@ -83,6 +83,13 @@ impl SpareBuffers {
         self.vertex_colors = frame.vertex_colors;
         self.raster = frame.raster;
     }
+
+    /// The raster chunks and projected vertices, for the shadow pass (`depth`), which runs
+    /// before the frame's geometry and leaves them for it: the two never need them at once, so
+    /// a frame with shadow maps holds no second set of triangle arrays.
+    pub(crate) fn depth_pass_arrays(&mut self) -> (&mut Vec<RasterChunk>, &mut Vec<ProjectedVertex>) {
+        (&mut self.raster, &mut self.projected)
+    }
 }
 
 /// `vector` emptied, with room for at least `count` elements.

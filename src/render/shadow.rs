@@ -27,8 +27,8 @@ use std::sync::Arc;
 
 use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
 
-use crate::render::depth::{DepthBuffers, render_depth};
-use crate::render::geometry::CameraSetup;
+use crate::render::depth::render_depth;
+use crate::render::geometry::{CameraSetup, SpareBuffers};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
 
@@ -50,6 +50,8 @@ struct ShadowFace {
     /// (orthographic).
     texel_size: f32,
     perspective: bool,
+    /// The last row of `clip_from_frame` is `(0, 0, 0, 1)` (an orthographic face): `w` is 1.
+    affine: bool,
     /// Where the light is (perspective) in the frame's eye-relative space, and where it looks.
     origin: Vec3,
     forward: Vec3,
@@ -81,12 +83,19 @@ impl ShadowMap {
     /// each lane has the bits of the one-point call. The projection into the light's view, the
     /// normal offset and the tests that the point is in the map are computed lane-wise; the
     /// (2r+1)² depth compares, which read texels wherever each point falls, lane after lane.
+    #[inline]
     pub fn visibility_lanes(&self, position: Vec3s, normal: Vec3s, to_light: Vec3s, wanted: Mask) -> Floats {
-        if let [face] = self.faces.as_slice() {
-            return face.visibility_lanes(position, normal, &self.settings, wanted);
+        match self.faces.as_slice() {
+            [face] => face.visibility_lanes(position, normal, &self.settings, wanted),
+            _ => self.cube_visibility_lanes(position, normal, to_light, wanted),
         }
-        // A cube: each lane's face picked as the one-point call picks it, then the lanes of each
-        // face that some lane looks at, together.
+    }
+
+    /// [`ShadowMap::visibility_lanes`] of a cube: each lane's face picked as the one-point call
+    /// picks it, then the lanes of each face that some lane looks at, together. Out of line, so
+    /// that the one-face lookup stays small where the lighting inlines it.
+    #[inline(never)]
+    fn cube_visibility_lanes(&self, position: Vec3s, normal: Vec3s, to_light: Vec3s, wanted: Mask) -> Floats {
         let directions = to_light.to_array();
         let faces: [Option<usize>; LANES] = std::array::from_fn(|lane| {
             wanted
@@ -178,6 +187,7 @@ impl ShadowFace {
     }
 
     /// [`ShadowFace::visibility`] lane by lane where `wanted` holds (1 elsewhere).
+    #[inline]
     fn visibility_lanes(
         &self,
         position: Vec3s,
@@ -228,10 +238,21 @@ impl ShadowFace {
                 + column(matrix.z_axis) * offset.z)
                 + Floats::splat(matrix.w_axis[axis] * 1.0)
         };
-        let (x, y, z, w) = (row(0), row(1), row(2), row(3));
-        // `w > 0` is false for NaN: the scalar test's `is_nan() || <= 0`, negated.
-        let in_front = w.gt(Floats::splat(0.0));
-        let ndc = Vec3s { x, y, z }.divide(w);
+        let clip = Vec3s {
+            x: row(0),
+            y: row(1),
+            z: row(2),
+        };
+        let (ndc, in_front) = if self.affine {
+            // `w = ((0·x + 0·y) + 0·z) + 1·1` is exactly 1 for a finite offset, and dividing by
+            // 1 changes nothing. A non-finite offset makes x, y and z non-finite too (`0·∞` and
+            // `a·∞` both are), which the test below turns away as the scalar test of `w` does.
+            (clip, Mask::ALL)
+        } else {
+            let w = row(3);
+            // `w > 0` is false for NaN: the scalar test's `is_nan() || <= 0`, negated.
+            (clip.divide(w), w.gt(Floats::splat(0.0)))
+        };
         let (one, minus_one) = (Floats::splat(1.0), Floats::splat(-1.0));
         // For finite values `|v| > 1` is `v > 1 ∨ v < −1`.
         let inside = ndc
@@ -264,13 +285,12 @@ impl ShadowFace {
     }
 }
 
-/// The arrays of the last frame's shadow maps and of their depth-only frames, to render the next
-/// frame's maps in (see `geometry::SpareBuffers`): a stream of frames then allocates nothing
-/// big for its maps after the first. Which arrays are reused changes no texel: the depth pass
-/// writes every texel.
+/// The texel arrays of the last frame's shadow maps, to render the next frame's maps in: a
+/// stream of frames then allocates nothing big for its maps after the first (their triangles are
+/// set up in the image's spare arrays, `geometry::SpareBuffers`). Which arrays are reused
+/// changes no texel: the depth pass writes every texel.
 #[derive(Default)]
 pub struct ShadowBuffers {
-    depth: DepthBuffers,
     texels: Vec<Vec<f32>>,
 }
 
@@ -298,11 +318,13 @@ impl ShadowBuffers {
 }
 
 /// Renders the shadow map of every light that casts shadows (`None` for the others), in the
-/// eye-relative space of a frame whose eye is `frame_eye`, in the arrays of `buffers`.
+/// eye-relative space of a frame whose eye is `frame_eye`, in the arrays of `buffers` and
+/// `spare` (before the frame's geometry takes them).
 pub fn render_shadow_maps(
     scene: &Scene,
     frame_eye: DVec3,
     buffers: &mut ShadowBuffers,
+    spare: &mut SpareBuffers,
 ) -> Vec<Option<Arc<ShadowMap>>> {
     // The bounds read every vertex of the scene: computed on the first light that casts a
     // shadow, and never for a scene without shadows.
@@ -315,7 +337,7 @@ pub fn render_shadow_maps(
             let bounds = *bounds.get_or_insert_with(|| bounding_sphere(&scene.objects));
             let faces = light_views(light, bounds, settings.resolution)
                 .into_iter()
-                .map(|(camera, size)| render_face(scene, &camera, size, frame_eye, buffers))
+                .map(|(camera, size)| render_face(scene, &camera, size, frame_eye, buffers, spare))
                 .collect();
             Some(Arc::new(ShadowMap { faces, settings }))
         })
@@ -455,10 +477,11 @@ fn render_face(
     size: u32,
     frame_eye: DVec3,
     buffers: &mut ShadowBuffers,
+    spare: &mut SpareBuffers,
 ) -> ShadowFace {
     let side = size as usize;
     let mut depth = buffers.texels(side * side);
-    render_depth(scene, camera, size, &mut depth, &mut buffers.depth);
+    render_depth(scene, camera, size, &mut depth, spare);
     let setup = CameraSetup::new(camera, 1.0);
     let clip_from_frame = setup.clip_from_world * DMat4::from_translation(frame_eye - camera.eye);
     let (texel_size, perspective) = match camera.projection {
@@ -470,6 +493,7 @@ fn render_face(
     };
     ShadowFace {
         clip_from_frame: clip_from_frame.as_mat4(),
+        affine: clip_from_frame.as_mat4().row(3) == glam::Vec4::W,
         size,
         depth,
         texel_size,
@@ -539,7 +563,12 @@ pub(crate) mod tests {
         let mut scene = scene(LightingModel::Phong, Vec3::ONE, BackFaces::Lit, LIGHTS[0]);
         scene.lights = shadowed_lights();
         let eye = scene.camera.eye;
-        let maps = render_shadow_maps(&scene, eye, &mut ShadowBuffers::default());
+        let maps = render_shadow_maps(
+            &scene,
+            eye,
+            &mut ShadowBuffers::default(),
+            &mut Default::default(),
+        );
         let frame = crate::render::geometry::build_frame(
             &scene,
             crate::render::raster::SamplePattern::SINGLE,
