@@ -329,19 +329,100 @@ pub fn render_shadow_maps(
     // The bounds read every vertex of the scene: computed on the first light that casts a
     // shadow, and never for a scene without shadows.
     let mut bounds = None;
+    let mut seen = None;
     scene
         .lights
         .iter()
         .map(|light| {
             let settings = light.shadow()?;
+            let seen: &Vec<BoundingSphere> = seen.get_or_insert_with(|| seen_bounds(scene));
+            if !lights_any(light, seen) {
+                return None;
+            }
             let bounds = *bounds.get_or_insert_with(|| bounding_sphere(&scene.objects));
-            let faces = light_views(light, bounds, settings.resolution)
-                .into_iter()
-                .map(|(camera, size)| render_face(scene, &camera, size, frame_eye, buffers, spare))
-                .collect();
-            Some(Arc::new(ShadowMap { faces, settings }))
+            Some(Arc::new(render_map(
+                scene, light, settings, bounds, frame_eye, buffers, spare,
+            )))
         })
         .collect()
+}
+
+/// The shadow map of `light` with `settings`, fitted to the bounds of every object.
+fn render_map(
+    scene: &Scene,
+    light: &Light,
+    settings: ShadowSettings,
+    bounds: BoundingSphere,
+    frame_eye: DVec3,
+    buffers: &mut ShadowBuffers,
+    spare: &mut SpareBuffers,
+) -> ShadowMap {
+    let faces = light_views(light, bounds, settings.resolution)
+        .into_iter()
+        .map(|(camera, size)| render_face(scene, &camera, size, frame_eye, buffers, spare))
+        .collect();
+    ShadowMap { faces, settings }
+}
+
+/// The bounding spheres of the objects whose bounds reach into the camera's view volume: only
+/// points of those are ever lit (pixels, flat triangles and Gouraud vertices of triangles that
+/// cover a sample, constant colours that are shown), so only they can read a shadow map.
+fn seen_bounds(scene: &Scene) -> Vec<BoundingSphere> {
+    let camera = CameraSetup::new(
+        &scene.camera,
+        f64::from(scene.image.width) / f64::from(scene.image.height),
+    );
+    // The six planes of the clip volume, `|x| ≤ w`, `|y| ≤ w`, `0 ≤ z ≤ w`, in eye-relative
+    // world space.
+    let matrix = camera.clip_from_world;
+    let [x, y, z, w] = [0, 1, 2, 3].map(|row| matrix.row(row));
+    let planes = [w + x, w - x, w + y, w - y, z, w - z];
+    scene
+        .objects
+        .iter()
+        .map(|object| bounding_sphere(std::slice::from_ref(object)))
+        .filter(|sphere| {
+            let center = sphere.center - camera.eye;
+            // A margin for the rounding of positions to `f32` on the way.
+            let radius = sphere.radius * 1.001 + center.length() * 1e-6;
+            planes.iter().all(|plane| {
+                let normal = plane.truncate();
+                normal.dot(center) + plane.w >= -radius * normal.length()
+            })
+        })
+        .collect()
+}
+
+/// Whether `light` may light some point of the spheres `seen`, so that some lookup may read its
+/// shadow map: a spot light lights only its cone (elsewhere the lighting asks no visibility),
+/// the other lights every point that faces them.
+fn lights_any(light: &Light, seen: &[BoundingSphere]) -> bool {
+    let Light::Spot {
+        position,
+        direction,
+        cutoff_degrees,
+        ..
+    } = *light
+    else {
+        return !seen.is_empty();
+    };
+    let axis = direction.as_dvec3().normalize_or_zero();
+    if axis == DVec3::ZERO {
+        return !seen.is_empty();
+    }
+    // The lighting compares `f32` cosines: a margin of a thousandth of a radian covers their
+    // rounding.
+    let cone = f64::from(cutoff_degrees).to_radians() + 1e-3;
+    seen.iter().any(|sphere| {
+        let offset = sphere.center - position;
+        let distance = offset.length();
+        let radius = sphere.radius * 1.001;
+        if distance <= radius {
+            return true;
+        }
+        let angle = (offset.dot(axis) / distance).clamp(-1.0, 1.0).acos();
+        angle <= cone + (radius / distance).asin()
+    })
 }
 
 /// Any unit vector not parallel to `forward`, for a camera's `up`.
@@ -684,6 +765,105 @@ pub(crate) mod tests {
                 outcomes[0] > 20 && outcomes[1] >= partial_least && outcomes[2] > 20,
                 "{light:?}: dark, partly lit, lit: {outcomes:?}"
             );
+        }
+    }
+
+    /// A light that lights nothing the camera may see gets no map, and the image is the one
+    /// every map gives, bit for bit: spot lights aimed beside the view and behind the camera
+    /// are skipped, the others not, in every shading mode.
+    #[test]
+    fn maps_no_visible_point_reads_are_skipped_and_change_nothing() {
+        use crate::render::raster::{SamplePattern, rasterize_tile};
+        use crate::render::shade::{TileScratch, TileTarget, shade_tile};
+        use crate::render::shade_fast::tests::{LIGHTS, scene};
+        use crate::scene::{Attenuation, BackFaces, LightingModel, Shading};
+        let mut scene = scene(LightingModel::Phong, Vec3::ONE, BackFaces::Lit, LIGHTS[2]);
+        let spot = |position: DVec3, direction: Vec3, cutoff_degrees: f32| Light::Spot {
+            position,
+            direction: direction.normalize(),
+            color: Vec3::splat(0.5),
+            cutoff_degrees,
+            exponent: 1.0,
+            attenuation: Attenuation::NONE,
+            shadow: Some(ShadowSettings {
+                resolution: 64,
+                bias: 1.0,
+                filter_radius: 1,
+            }),
+        };
+        let eye = scene.camera.eye;
+        scene.lights.extend([
+            // Beside the spheres, aimed away from them and from the view.
+            spot(DVec3::new(6.0, 0.0, 0.0), Vec3::X, 20.0),
+            // Behind the camera, aimed back at the scene through it: lights what it sees.
+            spot(eye - DVec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 1.0, -0.2), 30.0),
+            // Behind the camera, aimed further back: a wide cone (the cube) that lights nothing.
+            spot(eye - DVec3::new(0.0, 2.0, 0.0), -Vec3::Y, 70.0),
+        ]);
+        let faces =
+            |maps: &[Option<Arc<ShadowMap>>]| maps.iter().flatten().map(|m| m.face_count()).sum::<usize>();
+        for shading in [Shading::Phong, Shading::Gouraud, Shading::Flat, Shading::Constant] {
+            for object in &mut scene.objects {
+                object.shading = shading;
+            }
+            let mut spare = SpareBuffers::default();
+            let maps = render_shadow_maps(&scene, eye, &mut ShadowBuffers::default(), &mut spare);
+            let skipped: Vec<bool> = maps.iter().map(Option::is_none).collect();
+            assert_eq!(skipped, [false, false, true, false, true], "{shading:?}");
+            let bounds = bounding_sphere(&scene.objects);
+            let every: Vec<Option<Arc<ShadowMap>>> = scene
+                .lights
+                .iter()
+                .map(|light| {
+                    let settings = light.shadow().expect("every light casts shadows");
+                    let mut buffers = ShadowBuffers::default();
+                    Some(Arc::new(render_map(
+                        &scene,
+                        light,
+                        settings,
+                        bounds,
+                        eye,
+                        &mut buffers,
+                        &mut spare,
+                    )))
+                })
+                .collect();
+            assert!(faces(&every) > faces(&maps));
+            let (image, _) = crate::render::render(&scene, &Default::default());
+            let frame = crate::render::geometry::build_frame(&scene, SamplePattern::SINGLE, None, every);
+            let width = scene.image.width as usize;
+            let mut color = vec![Vec3::NAN; image.color.len()];
+            let mut covered = vec![false; image.color.len()];
+            let mut scratch = TileScratch::default();
+            for tile in 0..frame.tiles.count() {
+                let rect = frame.tiles.rect(tile);
+                let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+                let start = rect.y0 as usize * width;
+                let end = start + rect.height() as usize * width;
+                let mut target = TileTarget {
+                    color: &mut color[start..end],
+                    covered: &mut covered[start..end],
+                    stride: width,
+                };
+                shade_tile(
+                    &frame,
+                    &visibility,
+                    scene.image.background,
+                    &mut target,
+                    &mut scratch,
+                );
+            }
+            let bits = |colors: &[Vec3]| {
+                colors
+                    .iter()
+                    .map(|c| c.to_array().map(f32::to_bits))
+                    .collect::<Vec<_>>()
+            };
+            assert!(
+                bits(&color) == bits(&image.color),
+                "{shading:?}: the images differ"
+            );
+            assert!(covered.iter().filter(|&&c| c).count() > 1000);
         }
     }
 
