@@ -53,12 +53,21 @@ impl TileGrid {
         }
     }
 
-    /// The tiles `bounds` touches, as ranges of tile rows and columns.
-    fn tiles_touched(&self, bounds: &PixelRect) -> (std::ops::Range<u32>, std::ops::Range<u32>) {
-        (
-            bounds.y0 / TILE_SIZE..(bounds.y1 - 1) / TILE_SIZE + 1,
-            bounds.x0 / TILE_SIZE..(bounds.x1 - 1) / TILE_SIZE + 1,
-        )
+    /// Calls `visit(tile)` for every tile `bounds` touches, row by row. Nearly every triangle
+    /// touches one tile, which takes no loop.
+    #[inline(always)]
+    fn for_each_tile_touched(&self, bounds: &PixelRect, mut visit: impl FnMut(usize)) {
+        let (row0, row1) = (bounds.y0 / TILE_SIZE, (bounds.y1 - 1) / TILE_SIZE);
+        let (column0, column1) = (bounds.x0 / TILE_SIZE, (bounds.x1 - 1) / TILE_SIZE);
+        if row0 == row1 && column0 == column1 {
+            visit((row0 * self.columns + column0) as usize);
+            return;
+        }
+        for row in row0..=row1 {
+            for column in column0..=column1 {
+                visit((row * self.columns + column) as usize);
+            }
+        }
     }
 }
 
@@ -117,12 +126,7 @@ impl RasterChunk {
         let offsets = &mut self.offsets;
         offsets.resize(grid.count() + 1, 0);
         for triangle in &self.triangles {
-            let (rows, columns) = grid.tiles_touched(&triangle.bounds);
-            for row in rows {
-                for column in columns.clone() {
-                    offsets[(row * grid.columns + column) as usize + 1] += 1;
-                }
-            }
+            grid.for_each_tile_touched(&triangle.bounds, |tile| offsets[tile + 1] += 1);
         }
         for t in 1..offsets.len() {
             offsets[t] += offsets[t - 1];
@@ -130,14 +134,10 @@ impl RasterChunk {
         let mut cursor = offsets.clone();
         self.entries.resize(offsets[grid.count()] as usize, 0);
         for (index, triangle) in self.triangles.iter().enumerate() {
-            let (rows, columns) = grid.tiles_touched(&triangle.bounds);
-            for row in rows {
-                for column in columns.clone() {
-                    let tile = (row * grid.columns + column) as usize;
-                    self.entries[cursor[tile] as usize] = index as u32;
-                    cursor[tile] += 1;
-                }
-            }
+            grid.for_each_tile_touched(&triangle.bounds, |tile| {
+                self.entries[cursor[tile] as usize] = index as u32;
+                cursor[tile] += 1;
+            });
         }
     }
 

@@ -52,8 +52,6 @@ pub struct Frame {
     pub debug_view: Option<DebugView>,
     /// Per light, its shadow map (for lights that cast shadows).
     pub shadows: Vec<Option<Arc<ShadowMap>>>,
-    /// False for a depth-only frame (a shadow map): nothing is lit and nothing culled.
-    pub lit: bool,
 }
 
 /// A vertex in eye-relative world space (the eye at the origin, world axes).

@@ -60,18 +60,7 @@ pub fn build_frame_in(
     shadows: Vec<Option<Arc<ShadowMap>>>,
     spare: &mut SpareBuffers,
 ) -> Frame {
-    let (width, height) = (scene.image.width, scene.image.height);
-    build(
-        scene,
-        &scene.camera,
-        width,
-        height,
-        pattern,
-        debug_view,
-        shadows,
-        true,
-        spare,
-    )
+    build(scene, pattern, debug_view, shadows, spare)
 }
 
 /// The big arrays of a finished frame, emptied but with their capacity, to build the next frame
@@ -95,6 +84,13 @@ impl SpareBuffers {
         self.vertex_colors = frame.vertex_colors;
         self.raster = frame.raster;
     }
+
+    /// The raster chunks and projected vertices, for the shadow pass (`depth`), which runs
+    /// before the frame's geometry and leaves them for it: the two never need them at once, so
+    /// a frame with shadow maps holds no second set of triangle arrays.
+    pub(crate) fn depth_pass_arrays(&mut self) -> (&mut Vec<RasterChunk>, &mut Vec<ProjectedVertex>) {
+        (&mut self.raster, &mut self.projected)
+    }
 }
 
 /// `vector` emptied, with room for at least `count` elements.
@@ -112,47 +108,22 @@ fn overwritable<T: Default + Clone>(mut vector: Vec<T>, count: usize) -> Vec<T> 
     vector
 }
 
-/// The scene's geometry as `camera` sees it on a `size`×`size` image, for depth only: nothing is
-/// lit and no face is culled (a shadow map needs every surface that can block light). Built in
-/// the arrays of `spare`; give the frame back with [`SpareBuffers::keep`] when done.
-pub fn build_depth_frame(scene: &Scene, camera: &Camera, size: u32, spare: &mut SpareBuffers) -> Frame {
-    build(
-        scene,
-        camera,
-        size,
-        size,
-        SamplePattern::SINGLE,
-        None,
-        Vec::new(),
-        false,
-        spare,
-    )
-}
-
-#[allow(clippy::too_many_arguments)]
 fn build(
     scene: &Scene,
-    camera: &Camera,
-    width: u32,
-    height: u32,
     pattern: SamplePattern,
     debug_view: Option<DebugView>,
     shadows: Vec<Option<Arc<ShadowMap>>>,
-    lit: bool,
     spare: &mut SpareBuffers,
 ) -> Frame {
-    let eye = camera.eye;
-    let camera = CameraSetup::new(camera, width as f64 / height as f64);
+    let (width, height) = (scene.image.width, scene.image.height);
+    let eye = scene.camera.eye;
+    let camera = CameraSetup::new(&scene.camera, width as f64 / height as f64);
     let vertex_count: usize = scene.objects.iter().map(|o| o.mesh.positions.len()).sum();
-    let needs_colors = lit && scene.objects.iter().any(|o| o.shading == Shading::Gouraud);
-    let needs_attributes = lit
-        && scene.objects.iter().any(|o| {
-            let mesh = &o.mesh;
-            !mesh.uvs.is_empty()
-                || !mesh.uvs1.is_empty()
-                || !mesh.colors.is_empty()
-                || !mesh.tangents.is_empty()
-        });
+    let needs_colors = scene.objects.iter().any(|o| o.shading == Shading::Gouraud);
+    let needs_attributes = scene.objects.iter().any(|o| {
+        let mesh = &o.mesh;
+        !mesh.uvs.is_empty() || !mesh.uvs1.is_empty() || !mesh.colors.is_empty() || !mesh.tangents.is_empty()
+    });
     let mut frame = Frame {
         vertices: overwritable(std::mem::take(&mut spare.vertices), vertex_count),
         vertex_colors: if needs_colors {
@@ -175,16 +146,8 @@ fn build(
         forward: camera.forward.as_vec3(),
         debug_view,
         shadows,
-        lit,
     };
-    let viewport = Viewport {
-        width,
-        height,
-        pattern,
-        sample_reach: pattern.reach(),
-        guard_x: GUARD_BAND_PIXELS / width as f32,
-        guard_y: GUARD_BAND_PIXELS / height as f32,
-    };
+    let viewport = Viewport::new(width, height, pattern);
     let mut projected = overwritable(std::mem::take(&mut spare.projected), vertex_count);
     let mut vertex_base = 0;
     let placed: Vec<PlacedObject> = scene
@@ -451,14 +414,29 @@ impl LightingBatch {
     }
 }
 
-struct Viewport {
-    width: u32,
-    height: u32,
+/// The image triangles are set up for: its size, sample pattern and guard band.
+pub(crate) struct Viewport {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
     pattern: SamplePattern,
     /// `pattern.reach()`, asked once per triangle.
     sample_reach: i64,
-    guard_x: f32,
-    guard_y: f32,
+    /// The guard band's half extents in NDC units (the viewport is 1).
+    pub(crate) guard_x: f32,
+    pub(crate) guard_y: f32,
+}
+
+impl Viewport {
+    pub(crate) fn new(width: u32, height: u32, pattern: SamplePattern) -> Self {
+        Viewport {
+            width,
+            height,
+            pattern,
+            sample_reach: pattern.reach(),
+            guard_x: GUARD_BAND_PIXELS / width as f32,
+            guard_y: GUARD_BAND_PIXELS / height as f32,
+        }
+    }
 }
 
 /// A vertex of the frame in clip space, and projected to the screen when it lies inside every
@@ -466,10 +444,28 @@ struct Viewport {
 /// again).
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct ProjectedVertex {
-    clip: Vec4,
+    pub(crate) clip: Vec4,
     /// Snapped to fixed point; meaningful only when `inside`.
-    screen: SnappedVertex,
-    inside: bool,
+    pub(crate) screen: SnappedVertex,
+    pub(crate) inside: bool,
+}
+
+impl ProjectedVertex {
+    /// The vertex at `clip` on a `width` × `height` image whose guard band reaches `guard_x`,
+    /// `guard_y` (NDC units).
+    #[inline]
+    pub(crate) fn new(clip: Vec4, guard_x: f32, guard_y: f32, width: f32, height: f32) -> Self {
+        let inside = inside_clip_volume(clip, guard_x, guard_y);
+        ProjectedVertex {
+            clip,
+            screen: if inside {
+                SnappedVertex::snap(&project(clip, Vec3::ZERO, width, height)).0
+            } else {
+                SnappedVertex::default()
+            },
+            inside,
+        }
+    }
 }
 
 /// Vertices per parallel work item of the vertex pass.
@@ -627,16 +623,16 @@ fn shading_light(light: &Light, eye: DVec3) -> ShadingLight {
 }
 
 /// The matrices of one object.
-struct ObjectTransforms {
+pub(crate) struct ObjectTransforms {
     world_from_model: Mat4,
-    clip_from_model: Mat4,
+    pub(crate) clip_from_model: Mat4,
     normal_matrix: Mat3,
     /// A mirroring transform turns counter-clockwise triangles clockwise.
-    mirrored: bool,
+    pub(crate) mirrored: bool,
 }
 
 impl ObjectTransforms {
-    fn new(object: &Object, camera: &CameraSetup) -> Self {
+    pub(crate) fn new(object: &Object, camera: &CameraSetup) -> Self {
         let world_from_model = DMat4::from_translation(-camera.eye) * object.transform;
         let linear = DMat3::from_mat4(object.transform);
         ObjectTransforms {
@@ -694,12 +690,11 @@ fn add_object_vertices(
     let range = vertex_base as usize..vertex_base as usize + vertex_count;
     let (width, height) = (viewport.width as f32, viewport.height as f32);
     // Only smooth shading reads vertex normals: flat and constant shading light with the face
-    // normal, and depth-only frames light nothing. Gouraud shading reads only those of the
+    // normal. Gouraud shading reads only those of the
     // vertices it lights, which get theirs then (`light_gouraud_vertices`): the triangles
     // tell which (debug views read the others).
-    let normal_when_lit = frame.lit && style.shading == Shading::Gouraud && frame.debug_view.is_none();
-    let needs_normals =
-        frame.lit && matches!(style.shading, Shading::Gouraud | Shading::Phong) && !normal_when_lit;
+    let normal_when_lit = style.shading == Shading::Gouraud && frame.debug_view.is_none();
+    let needs_normals = matches!(style.shading, Shading::Gouraud | Shading::Phong) && !normal_when_lit;
     frame.vertices[range.clone()]
         .par_chunks_mut(VERTEX_CHUNK)
         .zip(projected[range].par_chunks_mut(VERTEX_CHUNK))
@@ -720,16 +715,7 @@ fn add_object_vertices(
                     },
                 };
                 let clip = transforms.clip_from_model * p.extend(1.0);
-                let inside = inside_clip_volume(clip, viewport.guard_x, viewport.guard_y);
-                *projected = ProjectedVertex {
-                    clip,
-                    screen: if inside {
-                        SnappedVertex::snap(&project(clip, Vec3::ZERO, width, height)).0
-                    } else {
-                        SnappedVertex::default()
-                    },
-                    inside,
-                };
+                *projected = ProjectedVertex::new(clip, viewport.guard_x, viewport.guard_y, width, height);
             }
         });
 
@@ -763,7 +749,7 @@ fn add_object_vertices(
     // Constant shading: one colour per material for the whole object, lit at the centre of its
     // bounds with the normal facing the viewer.
     frame.constant_colors.resize(frame.materials.len(), Vec3::ZERO);
-    if frame.lit && style.shading == Shading::Constant {
+    if style.shading == Shading::Constant {
         let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
         let center = transforms.world_from_model.transform_point3((lo + hi) / 2.0);
         let normal = frame.viewer.to_viewer(center);
@@ -779,7 +765,7 @@ fn add_object_vertices(
         normal_matrix: transforms.normal_matrix,
         normal_when_lit,
         mirrored: transforms.mirrored,
-        skip_back_faces: frame.lit && back_faces_hidden(object, camera),
+        skip_back_faces: back_faces_hidden(object, camera),
     }
 }
 
@@ -814,7 +800,7 @@ fn inside_clip_volume(p: Vec4, guard_x: f32, guard_y: f32) -> bool {
 
 /// The perspective divide and viewport mapping of a clip-space point with `w > 0`.
 #[inline]
-fn project(position: Vec4, weights: Vec3, width: f32, height: f32) -> ScreenVertex {
+pub(crate) fn project(position: Vec4, weights: Vec3, width: f32, height: f32) -> ScreenVertex {
     let inv_w = 1.0 / position.w;
     let ndc = position.xyz() * inv_w;
     ScreenVertex {
@@ -872,9 +858,8 @@ fn add_triangles(
                 let mesh = &scene.objects[object].mesh;
                 let place = &placed[object];
                 let style = &frame_ref.objects[object];
-                let marks_vertices = frame_ref.lit && style.shading == Shading::Gouraud;
-                let cull_back_faces =
-                    frame_ref.lit && (style.back_faces == BackFaces::Cull || place.skip_back_faces);
+                let marks_vertices = style.shading == Shading::Gouraud;
+                let cull_back_faces = style.back_faces == BackFaces::Cull || place.skip_back_faces;
                 let first_t = first + run_start - object_starts[object];
                 for t in first_t..first_t + (run_end - run_start) {
                     let corners = mesh.triangles[t];
@@ -920,9 +905,9 @@ fn add_triangles(
 
 /// A chunk's raster triangles as the geometry stage appends them, and the corner weights of
 /// those that were clipped (see `CornerWeights`).
-struct RasterOutput {
-    triangles: Vec<RasterTriangle>,
-    clipped_weights: Vec<[Vec3; 3]>,
+pub(crate) struct RasterOutput {
+    pub(crate) triangles: Vec<RasterTriangle>,
+    pub(crate) clipped_weights: Vec<[Vec3; 3]>,
 }
 
 /// Appends the raster triangles of one frame triangle: none if it is culled or invisible, one
@@ -937,9 +922,7 @@ fn add_raster_triangles(
     raster: &mut RasterOutput,
 ) {
     let corners = triangle.vertices.map(|v| &projected[v as usize]);
-    let (width, height) = (viewport.width, viewport.height);
-    let clip = corners.map(|v| v.clip);
-    let facing = homogeneous_facing(clip);
+    let facing = homogeneous_facing(corners.map(|v| v.clip));
     let back_facing = facing < 0.0;
     if facing == 0.0 || facing.is_nan() || (back_facing && cull_back_faces) {
         return; // edge-on, degenerate, non-finite, or culled
@@ -949,6 +932,20 @@ fn add_raster_triangles(
         triangle: *triangle,
         back_facing,
     };
+    set_up_raster_triangles(corners, source, viewport, raster);
+}
+
+/// Appends the raster triangles of a triangle with the projected corners `corners`: none if it
+/// covers no sample, one if it needs no clipping, a fan if it does.
+#[inline(always)]
+pub(crate) fn set_up_raster_triangles(
+    corners: [&ProjectedVertex; 3],
+    source: SourceTriangle,
+    viewport: &Viewport,
+    raster: &mut RasterOutput,
+) {
+    let (width, height) = (viewport.width, viewport.height);
+    let clip = corners.map(|v| v.clip);
     if corners.iter().all(|v| v.inside) {
         let screen = corners.map(|v| v.screen);
         let setup = sample_bounds(&screen, width, height, viewport.sample_reach)
@@ -984,7 +981,7 @@ fn add_raster_triangles(
 /// its front (counter-clockwise), negative from behind, zero edge-on. Unlike a screen-space
 /// area it is right even when corners lie behind the eye (Olano & Greer, homogeneous
 /// rasterization). Computed in `f64` so that nearly edge-on triangles get a reliable sign.
-fn homogeneous_facing(clip: [Vec4; 3]) -> f64 {
+pub(crate) fn homogeneous_facing(clip: [Vec4; 3]) -> f64 {
     let [a, b, c] = clip.map(|p| DVec3::new(p.x as f64, p.y as f64, p.w as f64));
     a.dot(b.cross(c))
 }

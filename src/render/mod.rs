@@ -21,6 +21,7 @@
 
 pub mod bin;
 pub mod clip;
+pub mod depth;
 pub mod frame;
 pub mod geometry;
 pub mod lanes;
@@ -214,7 +215,7 @@ fn render_frame(
     let started = Instant::now();
     progress.start_geometry();
     let pattern = raster::SamplePattern::new(scene.image.samples).unwrap_or(raster::SamplePattern::SINGLE);
-    let shadows = shadow::render_shadow_maps(scene, scene.camera.eye, shadow_buffers);
+    let shadows = shadow::render_shadow_maps(scene, scene.camera.eye, shadow_buffers, spare);
     let shadow_time = started.elapsed();
     let shadow_faces = shadows.iter().flatten().map(|map| map.face_count()).sum();
     let started = Instant::now();

@@ -35,7 +35,6 @@
 use crate::render::TILE_SIZE;
 use crate::render::bin::{RasterChunk, raster_id};
 use glam::Vec3;
-use std::cmp::Ordering;
 
 /// Fractional bits of the fixed-point screen coordinates.
 pub const SUBPIXEL_BITS: u32 = 8;
@@ -701,123 +700,30 @@ fn rasterize_single_sample(triangle: &RasterTriangle, id: u32, visibility: &mut 
     );
 }
 
-/// Rasterizes tile `tile` (the pixels `rect`) of a depth-only frame straight into `depth`, the
-/// image's rows from `rect.y0` on, `stride` apart (a band of a shadow map): the nearest depth
-/// at every pixel centre, as [`Visibility::rasterize`] finds it with one sample, and nothing
-/// else (no triangle numbers, no buffer of the tile's own). What the rect held before is
-/// replaced.
-///
-/// Only depth is kept, so the order of the triangles does not matter: the nearest of a set is
-/// the same value whatever the order (the one exception, `+0` against `−0` at the far plane,
-/// cannot happen in a shadow map, whose far plane lies beyond the scene). Front faces go first;
-/// then each back face is rasterized only if some block of texels it touches may still hold
-/// something farther than its nearest possible depth ([`depth_bound`]). Seen from a light, a
-/// closed mesh's back faces lie behind its front faces except along its outline, so most of
-/// them are skipped, and the depths are those of rasterizing every triangle in order.
-pub fn rasterize_depth_only(
-    rect: PixelRect,
-    chunks: &[RasterChunk],
-    tile: usize,
-    depth: &mut [f32],
-    stride: usize,
-) {
+/// The depth test of `triangle` at every pixel centre of `rect` (within a tile), straight into
+/// `depth`, the image's rows from `rect.y0` on, `stride` apart (a band of a shadow map): where
+/// the triangle is nearer than what a texel holds, the texel gets its depth, as in
+/// [`Visibility::rasterize`] with one sample, and nothing else is written (no triangle numbers,
+/// no buffer of the tile's own).
+#[inline]
+pub fn rasterize_depth_only(triangle: &RasterTriangle, rect: PixelRect, depth: &mut [f32], stride: usize) {
     debug_assert!(rect.width() <= TILE_SIZE);
-    let (x0, width) = (rect.x0 as usize, rect.width() as usize);
-    for row in 0..rect.height() as usize {
-        depth[row * stride + x0..row * stride + x0 + width].fill(f32::NEG_INFINITY);
-    }
     let rows = RowLayout { stride, x_origin: 0 };
-    let mut back_faces = false;
-    for chunk in chunks {
-        for &index in chunk.tile_triangles(tile) {
-            let triangle = &chunk.triangles[index as usize];
-            if triangle.back_facing {
-                back_faces = true;
-            } else {
-                depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
-            }
-        }
-    }
-    if !back_faces {
-        return;
-    }
-    let farthest = FarthestInBlocks::of(rect, depth, stride);
-    for chunk in chunks {
-        for &index in chunk.tile_triangles(tile) {
-            let triangle = &chunk.triangles[index as usize];
-            if triangle.back_facing && farthest.may_be_nearer(triangle, rect) {
-                depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
-            }
-        }
-    }
+    depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
 }
 
-/// A bound on the depth a triangle can write: no interpolated depth exceeds it. The depth at a
-/// covered centre is `((e₀·d₀ + e₁·d₁) + e₂·d₂)·(1/A)` with integer `eᵢ ≥ 0` summing to `A`,
-/// so exactly it is at most `max dᵢ`; each of the eight roundings on the way (the three
-/// conversions, two products, two sums, the reciprocal and the last product) adds at most a
-/// relative 2⁻²⁴ of `max |dᵢ|`, under 2⁻²⁰ in all.
+/// A bound on the depth a triangle with corner depths `depths` can write: no depth
+/// interpolated at a covered centre exceeds it. That depth is `((e₀·d₀ + e₁·d₁) + e₂·d₂)·(1/A)`
+/// with integer `eᵢ ≥ 0` summing to `A`, so exactly it is at most `max dᵢ`; the roundings on
+/// the way (three conversions, two products and two sums, the reciprocal of `A` and the last
+/// product) add under `8·2⁻²⁴·max |dᵢ|` to it, and the bound adds `2⁻²⁰·max |dᵢ|` (which the
+/// rounding of its own sum cannot halve).
 #[inline]
-fn depth_bound(triangle: &RasterTriangle) -> f32 {
-    let [d0, d1, d2] = triangle.depth;
+pub fn depth_bound(depths: [f32; 3]) -> f32 {
+    let [d0, d1, d2] = depths;
     let nearest = d0.max(d1).max(d2);
     let magnitude = d0.abs().max(d1.abs()).max(d2.abs());
     nearest + magnitude * (1.0 / (1 << 20) as f32)
-}
-
-/// Texels per side of the blocks of [`FarthestInBlocks`].
-const DEPTH_BLOCK: u32 = 8;
-/// Blocks per side of a tile.
-const TILE_BLOCKS: usize = (TILE_SIZE / DEPTH_BLOCK) as usize;
-
-/// The farthest depth in each 8×8 block of a tile's texels.
-struct FarthestInBlocks {
-    farthest: [f32; TILE_BLOCKS * TILE_BLOCKS],
-}
-
-impl FarthestInBlocks {
-    fn of(rect: PixelRect, depth: &[f32], stride: usize) -> Self {
-        let mut farthest = [f32::INFINITY; TILE_BLOCKS * TILE_BLOCKS];
-        for row in 0..rect.height() as usize {
-            let texels = &depth[row * stride + rect.x0 as usize..][..rect.width() as usize];
-            let blocks = &mut farthest[row / DEPTH_BLOCK as usize * TILE_BLOCKS..][..TILE_BLOCKS];
-            for (block, texels) in blocks.iter_mut().zip(texels.chunks(DEPTH_BLOCK as usize)) {
-                // `<` and not `f32::min`, so that the loop vectorises (no NaN is stored).
-                *block = texels
-                    .iter()
-                    .fold(*block, |least, &d| if d < least { d } else { least });
-            }
-        }
-        FarthestInBlocks { farthest }
-    }
-
-    /// Whether `triangle` may be nearer than what some texel of the blocks it touches holds
-    /// (if not, its depth test fails everywhere and it changes nothing).
-    #[inline]
-    fn may_be_nearer(&self, triangle: &RasterTriangle, rect: PixelRect) -> bool {
-        let Some(area) = triangle.bounds.intersect(&rect) else {
-            return false;
-        };
-        let bound = depth_bound(triangle);
-        let (bx0, bx1) = (
-            (area.x0 - rect.x0) / DEPTH_BLOCK,
-            (area.x1 - 1 - rect.x0) / DEPTH_BLOCK,
-        );
-        let (by0, by1) = (
-            (area.y0 - rect.y0) / DEPTH_BLOCK,
-            (area.y1 - 1 - rect.y0) / DEPTH_BLOCK,
-        );
-        (by0..=by1).any(|by| {
-            let row = &self.farthest[by as usize * TILE_BLOCKS..][..TILE_BLOCKS];
-            // "Not at least as far as the bound", NaN included.
-            row[bx0 as usize..=bx1 as usize].iter().any(|&farthest| {
-                !matches!(
-                    farthest.partial_cmp(&bound),
-                    Some(Ordering::Greater | Ordering::Equal)
-                )
-            })
-        })
-    }
 }
 
 /// Where the pixels of a rect lie in a depth buffer: pixel `(px, py)` at
@@ -1135,12 +1041,11 @@ mod tests {
     }
 
     /// The depth-only rasterizer (shadow maps) against the visibility buffer's depths, bit for
-    /// bit, on every tile of a lit frame (back faces culled, near-plane clipped) and of a
-    /// depth-only frame (nothing culled), written into a buffer whose stale values it must
-    /// replace.
+    /// bit, on every tile of a frame (back faces culled, near-plane clipped), written over
+    /// depths it must keep where they are nearer.
     #[test]
     fn depth_only_rasterizer_equals_the_visibility_buffers_depths() {
-        use crate::render::geometry::{SpareBuffers, build_depth_frame, build_frame};
+        use crate::render::geometry::build_frame;
         use crate::render::shade_fast;
         use crate::scene::{BackFaces, LightingModel};
         let mut scene = shade_fast::tests::scene(
@@ -1154,34 +1059,51 @@ mod tests {
             near: 4.9,
             far: 100.0,
         };
-        let lit = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 2]);
-        let depth_only = build_depth_frame(&scene, &scene.camera, 130, &mut SpareBuffers::default());
-        for frame in [lit, depth_only] {
-            let grid = frame.tiles;
-            let stride = grid.width as usize;
-            let mut depth = vec![f32::NAN; stride * grid.height as usize];
-            let mut covered = 0;
-            for (tile_row, band) in depth.chunks_mut(TILE_SIZE as usize * stride).enumerate() {
-                for column in 0..grid.columns as usize {
-                    let tile = tile_row * grid.columns as usize + column;
-                    rasterize_depth_only(grid.rect(tile), &frame.raster, tile, band, stride);
-                }
+        let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None; 2]);
+        let grid = frame.tiles;
+        let stride = grid.width as usize;
+        // Depths already there: a nearer one on every seventh texel.
+        let before = |x: usize, y: usize| {
+            if (x + 3 * y).is_multiple_of(7) {
+                0.9
+            } else {
+                f32::NEG_INFINITY
             }
-            for tile in 0..grid.count() {
-                let rect = grid.rect(tile);
-                let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
-                for y in rect.y0..rect.y1 {
-                    for x in rect.x0..rect.x1 {
-                        let expected =
-                            visibility.depth[((y - rect.y0) * rect.width() + x - rect.x0) as usize];
-                        let found = depth[y as usize * stride + x as usize];
-                        assert_eq!(found.to_bits(), expected.to_bits(), "pixel ({x}, {y})");
-                        covered += usize::from(expected > f32::NEG_INFINITY);
+        };
+        let mut depth: Vec<f32> = (0..stride * grid.height as usize)
+            .map(|i| before(i % stride, i / stride))
+            .collect();
+        for (tile_row, band) in depth.chunks_mut(TILE_SIZE as usize * stride).enumerate() {
+            for column in 0..grid.columns as usize {
+                let tile = tile_row * grid.columns as usize + column;
+                for chunk in &frame.raster {
+                    for &index in chunk.tile_triangles(tile) {
+                        let triangle = &chunk.triangles[index as usize];
+                        rasterize_depth_only(triangle, grid.rect(tile), band, stride);
                     }
                 }
             }
-            assert!(covered > 1500, "{covered} pixels covered");
         }
+        let (mut covered, mut kept) = (0, 0);
+        for tile in 0..grid.count() {
+            let rect = grid.rect(tile);
+            let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+            for y in rect.y0..rect.y1 {
+                for x in rect.x0..rect.x1 {
+                    let drawn = visibility.depth[((y - rect.y0) * rect.width() + x - rect.x0) as usize];
+                    let old = before(x as usize, y as usize);
+                    let expected = if drawn > old { drawn } else { old };
+                    let found = depth[y as usize * stride + x as usize];
+                    assert_eq!(found.to_bits(), expected.to_bits(), "pixel ({x}, {y})");
+                    covered += usize::from(drawn > f32::NEG_INFINITY);
+                    kept += usize::from(drawn > f32::NEG_INFINITY && old > drawn);
+                }
+            }
+        }
+        assert!(
+            covered > 1500 && kept > 100,
+            "{covered} pixels covered, {kept} kept"
+        );
     }
 
     /// The multisample depth test specialised per sample count against the general coverage

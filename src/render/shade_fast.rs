@@ -697,8 +697,12 @@ pub(crate) mod tests {
         pattern: SamplePattern,
         view: Option<crate::render::DebugView>,
     ) -> Frame {
-        let shadows =
-            crate::render::shadow::render_shadow_maps(scene, scene.camera.eye, &mut Default::default());
+        let shadows = crate::render::shadow::render_shadow_maps(
+            scene,
+            scene.camera.eye,
+            &mut Default::default(),
+            &mut Default::default(),
+        );
         build_frame(scene, pattern, view, shadows)
     }
 

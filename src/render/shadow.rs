@@ -1,7 +1,7 @@
 //! Shadow maps: the seeds' shadow term `S_i` (seed 001), one depth image per shadow-casting light.
 //!
-//! Each map is rendered with the same geometry stage and tiled rasterizer as the image (depth
-//! only: nothing lit, nothing culled), from the light's point of view:
+//! Each map is rendered by the depth pass (`depth`: the image's clipping, setup and coverage
+//! loop, depth only, nothing culled), from the light's point of view:
 //! - a directional light looks along its direction with an orthographic projection that just
 //!   contains the bounding sphere of every object;
 //! - a spot light looks down its axis with a perspective projection covering its cone (up to a
@@ -14,7 +14,10 @@
 //! on slopes without the detached shadows, "peter-panning", of a large depth offset), projected
 //! into the light's clip space, and compared with the (2r+1)² nearest texels
 //! (percentage-closer filtering): the share of texels that do not hold a nearer surface is the
-//! light's visibility, between 0 and 1. Points outside a map are lit.
+//! light's visibility, between 0 and 1. Points outside a map are lit. The lane lighting looks
+//! eight points up at once ([`ShadowMap::visibility_lanes`]: the projection and the tests that
+//! a point is in the map lane-wise, the block's compares per lane), with the bits of the
+//! one-point lookup.
 //!
 //! Depth is reversed (1 at the light's near plane), so "nearer to the light" is "greater".
 //! Everything is computed in the frame's eye-relative space, and the maps are deterministic
@@ -23,12 +26,10 @@
 use std::sync::Arc;
 
 use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
-use rayon::prelude::*;
 
-use crate::render::TILE_SIZE;
-use crate::render::geometry::{CameraSetup, SpareBuffers, build_depth_frame};
+use crate::render::depth::render_depth;
+use crate::render::geometry::{CameraSetup, SpareBuffers};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
-use crate::render::raster::rasterize_depth_only;
 use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
 
 /// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
@@ -49,6 +50,8 @@ struct ShadowFace {
     /// (orthographic).
     texel_size: f32,
     perspective: bool,
+    /// The last row of `clip_from_frame` is `(0, 0, 0, 1)` (an orthographic face): `w` is 1.
+    affine: bool,
     /// Where the light is (perspective) in the frame's eye-relative space, and where it looks.
     origin: Vec3,
     forward: Vec3,
@@ -80,12 +83,19 @@ impl ShadowMap {
     /// each lane has the bits of the one-point call. The projection into the light's view, the
     /// normal offset and the tests that the point is in the map are computed lane-wise; the
     /// (2r+1)² depth compares, which read texels wherever each point falls, lane after lane.
+    #[inline]
     pub fn visibility_lanes(&self, position: Vec3s, normal: Vec3s, to_light: Vec3s, wanted: Mask) -> Floats {
-        if let [face] = self.faces.as_slice() {
-            return face.visibility_lanes(position, normal, &self.settings, wanted);
+        match self.faces.as_slice() {
+            [face] => face.visibility_lanes(position, normal, &self.settings, wanted),
+            _ => self.cube_visibility_lanes(position, normal, to_light, wanted),
         }
-        // A cube: each lane's face picked as the one-point call picks it, then the lanes of each
-        // face that some lane looks at, together.
+    }
+
+    /// [`ShadowMap::visibility_lanes`] of a cube: each lane's face picked as the one-point call
+    /// picks it, then the lanes of each face that some lane looks at, together. Out of line, so
+    /// that the one-face lookup stays small where the lighting inlines it.
+    #[inline(never)]
+    fn cube_visibility_lanes(&self, position: Vec3s, normal: Vec3s, to_light: Vec3s, wanted: Mask) -> Floats {
         let directions = to_light.to_array();
         let faces: [Option<usize>; LANES] = std::array::from_fn(|lane| {
             wanted
@@ -177,6 +187,7 @@ impl ShadowFace {
     }
 
     /// [`ShadowFace::visibility`] lane by lane where `wanted` holds (1 elsewhere).
+    #[inline]
     fn visibility_lanes(
         &self,
         position: Vec3s,
@@ -227,10 +238,21 @@ impl ShadowFace {
                 + column(matrix.z_axis) * offset.z)
                 + Floats::splat(matrix.w_axis[axis] * 1.0)
         };
-        let (x, y, z, w) = (row(0), row(1), row(2), row(3));
-        // `w > 0` is false for NaN: the scalar test's `is_nan() || <= 0`, negated.
-        let in_front = w.gt(Floats::splat(0.0));
-        let ndc = Vec3s { x, y, z }.divide(w);
+        let clip = Vec3s {
+            x: row(0),
+            y: row(1),
+            z: row(2),
+        };
+        let (ndc, in_front) = if self.affine {
+            // `w = ((0·x + 0·y) + 0·z) + 1·1` is exactly 1 for a finite offset, and dividing by
+            // 1 changes nothing. A non-finite offset makes x, y and z non-finite too (`0·∞` and
+            // `a·∞` both are), which the test below turns away as the scalar test of `w` does.
+            (clip, Mask::ALL)
+        } else {
+            let w = row(3);
+            // `w > 0` is false for NaN: the scalar test's `is_nan() || <= 0`, negated.
+            (clip.divide(w), w.gt(Floats::splat(0.0)))
+        };
         let (one, minus_one) = (Floats::splat(1.0), Floats::splat(-1.0));
         // For finite values `|v| > 1` is `v > 1 ∨ v < −1`.
         let inside = ndc
@@ -263,13 +285,12 @@ impl ShadowFace {
     }
 }
 
-/// The arrays of the last frame's shadow maps and of their depth-only frames, to render the next
-/// frame's maps in (see `geometry::SpareBuffers`): a stream of frames then allocates nothing
-/// big for its maps after the first. Which arrays are reused changes no texel: every texel of a
-/// map is written by its tile.
+/// The texel arrays of the last frame's shadow maps, to render the next frame's maps in: a
+/// stream of frames then allocates nothing big for its maps after the first (their triangles are
+/// set up in the image's spare arrays, `geometry::SpareBuffers`). Which arrays are reused
+/// changes no texel: the depth pass writes every texel.
 #[derive(Default)]
 pub struct ShadowBuffers {
-    geometry: SpareBuffers,
     texels: Vec<Vec<f32>>,
 }
 
@@ -297,28 +318,111 @@ impl ShadowBuffers {
 }
 
 /// Renders the shadow map of every light that casts shadows (`None` for the others), in the
-/// eye-relative space of a frame whose eye is `frame_eye`, in the arrays of `buffers`.
+/// eye-relative space of a frame whose eye is `frame_eye`, in the arrays of `buffers` and
+/// `spare` (before the frame's geometry takes them).
 pub fn render_shadow_maps(
     scene: &Scene,
     frame_eye: DVec3,
     buffers: &mut ShadowBuffers,
+    spare: &mut SpareBuffers,
 ) -> Vec<Option<Arc<ShadowMap>>> {
     // The bounds read every vertex of the scene: computed on the first light that casts a
     // shadow, and never for a scene without shadows.
     let mut bounds = None;
+    let mut seen = None;
     scene
         .lights
         .iter()
         .map(|light| {
             let settings = light.shadow()?;
+            let seen: &Vec<BoundingSphere> = seen.get_or_insert_with(|| seen_bounds(scene));
+            if !lights_any(light, seen) {
+                return None;
+            }
             let bounds = *bounds.get_or_insert_with(|| bounding_sphere(&scene.objects));
-            let faces = light_views(light, bounds, settings.resolution)
-                .into_iter()
-                .map(|(camera, size)| render_face(scene, &camera, size, frame_eye, buffers))
-                .collect();
-            Some(Arc::new(ShadowMap { faces, settings }))
+            Some(Arc::new(render_map(
+                scene, light, settings, bounds, frame_eye, buffers, spare,
+            )))
         })
         .collect()
+}
+
+/// The shadow map of `light` with `settings`, fitted to the bounds of every object.
+fn render_map(
+    scene: &Scene,
+    light: &Light,
+    settings: ShadowSettings,
+    bounds: BoundingSphere,
+    frame_eye: DVec3,
+    buffers: &mut ShadowBuffers,
+    spare: &mut SpareBuffers,
+) -> ShadowMap {
+    let faces = light_views(light, bounds, settings.resolution)
+        .into_iter()
+        .map(|(camera, size)| render_face(scene, &camera, size, frame_eye, buffers, spare))
+        .collect();
+    ShadowMap { faces, settings }
+}
+
+/// The bounding spheres of the objects whose bounds reach into the camera's view volume: only
+/// points of those are ever lit (pixels, flat triangles and Gouraud vertices of triangles that
+/// cover a sample, constant colours that are shown), so only they can read a shadow map.
+fn seen_bounds(scene: &Scene) -> Vec<BoundingSphere> {
+    let camera = CameraSetup::new(
+        &scene.camera,
+        f64::from(scene.image.width) / f64::from(scene.image.height),
+    );
+    // The six planes of the clip volume, `|x| ≤ w`, `|y| ≤ w`, `0 ≤ z ≤ w`, in eye-relative
+    // world space.
+    let matrix = camera.clip_from_world;
+    let [x, y, z, w] = [0, 1, 2, 3].map(|row| matrix.row(row));
+    let planes = [w + x, w - x, w + y, w - y, z, w - z];
+    scene
+        .objects
+        .iter()
+        .map(|object| bounding_sphere(std::slice::from_ref(object)))
+        .filter(|sphere| {
+            let center = sphere.center - camera.eye;
+            // A margin for the rounding of positions to `f32` on the way.
+            let radius = sphere.radius * 1.001 + center.length() * 1e-6;
+            planes.iter().all(|plane| {
+                let normal = plane.truncate();
+                normal.dot(center) + plane.w >= -radius * normal.length()
+            })
+        })
+        .collect()
+}
+
+/// Whether `light` may light some point of the spheres `seen`, so that some lookup may read its
+/// shadow map: a spot light lights only its cone (elsewhere the lighting asks no visibility),
+/// the other lights every point that faces them.
+fn lights_any(light: &Light, seen: &[BoundingSphere]) -> bool {
+    let Light::Spot {
+        position,
+        direction,
+        cutoff_degrees,
+        ..
+    } = *light
+    else {
+        return !seen.is_empty();
+    };
+    let axis = direction.as_dvec3().normalize_or_zero();
+    if axis == DVec3::ZERO {
+        return !seen.is_empty();
+    }
+    // The lighting compares `f32` cosines: a margin of a thousandth of a radian covers their
+    // rounding.
+    let cone = f64::from(cutoff_degrees).to_radians() + 1e-3;
+    seen.iter().any(|sphere| {
+        let offset = sphere.center - position;
+        let distance = offset.length();
+        let radius = sphere.radius * 1.001;
+        if distance <= radius {
+            return true;
+        }
+        let angle = (offset.dot(axis) / distance).clamp(-1.0, 1.0).acos();
+        angle <= cone + (radius / distance).asin()
+    })
 }
 
 /// Any unit vector not parallel to `forward`, for a camera's `up`.
@@ -384,7 +488,7 @@ fn lit_in_block<const SIDE: usize>(map: &[f32], first: usize, stride: usize, dep
 }
 
 /// The cameras (and map sizes) a light's shadow map is rendered from.
-fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32) -> Vec<(Camera, u32)> {
+pub(crate) fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32) -> Vec<(Camera, u32)> {
     let cube = |position: DVec3| -> Vec<(Camera, u32)> {
         let reach = (bounds.center - position).length() + bounds.radius;
         [DVec3::X, -DVec3::X, DVec3::Y, -DVec3::Y, DVec3::Z, -DVec3::Z]
@@ -454,24 +558,11 @@ fn render_face(
     size: u32,
     frame_eye: DVec3,
     buffers: &mut ShadowBuffers,
+    spare: &mut SpareBuffers,
 ) -> ShadowFace {
-    let frame = build_depth_frame(scene, camera, size, &mut buffers.geometry);
-    let grid = frame.tiles;
-    // As the image's tiles are: bands of tile rows in parallel, each band's tiles in order,
-    // each tile rasterized straight into the band's rows (depth only: no triangle numbers, no
-    // tile buffer, nothing copied). Every texel is written by its tile.
     let side = size as usize;
     let mut depth = buffers.texels(side * side);
-    depth
-        .par_chunks_mut(TILE_SIZE as usize * side)
-        .enumerate()
-        .for_each(|(tile_row, band)| {
-            for column in 0..grid.columns as usize {
-                let index = tile_row * grid.columns as usize + column;
-                rasterize_depth_only(grid.rect(index), &frame.raster, index, band, side);
-            }
-        });
-    buffers.geometry.keep(frame);
+    render_depth(scene, camera, size, &mut depth, spare);
     let setup = CameraSetup::new(camera, 1.0);
     let clip_from_frame = setup.clip_from_world * DMat4::from_translation(frame_eye - camera.eye);
     let (texel_size, perspective) = match camera.projection {
@@ -483,6 +574,7 @@ fn render_face(
     };
     ShadowFace {
         clip_from_frame: clip_from_frame.as_mat4(),
+        affine: clip_from_frame.as_mat4().row(3) == glam::Vec4::W,
         size,
         depth,
         texel_size,
@@ -493,13 +585,13 @@ fn render_face(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// A shadow-casting light of each kind and map shape: directional (orthographic), a narrow
     /// spot (one perspective face), a wide spot and a point light (six cube faces); filters of
     /// radius 0, 1 and 2.
-    fn shadowed_lights() -> Vec<Light> {
+    pub(crate) fn shadowed_lights() -> Vec<Light> {
         use crate::scene::Attenuation;
         let settings = |filter_radius| {
             Some(ShadowSettings {
@@ -552,7 +644,12 @@ mod tests {
         let mut scene = scene(LightingModel::Phong, Vec3::ONE, BackFaces::Lit, LIGHTS[0]);
         scene.lights = shadowed_lights();
         let eye = scene.camera.eye;
-        let maps = render_shadow_maps(&scene, eye, &mut ShadowBuffers::default());
+        let maps = render_shadow_maps(
+            &scene,
+            eye,
+            &mut ShadowBuffers::default(),
+            &mut Default::default(),
+        );
         let frame = crate::render::geometry::build_frame(
             &scene,
             crate::render::raster::SamplePattern::SINGLE,
@@ -668,6 +765,105 @@ mod tests {
                 outcomes[0] > 20 && outcomes[1] >= partial_least && outcomes[2] > 20,
                 "{light:?}: dark, partly lit, lit: {outcomes:?}"
             );
+        }
+    }
+
+    /// A light that lights nothing the camera may see gets no map, and the image is the one
+    /// every map gives, bit for bit: spot lights aimed beside the view and behind the camera
+    /// are skipped, the others not, in every shading mode.
+    #[test]
+    fn maps_no_visible_point_reads_are_skipped_and_change_nothing() {
+        use crate::render::raster::{SamplePattern, rasterize_tile};
+        use crate::render::shade::{TileScratch, TileTarget, shade_tile};
+        use crate::render::shade_fast::tests::{LIGHTS, scene};
+        use crate::scene::{Attenuation, BackFaces, LightingModel, Shading};
+        let mut scene = scene(LightingModel::Phong, Vec3::ONE, BackFaces::Lit, LIGHTS[2]);
+        let spot = |position: DVec3, direction: Vec3, cutoff_degrees: f32| Light::Spot {
+            position,
+            direction: direction.normalize(),
+            color: Vec3::splat(0.5),
+            cutoff_degrees,
+            exponent: 1.0,
+            attenuation: Attenuation::NONE,
+            shadow: Some(ShadowSettings {
+                resolution: 64,
+                bias: 1.0,
+                filter_radius: 1,
+            }),
+        };
+        let eye = scene.camera.eye;
+        scene.lights.extend([
+            // Beside the spheres, aimed away from them and from the view.
+            spot(DVec3::new(6.0, 0.0, 0.0), Vec3::X, 20.0),
+            // Behind the camera, aimed back at the scene through it: lights what it sees.
+            spot(eye - DVec3::new(0.0, 2.0, 0.0), Vec3::new(0.0, 1.0, -0.2), 30.0),
+            // Behind the camera, aimed further back: a wide cone (the cube) that lights nothing.
+            spot(eye - DVec3::new(0.0, 2.0, 0.0), -Vec3::Y, 70.0),
+        ]);
+        let faces =
+            |maps: &[Option<Arc<ShadowMap>>]| maps.iter().flatten().map(|m| m.face_count()).sum::<usize>();
+        for shading in [Shading::Phong, Shading::Gouraud, Shading::Flat, Shading::Constant] {
+            for object in &mut scene.objects {
+                object.shading = shading;
+            }
+            let mut spare = SpareBuffers::default();
+            let maps = render_shadow_maps(&scene, eye, &mut ShadowBuffers::default(), &mut spare);
+            let skipped: Vec<bool> = maps.iter().map(Option::is_none).collect();
+            assert_eq!(skipped, [false, false, true, false, true], "{shading:?}");
+            let bounds = bounding_sphere(&scene.objects);
+            let every: Vec<Option<Arc<ShadowMap>>> = scene
+                .lights
+                .iter()
+                .map(|light| {
+                    let settings = light.shadow().expect("every light casts shadows");
+                    let mut buffers = ShadowBuffers::default();
+                    Some(Arc::new(render_map(
+                        &scene,
+                        light,
+                        settings,
+                        bounds,
+                        eye,
+                        &mut buffers,
+                        &mut spare,
+                    )))
+                })
+                .collect();
+            assert!(faces(&every) > faces(&maps));
+            let (image, _) = crate::render::render(&scene, &Default::default());
+            let frame = crate::render::geometry::build_frame(&scene, SamplePattern::SINGLE, None, every);
+            let width = scene.image.width as usize;
+            let mut color = vec![Vec3::NAN; image.color.len()];
+            let mut covered = vec![false; image.color.len()];
+            let mut scratch = TileScratch::default();
+            for tile in 0..frame.tiles.count() {
+                let rect = frame.tiles.rect(tile);
+                let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+                let start = rect.y0 as usize * width;
+                let end = start + rect.height() as usize * width;
+                let mut target = TileTarget {
+                    color: &mut color[start..end],
+                    covered: &mut covered[start..end],
+                    stride: width,
+                };
+                shade_tile(
+                    &frame,
+                    &visibility,
+                    scene.image.background,
+                    &mut target,
+                    &mut scratch,
+                );
+            }
+            let bits = |colors: &[Vec3]| {
+                colors
+                    .iter()
+                    .map(|c| c.to_array().map(f32::to_bits))
+                    .collect::<Vec<_>>()
+            };
+            assert!(
+                bits(&color) == bits(&image.color),
+                "{shading:?}: the images differ"
+            );
+            assert!(covered.iter().filter(|&&c| c).count() > 1000);
         }
     }
 
