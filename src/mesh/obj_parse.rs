@@ -562,8 +562,18 @@ fn parse_corner(word: &str, defined: [usize; 3]) -> Result<Corner, String> {
         ("texture coordinate", "texture coordinates"),
         ("normal", "normals"),
     ];
-    let malformed = || format!("malformed face vertex '{word}'");
     let bytes = word.as_bytes();
+    // The usual corner of a scan, a position index alone (`5123`), read directly; anything
+    // else (and an index out of range, for its message) takes the general path below.
+    if bytes.len() <= 18 && bytes.iter().all(u8::is_ascii_digit) {
+        let index = bytes
+            .iter()
+            .fold(0usize, |index, &digit| 10 * index + usize::from(digit - b'0'));
+        if (1..=defined[0]).contains(&index) {
+            return Ok([(index - 1) as u32, ABSENT, ABSENT]);
+        }
+    }
+    let malformed = || format!("malformed face vertex '{word}'");
     let mut parts: [&[u8]; 3] = [b""; 3];
     let mut part_count = 0;
     let mut start = 0;
@@ -668,40 +678,31 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
         1e18, 1e19, 1e20, 1e21, 1e22,
     ];
-    const MANTISSA_LIMIT: u64 = 1 << 53;
     let (negative, start) = match bytes.first() {
         Some(b'-') => (true, 1),
         Some(b'+') => (false, 1),
         _ => (false, 0),
     };
-    let mut i = start;
+    // Up to 19 digits fit in a u64 (more, leading zeros included, are left to `str::parse`).
     let mut mantissa: u64 = 0;
-    // Below 2⁵³ before a digit is added, so `10·m + 9` cannot overflow.
-    let add_digit = |digit: u8, mantissa: &mut u64| {
-        *mantissa = *mantissa * 10 + u64::from(digit - b'0');
-        *mantissa < MANTISSA_LIMIT
-    };
+    let mut i = start;
     while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
-        if !add_digit(digit, &mut mantissa) {
-            return None;
-        }
+        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
         i += 1;
     }
-    let mut digit_count = i - start;
+    let integer_digits = i - start;
     let mut exponent: i64 = 0;
     if bytes.get(i) == Some(&b'.') {
         i += 1;
         let fraction_start = i;
         while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
-            if !add_digit(digit, &mut mantissa) {
-                return None;
-            }
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
             i += 1;
         }
         exponent = -((i - fraction_start) as i64);
-        digit_count += i - fraction_start;
     }
-    if digit_count == 0 {
+    let digit_count = integer_digits + exponent.unsigned_abs() as usize;
+    if digit_count == 0 || digit_count > 19 {
         return None;
     }
     if let Some(b'e' | b'E') = bytes.get(i) {
@@ -728,7 +729,7 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
         }
         exponent += if exponent_negative { -written } else { written };
     }
-    if i != bytes.len() || exponent.unsigned_abs() > 22 {
+    if i != bytes.len() || mantissa >= 1 << 53 || exponent.unsigned_abs() > 22 {
         return None;
     }
     let scale = POWERS_OF_TEN[exponent.unsigned_abs() as usize];
