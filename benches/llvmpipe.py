@@ -139,7 +139,7 @@ def compare(args, work):
     for stem, scene in SCENES:
         if not selected(stem, args.scenes):
             continue
-        for mode in MODES:
+        for mode in args.modes:
             for threads in args.threads:
                 ours, theirs, ours_json = [], [], None
                 for _ in range(args.repeats):
@@ -251,7 +251,7 @@ def compare_meshes(args, work):
     rows = []
     for stem, scene in meshes:
         anchor = os.path.join(ROOT, "benches", "anchors", stem + ".json")
-        for mode in MODES:
+        for mode in args.modes:
             for threads in args.threads:
                 ours, theirs, info = [], [], None
                 for _ in range(args.repeats):
@@ -320,12 +320,16 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--frames", type=int, default=10)
     parser.add_argument("--threads", default="2,1", help="comma-separated thread counts")
+    parser.add_argument("--modes", default=",".join(MODES),
+                        help="comma-separated shading modes of the anchor and real-mesh rows (the feature "
+                        "scenes keep their own)")
     parser.add_argument("--scaling", action="store_true", help="also the triangle-count and resolution sweeps")
     parser.add_argument("--no-compare", action="store_true", help="skip the llvmpipe comparison")
     parser.add_argument("--scenes", help="comma-separated anchor names or shell patterns to compare "
                         "(`features`: every feature scene; `meshes`: every real-mesh scene); default: all")
     args = parser.parse_args()
     args.threads = [int(t) for t in args.threads.split(",")]
+    args.modes = args.modes.split(",")
     args.scenes = args.scenes.split(",") if args.scenes else None
     args.anchors = os.path.abspath(args.anchors)
     if not os.path.exists(LAMPSHADE):
