@@ -19,8 +19,14 @@ frame over the mean of those two S1 frames; the table gives the medians over the
 scenes with the ground plane also get their ratio to `s1_ground` of the same repeat ("x ground"):
 the same geometry and pixels, so that is the cost of the spot light or the shadow map alone.
 llvmpipe has no shadows in flat and gouraud, so the shadow scenes run in phong and blinn only.
+The real-mesh scenes (`s4_*`: the koala and nefertiti scans, Keenan Crane's cow Spot, the glTF Duck
+and nefertiti refined to a million triangles; their anchor JSON is in benches/anchors/, written with
+the scenes by benches/anchors/gen_real_mesh_scenes.py) get a table with our stage times and
+llvmpipe's frames compared with ours, and a table of our load times; the meshes that are generated
+rather than committed are written by benches/gen_meshes.py first when missing.
 `--scenes` selects rows by anchor name (comma-separated shell patterns; `features` stands for every
-feature scene), e.g. `--scenes features` or `--scenes s1_two_spheres,s1_spot`.
+feature scene, `meshes` for every real-mesh scene), e.g. `--scenes features` or
+`--scenes s1_two_spheres,s1_spot` or `--scenes meshes`.
 
 This is a benchmark: it prints figures and asserts nothing. Absolute times drift between runs on
 shared machines (the anchor README measured 1.05-1.4x); the ratios of interleaved runs are what to
@@ -60,6 +66,22 @@ FEATURE_SCENES = [
     ("s1_textured", "scenes/bench/textured.ron", MODES, None),
 ]
 PLAIN_S1 = ("s1_two_spheres", "scenes/bench/two-spheres.ron")
+# Real meshes (anchor JSON stem in benches/anchors/, our scene file): scans, Spot, the glTF Duck and
+# nefertiti refined to a million triangles, written by benches/anchors/gen_real_mesh_scenes.py.
+# cow-textured is cow with its texture, which glref cannot put on an OBJ: it is timed against
+# llvmpipe's untextured cow.
+MESH_SCENES = [
+    ("s4_koala", "scenes/bench/koala.ron"),
+    ("s4_koala_far", "scenes/bench/koala-far.ron"),
+    ("s4_nefertiti", "scenes/bench/nefertiti.ron"),
+    ("s4_cow", "scenes/bench/cow.ron"),
+    ("s4_cow_close", "scenes/bench/cow-close.ron"),
+    ("s4_cow", "scenes/bench/cow-textured.ron"),
+    ("s4_duck", "scenes/bench/duck.ron"),
+    ("s4_nefertiti_1m", "benches/scenes/nefertiti-1m.ron"),
+]
+# The meshes benches/gen_meshes.py writes (not committed).
+GENERATED_MESHES = ["benches/meshes/nefertiti-1m.obj", "benches/meshes/duck.obj"]
 # CPU used by other processes during each llvmpipe run's timed frames (glref's `foreign_cores`).
 FOREIGN_CORES = []
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -77,14 +99,17 @@ def build_glref(anchors):
     return work
 
 
-def glref_median(work, stem, mode, threads, frames):
-    out = os.path.join(work, "frame.png")
+def glref_median(work, scene, mode, threads, frames, out=None):
+    """llvmpipe's median frame of `scene` (an anchor stem in the anchor folder's scenes/, or a
+    path to a JSON file), writing its last frame to `out`."""
+    out = out or os.path.join(work, "frame.png")
     result = os.path.join(work, "result.jsonl")
     if os.path.exists(result):
         os.remove(result)
     env = dict(os.environ, LP_NUM_THREADS=str(threads))
+    path = scene if scene.endswith(".json") else os.path.join(work, "scenes", scene + ".json")
     subprocess.run(
-        [os.path.join(work, "glref"), os.path.join(work, "scenes", stem + ".json"), "--mode", mode,
+        [os.path.join(work, "glref"), path, "--mode", mode,
          "--frames", str(frames), "--warmup", "3", "--out", out, "--json", result],
         check=True, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     with open(result) as lines:
@@ -102,7 +127,9 @@ def lampshade_bench(scene, modes, threads, frames, extra=()):
 
 def selected(stem, patterns):
     return patterns is None or any(
-        (pattern == "features" and stem in {f[0] for f in FEATURE_SCENES}) or fnmatch.fnmatch(stem, pattern)
+        (pattern == "features" and stem in {f[0] for f in FEATURE_SCENES})
+        or (pattern == "meshes" and stem in {m[0] for m in MESH_SCENES})
+        or fnmatch.fnmatch(stem, pattern)
         for pattern in patterns)
 
 
@@ -112,7 +139,7 @@ def compare(args, work):
     for stem, scene in SCENES:
         if not selected(stem, args.scenes):
             continue
-        for mode in MODES:
+        for mode in args.modes:
             for threads in args.threads:
                 ours, theirs, ours_json = [], [], None
                 for _ in range(args.repeats):
@@ -209,6 +236,55 @@ def compare_features(args, work):
           f"(max {max(FOREIGN_CORES):.2f}) during llvmpipe's timed frames ({len(FOREIGN_CORES)} runs).")
 
 
+def compare_meshes(args, work):
+    """The real-mesh scenes: both renderers interleaved as in `compare`, llvmpipe's frames saved
+    for the image columns, our stage times, and our load time (median of 5 loads, MB/s)."""
+    meshes = [m for m in MESH_SCENES if selected(m[0], args.scenes)]
+    if not meshes:
+        return
+    if any(not os.path.exists(os.path.join(ROOT, mesh)) for mesh in GENERATED_MESHES):
+        subprocess.run([sys.executable, os.path.join(ROOT, "benches", "gen_meshes.py")], check=True)
+    frames = os.path.join(work, "mesh-frames")
+    os.makedirs(frames, exist_ok=True)
+    load_before = os.getloadavg()[0]
+    del FOREIGN_CORES[:]
+    rows = []
+    for stem, scene in meshes:
+        anchor = os.path.join(ROOT, "benches", "anchors", stem + ".json")
+        for mode in args.modes:
+            for threads in args.threads:
+                ours, theirs, info = [], [], None
+                for _ in range(args.repeats):
+                    out = os.path.join(frames, f"{stem}__{mode}.png")
+                    theirs.append(glref_median(work, anchor, mode, threads, args.frames, out))
+                    info = lampshade_bench(scene, [mode], threads, args.frames, ["--anchors", frames])[0]
+                    ours.append(info["median_ms"])
+                rows.append((scene, info, mode, threads, statistics.median(ours), statistics.median(theirs)))
+                print(f"{scene} {mode} {threads}: ours {statistics.median(ours):.1f} ms, "
+                      f"llvmpipe {statistics.median(theirs):.1f} ms", file=sys.stderr)
+    print("\n| scene | triangles | mode | threads | lampshade ms | llvmpipe ms | ratio | geometry ms | raster ms* | "
+          "shade ms* | cores | mean abs diff | max abs diff | pixels > 2/255 |")
+    print("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for scene, info, mode, threads, ours, theirs in rows:
+        name = os.path.splitext(os.path.basename(scene))[0]
+        print(f"| {name} | {info['triangles']:,} | {mode} | {threads} | {ours:.1f} | {theirs:.1f} | "
+              f"{ours / theirs:.2f} | {info['geometry_ms']:.1f} | {info['raster_thread_ms']:.1f} | "
+              f"{info['shade_thread_ms']:.1f} | {info.get('cores_busy') or float('nan'):.2f} | {image_columns(info)} |")
+    print(f"\nLoad average (1 min) {load_before:.2f} before the runs, {os.getloadavg()[0]:.2f} after; "
+          f"other processes used a median of {statistics.median(FOREIGN_CORES):.2f} cores "
+          f"(max {max(FOREIGN_CORES):.2f}) during llvmpipe's timed frames ({len(FOREIGN_CORES)} runs).")
+    print("\n| scene | bytes read | threads | load ms (median of 5) | MB/s |")
+    print("|---|---:|---:|---:|---:|")
+    for _, scene in meshes:
+        for threads in args.threads:
+            command = [LAMPSHADE, "bench", scene, "--json", "--frames", "1", "--warmup", "0", "--loads", "5",
+                       "--modes", "flat", "--threads", str(threads)]
+            output = subprocess.run(command, check=True, capture_output=True, text=True, cwd=ROOT).stdout
+            load = next(json.loads(line) for line in output.splitlines() if '"stage":"load"' in line)
+            name = os.path.splitext(os.path.basename(scene))[0]
+            print(f"| {name} | {load['bytes_read']:,} | {threads} | {load['median_ms']:.1f} | {load['mb_per_s']:.0f} |")
+
+
 def scaling(args):
     folder = tempfile.mkdtemp(prefix="lampshade-scaling-")
     print("\n| triangles | sphere(N) | median ms (phong, 1920×1080) | Mtri/s | peak MiB | bytes per triangle |")
@@ -244,12 +320,16 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--frames", type=int, default=10)
     parser.add_argument("--threads", default="2,1", help="comma-separated thread counts")
+    parser.add_argument("--modes", default=",".join(MODES),
+                        help="comma-separated shading modes of the anchor and real-mesh rows (the feature "
+                        "scenes keep their own)")
     parser.add_argument("--scaling", action="store_true", help="also the triangle-count and resolution sweeps")
     parser.add_argument("--no-compare", action="store_true", help="skip the llvmpipe comparison")
     parser.add_argument("--scenes", help="comma-separated anchor names or shell patterns to compare "
-                        "(`features`: every feature scene); default: all")
+                        "(`features`: every feature scene; `meshes`: every real-mesh scene); default: all")
     args = parser.parse_args()
     args.threads = [int(t) for t in args.threads.split(",")]
+    args.modes = args.modes.split(",")
     args.scenes = args.scenes.split(",") if args.scenes else None
     args.anchors = os.path.abspath(args.anchors)
     if not os.path.exists(LAMPSHADE):
@@ -258,6 +338,7 @@ def main():
         work = build_glref(args.anchors)
         compare(args, work)
         compare_features(args, work)
+        compare_meshes(args, work)
         shutil.rmtree(work, ignore_errors=True)
     if args.scaling:
         scaling(args)

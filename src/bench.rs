@@ -580,6 +580,17 @@ mod tests {
     }
 
     #[test]
+    fn bytes_read_count_each_file_once() {
+        let folder = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let a = folder.path().join("a.obj");
+        let b = folder.path().join("b.mtl");
+        std::fs::write(&a, [0u8; 1000]).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::write(&b, [0u8; 24]).unwrap_or_else(|e| panic!("{e}"));
+        let missing = folder.path().join("missing.png");
+        assert_eq!(bytes_of_files(&[a.clone(), b, a, missing]), 1024);
+    }
+
+    #[test]
     fn process_cpu_time_grows_with_work() {
         let Some(before) = process_cpu_time() else {
             return; // not Linux

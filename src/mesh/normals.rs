@@ -225,10 +225,8 @@ pub fn compute_vertex_normals(
     crease_angle_degrees: f32,
 ) -> Mesh {
     let corners = CornersByPosition::new(positions, triangles);
-    let corner_normals = corner_normals(positions, triangles, &corners, crease_angle_degrees);
-    split_vertices(positions, attributes, triangles, &corners, |corner| {
-        corner_normals[corner]
-    })
+    let normals = corner_normals(positions, triangles, &corners, crease_angle_degrees);
+    split_vertices(positions, attributes, triangles, &corners, |slot| normals[slot])
 }
 
 /// A mesh whose file-provided normals were checked, with how many had to be replaced.
@@ -285,10 +283,10 @@ pub fn repair_normals(
     } else {
         let corners = CornersByPosition::new(positions, triangles);
         let computed = corner_normals(positions, triangles, &corners, crease_angle_degrees);
-        split_vertices(positions, attributes, triangles, &corners, |corner| {
-            let vertex = triangles[corner / 3][corner % 3] as usize;
+        split_vertices(positions, attributes, triangles, &corners, |slot| {
+            let vertex = corners.vertex_at(triangles, slot) as usize;
             if is_broken[vertex] {
-                computed[corner]
+                computed[slot]
             } else {
                 file_normal(vertex)
             }
@@ -327,53 +325,80 @@ impl PositionGroups {
 
 /// The triangle corners (`3 · triangle + k`) sorted by the position group of their vertex
 /// (a counting sort, so each group's corners stay in corner order): what the per-position
-/// passes read.
+/// passes read. A corner's place in this order is its *slot*; per-corner results are kept by
+/// slot. Corners are `u32` (a mesh has fewer than 2³² corners: its indices are `u32`); the
+/// arrays per corner are most of the memory computing normals takes, and on a mesh of a
+/// million triangles fresh memory costs as much as the arithmetic (the kernel zeroes every new
+/// page).
 struct CornersByPosition {
-    /// The corners of group g are `corners_by_group[group_start[g]..group_start[g + 1]]`.
-    group_start: Vec<usize>,
-    corners_by_group: Vec<usize>,
+    /// The slots of group g are `group_start[g]..group_start[g + 1]`.
+    group_start: Vec<u32>,
+    /// The corner at each slot.
+    corners_by_group: Vec<u32>,
+    /// The slot of each corner.
+    slot_of_corner: Vec<u32>,
 }
 
 impl CornersByPosition {
     fn new(positions: &[Vec3], triangles: &[[u32; 3]]) -> Self {
         let groups = PositionGroups::new(positions);
         let corner_count = triangles.len() * 3;
-        let corner_group = |corner: usize| groups.of(triangles[corner / 3][corner % 3]) as usize;
-        let mut group_start = vec![0usize; groups.group_count + 1];
-        for corner in 0..corner_count {
-            group_start[corner_group(corner) + 1] += 1;
+        let corner_groups = || {
+            triangles
+                .iter()
+                .flatten()
+                .map(|&vertex| groups.of(vertex) as usize)
+        };
+        let mut group_start = vec![0u32; groups.group_count + 1];
+        for group in corner_groups() {
+            group_start[group + 1] += 1;
         }
         for group in 0..groups.group_count {
             group_start[group + 1] += group_start[group];
         }
         let mut next_slot = group_start.clone();
-        let mut corners_by_group = vec![0usize; corner_count];
-        for corner in 0..corner_count {
-            let slot = &mut next_slot[corner_group(corner)];
-            corners_by_group[*slot] = corner;
-            *slot += 1;
+        let mut corners_by_group = vec![0u32; corner_count];
+        let mut slot_of_corner = vec![0u32; corner_count];
+        for (corner, group) in corner_groups().enumerate() {
+            let slot = next_slot[group];
+            next_slot[group] += 1;
+            corners_by_group[slot as usize] = corner as u32;
+            slot_of_corner[corner] = slot;
         }
         CornersByPosition {
             group_start,
             corners_by_group,
+            slot_of_corner,
         }
     }
 
-    /// Calls `per_group(corners, outputs, scratch)` for every group with its corners and
-    /// their slots of `sorted` (one per corner, in the sorted order), in parallel over blocks
-    /// of whole groups with about equal numbers of corners; `scratch` is the block's own.
+    fn corner_count(&self) -> usize {
+        self.corners_by_group.len()
+    }
+
+    /// The vertex of the corner at `slot`.
+    fn vertex_at(&self, triangles: &[[u32; 3]], slot: usize) -> u32 {
+        let corner = self.corners_by_group[slot] as usize;
+        triangles[corner / 3][corner % 3]
+    }
+
+    /// Calls `per_group(first_slot, corners, outputs, scratch)` for every group with its first
+    /// slot, its corners and their outputs (`sorted` holds one per slot), in parallel over
+    /// blocks of whole groups with about equal numbers of corners; `scratch` is the block's
+    /// own.
     fn for_each_group<T: Send, S: Default>(
         &self,
         sorted: &mut [T],
-        per_group: impl Fn(&[usize], &mut [T], &mut S) + Sync,
+        per_group: impl Fn(usize, &[u32], &mut [T], &mut S) + Sync,
     ) {
-        let corner_count = self.corners_by_group.len();
+        let corner_count = self.corner_count();
         let group_count = self.group_start.len() - 1;
         let block_count = if corner_count < PARALLEL_THRESHOLD {
             1
         } else {
             4 * rayon::current_num_threads()
         };
+        let start = |group: usize| self.group_start[group] as usize;
         let mut blocks = Vec::with_capacity(block_count);
         let mut rest = sorted;
         let mut first_group = 0;
@@ -384,22 +409,26 @@ impl CornersByPosition {
                 // The first group starting at or after this block's share of the corners.
                 let wanted_end = corner_count * block / block_count;
                 self.group_start
-                    .partition_point(|&start| start < wanted_end)
+                    .partition_point(|&slot| (slot as usize) < wanted_end)
                     .max(first_group)
             };
-            let length = self.group_start[end_group] - self.group_start[first_group];
-            let (mine, after) = rest.split_at_mut(length);
+            let (mine, after) = rest.split_at_mut(start(end_group) - start(first_group));
             blocks.push((first_group..end_group, mine));
             rest = after;
             first_group = end_group;
         }
         let run_block = |(groups, outputs): (Range<usize>, &mut [T])| {
-            let offset = self.group_start[groups.start];
+            let offset = start(groups.start);
             let mut scratch = S::default();
             for group in groups {
-                let slots = self.group_start[group]..self.group_start[group + 1];
+                let slots = start(group)..start(group + 1);
                 let group_outputs = &mut outputs[slots.start - offset..slots.end - offset];
-                per_group(&self.corners_by_group[slots], group_outputs, &mut scratch);
+                per_group(
+                    slots.start,
+                    &self.corners_by_group[slots],
+                    group_outputs,
+                    &mut scratch,
+                );
             }
         };
         if block_count == 1 {
@@ -434,7 +463,8 @@ pub(super) fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
 /// calling thread: rayon's task set-up would cost more than the work.
 const PARALLEL_THRESHOLD: usize = 4096;
 
-/// The normal of every triangle corner (`3 · triangle + k`), per the module documentation.
+/// The normal of every triangle corner, per the module documentation, by slot
+/// ([`CornersByPosition`]).
 ///
 /// Each triangle's face normal and angles, and each position's corner normals, depend on
 /// nothing else, so both passes run in parallel with the serial arithmetic (the sums over a
@@ -445,7 +475,6 @@ fn corner_normals(
     corners: &CornersByPosition,
     crease_angle_degrees: f32,
 ) -> Vec<Vec3> {
-    let corner_count = triangles.len() * 3;
     let face_and_angles = |triangle: &[u32; 3]| {
         let [a, b, c] = triangle.map(|vertex| positions[vertex as usize]);
         let face = face_normal(a, b, c);
@@ -467,21 +496,15 @@ fn corner_normals(
     };
     let faces = CornerFaces { faces: &faces };
 
-    // The normals in the sorted order, computed in blocks of whole groups, then put back in
-    // corner order.
     let crease_cosine = crease_angle_degrees.clamp(0.0, 180.0).to_radians().cos() - CREASE_COSINE_TOLERANCE;
-    let mut sorted_normals = vec![Vec3::ZERO; corner_count];
+    let mut normals = vec![Vec3::ZERO; corners.corner_count()];
     corners.for_each_group(
-        &mut sorted_normals,
-        |group_corners, normals, crease_sums: &mut Vec<Vec3>| {
+        &mut normals,
+        |_, group_corners, normals, crease_sums: &mut Vec<Vec3>| {
             normals_at_position(group_corners, faces, crease_cosine, crease_sums);
             normals.copy_from_slice(crease_sums);
         },
     );
-    let mut normals = vec![Vec3::ZERO; corner_count];
-    for (&corner, &normal) in corners.corners_by_group.iter().zip(&sorted_normals) {
-        normals[corner] = normal;
-    }
     normals
 }
 
@@ -493,19 +516,19 @@ struct CornerFaces<'a> {
 
 impl CornerFaces<'_> {
     /// The face normal of the corner's triangle (zero when degenerate).
-    fn face(self, corner: usize) -> Vec3 {
-        self.faces[corner / 3].0
+    fn face(self, corner: u32) -> Vec3 {
+        self.faces[corner as usize / 3].0
     }
 
     /// The triangle's interior angle at the corner: the corner's weight.
-    fn weight(self, corner: usize) -> f32 {
-        self.faces[corner / 3].1[corner % 3]
+    fn weight(self, corner: u32) -> f32 {
+        self.faces[corner as usize / 3].1[corner as usize % 3]
     }
 }
 
 /// The normals of the corners of one position (in the order given), per the module
 /// documentation, into `normals` (cleared first).
-fn normals_at_position(corners: &[usize], faces: CornerFaces, crease_cosine: f32, normals: &mut Vec<Vec3>) {
+fn normals_at_position(corners: &[u32], faces: CornerFaces, crease_cosine: f32, normals: &mut Vec<Vec3>) {
     normals.clear();
     if corners.len() <= MAX_CORNERS_FOR_EXACT_CREASE {
         sum_within_crease_exact(corners, faces, crease_cosine, normals);
@@ -531,7 +554,7 @@ fn normals_at_position(corners: &[usize], faces: CornerFaces, crease_cosine: f32
 /// When every two of the position's faces lie within the crease angle (a smooth surface, the
 /// usual case), every corner's sum is the sum of all of them in the same order: it is added up
 /// once, after testing each pair once (`a·b` and `b·a` have the same bits).
-fn sum_within_crease_exact(corners: &[usize], faces: CornerFaces, crease_cosine: f32, sums: &mut Vec<Vec3>) {
+fn sum_within_crease_exact(corners: &[u32], faces: CornerFaces, crease_cosine: f32, sums: &mut Vec<Vec3>) {
     let smooth = corners.iter().enumerate().all(|(index, &corner)| {
         let face = faces.face(corner);
         face == Vec3::ZERO
@@ -577,7 +600,7 @@ fn sum_within_crease_exact(corners: &[usize], faces: CornerFaces, crease_cosine:
 /// the first cluster whose seed (the face normal that opened it) is within the crease
 /// angle, and gets its cluster's sum.
 fn sum_within_crease_clustered(
-    corners: &[usize],
+    corners: &[u32],
     faces: CornerFaces,
     crease_cosine: f32,
     sums: &mut Vec<Vec3>,
@@ -618,7 +641,7 @@ fn sum_within_crease_clustered(
 }
 
 /// Fallbacks 3 to 5 of the module documentation for one position.
-fn smooth_normal_ignoring_crease(corners: &[usize], faces: CornerFaces) -> Vec3 {
+fn smooth_normal_ignoring_crease(corners: &[u32], faces: CornerFaces) -> Vec3 {
     let weighted_sum: Vec3 = corners
         .iter()
         .map(|&corner| faces.weight(corner) * faces.face(corner))
@@ -636,8 +659,9 @@ fn smooth_normal_ignoring_crease(corners: &[usize], faces: CornerFaces) -> Vec3 
 
 /// Builds the output mesh: one vertex per distinct (position group, attribute group, normal)
 /// combination, created in the order corners are met, and the triangles re-indexed onto them.
+/// `normal_of_slot` gives each corner's normal by its slot ([`CornersByPosition`]).
 ///
-/// Each position's corners find their first corner with the same attributes and normal (in
+/// Each position's corners find the first of them with the same attributes and normal (in
 /// parallel over positions: a short list, or a hash map at a position with very many
 /// corners); then one pass in corner order numbers the vertices at those first corners.
 fn split_vertices(
@@ -645,90 +669,86 @@ fn split_vertices(
     attributes: VertexAttributes,
     triangles: &[[u32; 3]],
     corners: &CornersByPosition,
-    normal_of_corner: impl Fn(usize) -> Vec3 + Sync,
+    normal_of_slot: impl Fn(usize) -> Vec3 + Sync,
 ) -> Mesh {
     let attribute_group_of_vertex = attribute_groups(positions.len(), attributes);
-    let vertex_of_corner = |corner: usize| triangles[corner / 3][corner % 3];
-    let key_of_corner = |corner: usize| {
+    let key_of_slot = |slot: usize| {
+        let vertex = corners.vertex_at(triangles, slot);
         let attribute_group = attribute_group_of_vertex
-            .get(vertex_of_corner(corner) as usize)
+            .get(vertex as usize)
             .copied()
             .unwrap_or(0);
-        (attribute_group, exact_key(normal_of_corner(corner)))
+        (attribute_group, exact_key(normal_of_slot(slot)))
     };
-    let corner_count = triangles.len() * 3;
-    let mut sorted_firsts = vec![0usize; corner_count];
+    // For each slot, the slot of the first corner at its position with the same key (a group's
+    // slots are in corner order).
+    let mut first_slots = vec![0u32; corners.corner_count()];
     corners.for_each_group(
-        &mut sorted_firsts,
-        |group_corners, firsts, seen: &mut FirstCorners| {
+        &mut first_slots,
+        |first_slot, group_corners, firsts, seen: &mut FirstSlots| {
             seen.clear();
-            for (&corner, first) in group_corners.iter().zip(firsts) {
-                *first = seen.first_with(key_of_corner(corner), corner);
+            for (slot, first) in (first_slot..first_slot + group_corners.len()).zip(firsts) {
+                *first = seen.first_with(key_of_slot(slot), slot as u32);
             }
         },
     );
-    let mut first_of_corner = vec![0usize; corner_count];
-    for (&corner, &first) in corners.corners_by_group.iter().zip(&sorted_firsts) {
-        first_of_corner[corner] = first;
-    }
 
+    // Usually about one vertex per position (more on creases and seams).
     let mut mesh = Mesh {
-        triangles: Vec::with_capacity(triangles.len()),
+        positions: Vec::with_capacity(positions.len()),
+        normals: Vec::with_capacity(positions.len()),
+        triangles: vec![[0; 3]; triangles.len()],
         ..Mesh::default()
     };
-    // The new index of each corner's vertex; a corner's first corner comes before it.
-    let mut new_vertex_of_corner = vec![0u32; corner_count];
-    for corner in 0..corner_count {
-        let first = first_of_corner[corner];
-        new_vertex_of_corner[corner] = if first == corner {
-            let vertex = vertex_of_corner(corner) as usize;
+    for (corner, &slot) in corners.slot_of_corner.iter().enumerate() {
+        let first = first_slots[slot as usize];
+        let new_vertex = if first == slot {
+            let vertex = triangles[corner / 3][corner % 3] as usize;
             mesh.positions.push(positions[vertex]);
-            mesh.normals.push(normal_of_corner(corner));
+            mesh.normals.push(normal_of_slot(slot as usize));
             attributes.push_vertex(vertex, &mut mesh);
             (mesh.positions.len() - 1) as u32
         } else {
-            new_vertex_of_corner[first]
+            // The first corner comes earlier: its new vertex is already in place.
+            let first_corner = corners.corners_by_group[first as usize] as usize;
+            mesh.triangles[first_corner / 3][first_corner % 3]
         };
+        mesh.triangles[corner / 3][corner % 3] = new_vertex;
     }
-    mesh.triangles.extend(
-        new_vertex_of_corner
-            .chunks_exact(3)
-            .map(|corners| [corners[0], corners[1], corners[2]]),
-    );
     mesh
 }
 
 /// The distinct (attribute group, normal bits) keys met so far at one position, each with the
-/// first corner that had it.
+/// slot of the first corner that had it.
 #[derive(Default)]
-struct FirstCorners {
-    keys: Vec<((u32, [u32; 3]), usize)>,
+struct FirstSlots {
+    keys: Vec<((u32, [u32; 3]), u32)>,
     /// The same, once there are more than [`MAX_KEYS_SEARCHED`] (a fan's centre).
-    map: WordMap<(u32, [u32; 3]), usize>,
+    map: WordMap<(u32, [u32; 3]), u32>,
 }
 
 /// Up to this many distinct keys at one position are searched one by one.
 const MAX_KEYS_SEARCHED: usize = 16;
 
-impl FirstCorners {
+impl FirstSlots {
     fn clear(&mut self) {
         self.keys.clear();
         self.map.clear();
     }
 
-    /// The first corner seen with `key`: `corner` itself when the key is new.
-    fn first_with(&mut self, key: (u32, [u32; 3]), corner: usize) -> usize {
+    /// The first slot seen with `key`: `slot` itself when the key is new.
+    fn first_with(&mut self, key: (u32, [u32; 3]), slot: u32) -> u32 {
         if self.keys.len() <= MAX_KEYS_SEARCHED {
             if let Some(&(_, first)) = self.keys.iter().find(|(seen, _)| *seen == key) {
                 return first;
             }
-            self.keys.push((key, corner));
+            self.keys.push((key, slot));
             if self.keys.len() > MAX_KEYS_SEARCHED {
                 self.map.extend(self.keys.iter().copied());
             }
-            return corner;
+            return slot;
         }
-        *self.map.entry(key).or_insert(corner)
+        *self.map.entry(key).or_insert(slot)
     }
 }
 
@@ -1325,7 +1345,8 @@ mod tests {
             for crease in [0.0, 60.0, 180.0] {
                 let corners = CornersByPosition::new(positions, triangles);
                 let normals = corner_normals(positions, triangles, &corners, crease);
-                let expected = split_by_hash_map(positions, attributes, triangles, |c| normals[c]);
+                let normal_of_corner = |corner: usize| normals[corners.slot_of_corner[corner] as usize];
+                let expected = split_by_hash_map(positions, attributes, triangles, normal_of_corner);
                 for threads in [1, 3] {
                     let pool = rayon::ThreadPoolBuilder::new()
                         .num_threads(threads)
@@ -1341,7 +1362,7 @@ mod tests {
 
     /// The crease sums by their definition (module documentation): for each corner, the
     /// weighted faces within the crease angle of its own, in corner order.
-    fn crease_sums_by_definition(corners: &[usize], faces: CornerFaces, crease_cosine: f32) -> Vec<Vec3> {
+    fn crease_sums_by_definition(corners: &[u32], faces: CornerFaces, crease_cosine: f32) -> Vec<Vec3> {
         corners
             .iter()
             .map(|&corner| {
@@ -1384,7 +1405,7 @@ mod tests {
                     (face, [random(), random(), random()])
                 })
                 .collect();
-            let corners: Vec<usize> = (0..count).map(|k| 3 * k + k % 3).collect();
+            let corners: Vec<u32> = (0..count as u32).map(|k| 3 * k + k % 3).collect();
             let faces = CornerFaces { faces: &faces };
             for crease in [0.0f32, 10.0, 60.0, 180.0] {
                 let cosine = crease.to_radians().cos() - CREASE_COSINE_TOLERANCE;

@@ -71,7 +71,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::normals::VertexAttributes;
-use super::obj_parse::{FileNormals, ObjGeometry, assemble, parse_obj_text};
+use super::obj_parse::{FileNormals, ObjGeometry, ObjText, assemble, parse_obj_text};
 use super::{FileContent, LoadedMesh, MeshError, MeshOptions, USE_GLTF_HINT, first_bytes, normals};
 use crate::scene::access::FileAccess;
 use crate::scene::limits::MAX_LIGHTING_VALUE;
@@ -121,7 +121,10 @@ pub fn parse_obj(path: &Path, access: &FileAccess) -> Result<ParsedObj, MeshErro
     let bytes = access
         .read(path)
         .map_err(|error| MeshError::new(path, format!("cannot read mesh file: {error}")))?;
-    parse_obj_bytes(path, &bytes, access)
+    let text = parse_text(path, &bytes)?;
+    // Freed before the rest of the load allocates (`obj_parse`'s documentation: memory).
+    drop(bytes);
+    finish_parse(path, text, access)
 }
 
 /// An OBJ file read and parsed with its materials and textures; [`ParsedObj::build`] makes
@@ -197,6 +200,11 @@ impl ParsedObj {
 
 /// [`parse_obj`] on the bytes of the file at `path`, already read.
 fn parse_obj_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<ParsedObj, MeshError> {
+    finish_parse(path, parse_text(path, bytes)?, access)
+}
+
+/// The text of the OBJ file at `path`, parsed and checked (module documentation, step 1).
+fn parse_text(path: &Path, bytes: &[u8]) -> Result<ObjText, MeshError> {
     // A glTF or binary file named as `Obj(...)` would otherwise give "contains no triangles"
     // or a confusing line error: say what it is.
     match FileContent::of(bytes) {
@@ -219,8 +227,11 @@ fn parse_obj_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<Par
         }
         FileContent::ObjText | FileContent::OtherText => {}
     }
-    let parsed = parse_obj_text(bytes)
-        .map_err(|error| MeshError::at(path, error.line, error.column, error.message))?;
+    parse_obj_text(bytes).map_err(|error| MeshError::at(path, error.line, error.column, error.message))
+}
+
+/// The rest of [`parse_obj`] once the text is parsed: models, materials, textures.
+fn finish_parse(path: &Path, mut parsed: ObjText, access: &FileAccess) -> Result<ParsedObj, MeshError> {
     let mut text_warnings = Vec::new();
     if let Some(&first) = parsed.polyline_lines.first() {
         text_warnings.push(format!(
@@ -240,6 +251,8 @@ fn parse_obj_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<Par
     };
     let geometry = assemble(&parsed, |file, line| libraries.load(file, line))
         .map_err(|message| MeshError::new(path, message))?;
+    let material_uses = std::mem::take(&mut parsed.material_uses);
+    drop(parsed);
     // A library outside the sandbox is an error, not the warning of a missing one: the
     // sandbox must never be silently worked around.
     if let Some((library, line, problem)) = libraries.refused {
@@ -269,11 +282,8 @@ fn parse_obj_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<Par
 
     let library_materials = libraries.materials;
     let mut material_warnings = Vec::new();
-    let (mut materials, triangle_materials) = assign_materials(
-        &geometry.triangle_material_ids,
-        &library_materials,
-        &mut material_warnings,
-    );
+    let (mut materials, triangle_materials) =
+        assign_materials(&geometry, &library_materials, &mut material_warnings);
     // `assign_materials` keeps the libraries' order: material i is library material i.
     let mut textures = TextureFiles {
         access: access.clone(),
@@ -297,7 +307,7 @@ fn parse_obj_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<Par
     files_read.extend(textures.files_read);
     if !library_materials.is_empty() {
         let mut reported: Vec<&str> = Vec::new();
-        for (name, line) in &parsed.material_uses {
+        for (name, line) in &material_uses {
             let defined = library_materials.iter().any(|material| &material.name == name);
             if !defined && !reported.contains(&name.as_str()) {
                 reported.push(name);
@@ -458,12 +468,13 @@ fn prepare_mtl(text: &str) -> Result<Cow<'_, str>, (usize, String)> {
 /// The mesh's materials and per-triangle material indices from the libraries' materials
 /// (module documentation: "MTL to Material"); both empty when no face names a known material.
 fn assign_materials(
-    triangle_material_ids: &[Option<usize>],
+    geometry: &ObjGeometry,
     library_materials: &[tobj::Material],
     warnings: &mut Vec<String>,
 ) -> (Vec<Material>, Vec<u32>) {
     let known = |id: &Option<usize>| id.filter(|&id| id < library_materials.len());
-    if library_materials.is_empty() || triangle_material_ids.iter().all(|id| known(id).is_none()) {
+    let runs = &geometry.material_runs;
+    if library_materials.is_empty() || runs.iter().all(|(_, id)| known(id).is_none()) {
         return (Vec::new(), Vec::new());
     }
     let mut materials: Vec<Material> = library_materials
@@ -471,9 +482,9 @@ fn assign_materials(
         .map(|material| material_from_mtl(material, warnings))
         .collect();
     let default_index = materials.len() as u32;
-    let triangle_materials: Vec<u32> = triangle_material_ids
-        .iter()
-        .map(|id| known(id).map_or(default_index, |id| id as u32))
+    let triangle_materials: Vec<u32> = geometry
+        .triangle_material_ids()
+        .map(|id| known(&id).map_or(default_index, |id| id as u32))
         .collect();
     if triangle_materials.contains(&default_index) {
         materials.push(default_material());

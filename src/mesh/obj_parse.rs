@@ -28,6 +28,13 @@
 //!    `mtllib` lines above them. The models are then merged into one list (the rules for texture
 //!    coordinates and normals that only some vertices have are on [`ObjGeometry`]).
 //!
+//! **Memory.** Every page of memory the load touches for the first time is zeroed by the kernel
+//! first, which on these machines costs about as much per byte as parsing it: loading a mesh of
+//! a million triangles once spent more than half its time there. So the arrays that live
+//! only during a load are kept small: face corners as `u32` indices, texture coordinate and
+//! normal indices only from the first face that has them ([`RangeTriangles`]), materials as
+//! runs, and the file's bytes freed before the faces are assembled (`obj::parse_obj`).
+//!
 //! Statement names (`mtllib`, `usemtl`, `o`, `g`) are the rest of the line after the keyword,
 //! trimmed, so they may contain spaces. `tobj` took the text after the line's first space
 //! character instead, which differed for indented lines and tab separators (an indented
@@ -84,7 +91,7 @@ struct ParsedRange {
     positions: Vec<Vec3>,
     texcoords: Vec<Vec2>,
     normals: Vec<Vec3>,
-    triangles: Vec<[Corner; 3]>,
+    triangles: RangeTriangles,
     /// Each statement with the number of this range's triangles above it.
     statements: Vec<(usize, Statement)>,
     /// The line numbers of polyline (`l`) statements.
@@ -111,9 +118,50 @@ pub(super) struct ObjText {
 /// The faces of one range of lines.
 #[derive(Debug)]
 struct RangeFaces {
-    triangles: Vec<[Corner; 3]>,
+    triangles: RangeTriangles,
     /// Each statement with the number of the range's triangles above it.
     statements: Vec<(usize, Statement)>,
+}
+
+/// The triangles of a range of lines, corner by corner: the position indices, and the texture
+/// coordinate and normal indices only from the first triangle that has one of them on (before
+/// it every corner has neither). A scan's faces name positions only: 12 bytes a triangle
+/// instead of 36, on a file of a million triangles the difference between 14 and 40 MB of
+/// fresh memory.
+#[derive(Debug, Default)]
+struct RangeTriangles {
+    positions: Vec<[u32; 3]>,
+    /// Texture coordinate and normal indices of each corner of the triangles from
+    /// `extras_from` on.
+    extras: Vec<[[u32; 2]; 3]>,
+    extras_from: usize,
+}
+
+impl RangeTriangles {
+    fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    fn push(&mut self, triangle: [Corner; 3]) {
+        let extras = triangle.map(|[_, texcoord, normal]| [texcoord, normal]);
+        if !self.extras.is_empty() || extras != [[ABSENT; 2]; 3] {
+            if self.extras.is_empty() {
+                self.extras_from = self.positions.len();
+            }
+            self.extras.push(extras);
+        }
+        self.positions.push(triangle.map(|[position, _, _]| position));
+    }
+
+    /// Triangle `index`'s corners.
+    fn corners(&self, index: usize) -> [Corner; 3] {
+        let extras = match index.checked_sub(self.extras_from) {
+            Some(offset) if offset < self.extras.len() => self.extras[offset],
+            _ => [[ABSENT; 2]; 3],
+        };
+        let positions = self.positions[index];
+        [0, 1, 2].map(|k| [positions[k], extras[k][0], extras[k][1]])
+    }
 }
 
 impl ObjText {
@@ -130,6 +178,8 @@ struct RangeCounts {
     line_ends: usize,
     /// `v`, `vt` and `vn` statements.
     elements: [usize; 3],
+    /// `f` statements: at least as many triangles.
+    faces: usize,
 }
 
 /// Parses and checks the OBJ file `bytes` (module documentation, steps 1 and 2). The bytes
@@ -169,7 +219,7 @@ fn parse_in_ranges(bytes: &[u8], range_bytes: usize) -> Result<ObjText, ScanErro
     let parsed: Vec<Result<ParsedRange, ScanError>> = ranges
         .par_iter()
         .zip(&starts)
-        .map(|((text, _), &(first_line, defined))| parse_range(text, first_line, defined))
+        .map(|((text, counts), &(first_line, defined))| parse_range(text, first_line, defined, counts))
         .collect();
 
     let mut text = ObjText {
@@ -222,6 +272,7 @@ fn count_range(range: &str) -> RangeCounts {
         Some("v") => counts.elements[0] += 1,
         Some("vt") => counts.elements[1] += 1,
         Some("vn") => counts.elements[2] += 1,
+        Some("f") => counts.faces += 1,
         _ => {}
     };
     if range.is_ascii() {
@@ -324,9 +375,26 @@ fn column_of(line: &str, word: &str) -> usize {
 /// line's number and `defined` the positions, texture coordinates and normals defined above
 /// it. ASCII ranges (almost all) are cut into lines and words by bytes; others as `str::lines`
 /// and `str::split_whitespace` cut them.
-fn parse_range(range: &str, first_line: usize, defined: [usize; 3]) -> Result<ParsedRange, ScanError> {
+fn parse_range(
+    range: &str,
+    first_line: usize,
+    defined: [usize; 3],
+    counts: &RangeCounts,
+) -> Result<ParsedRange, ScanError> {
+    // Sized by the first pass: growing them would allocate (and the kernel zero) about twice
+    // the memory.
+    let parsed = ParsedRange {
+        positions: Vec::with_capacity(counts.elements[0]),
+        texcoords: Vec::with_capacity(counts.elements[1]),
+        normals: Vec::with_capacity(counts.elements[2]),
+        triangles: RangeTriangles {
+            positions: Vec::with_capacity(counts.faces),
+            ..RangeTriangles::default()
+        },
+        ..ParsedRange::default()
+    };
     let mut parser = RangeParser {
-        parsed: ParsedRange::default(),
+        parsed,
         defined,
         corners: Vec::new(),
     };
@@ -404,9 +472,9 @@ impl RangeParser {
                     )));
                 }
                 let first = self.corners[0];
-                parsed
-                    .triangles
-                    .extend(self.corners[1..].windows(2).map(|pair| [first, pair[0], pair[1]]));
+                for pair in self.corners[1..].windows(2) {
+                    parsed.triangles.push([first, pair[0], pair[1]]);
+                }
             }
             "l" => parsed.polyline_lines.push(line_number),
             "usemtl" => {
@@ -494,8 +562,18 @@ fn parse_corner(word: &str, defined: [usize; 3]) -> Result<Corner, String> {
         ("texture coordinate", "texture coordinates"),
         ("normal", "normals"),
     ];
-    let malformed = || format!("malformed face vertex '{word}'");
     let bytes = word.as_bytes();
+    // The usual corner of a scan, a position index alone (`5123`), read directly; anything
+    // else (and an index out of range, for its message) takes the general path below.
+    if bytes.len() <= 18 && bytes.iter().all(u8::is_ascii_digit) {
+        let index = bytes
+            .iter()
+            .fold(0usize, |index, &digit| 10 * index + usize::from(digit - b'0'));
+        if (1..=defined[0]).contains(&index) {
+            return Ok([(index - 1) as u32, ABSENT, ABSENT]);
+        }
+    }
+    let malformed = || format!("malformed face vertex '{word}'");
     let mut parts: [&[u8]; 3] = [b""; 3];
     let mut part_count = 0;
     let mut start = 0;
@@ -600,40 +678,31 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
         1e18, 1e19, 1e20, 1e21, 1e22,
     ];
-    const MANTISSA_LIMIT: u64 = 1 << 53;
     let (negative, start) = match bytes.first() {
         Some(b'-') => (true, 1),
         Some(b'+') => (false, 1),
         _ => (false, 0),
     };
-    let mut i = start;
+    // Up to 19 digits fit in a u64 (more, leading zeros included, are left to `str::parse`).
     let mut mantissa: u64 = 0;
-    // Below 2⁵³ before a digit is added, so `10·m + 9` cannot overflow.
-    let add_digit = |digit: u8, mantissa: &mut u64| {
-        *mantissa = *mantissa * 10 + u64::from(digit - b'0');
-        *mantissa < MANTISSA_LIMIT
-    };
+    let mut i = start;
     while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
-        if !add_digit(digit, &mut mantissa) {
-            return None;
-        }
+        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
         i += 1;
     }
-    let mut digit_count = i - start;
+    let integer_digits = i - start;
     let mut exponent: i64 = 0;
     if bytes.get(i) == Some(&b'.') {
         i += 1;
         let fraction_start = i;
         while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
-            if !add_digit(digit, &mut mantissa) {
-                return None;
-            }
+            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
             i += 1;
         }
         exponent = -((i - fraction_start) as i64);
-        digit_count += i - fraction_start;
     }
-    if digit_count == 0 {
+    let digit_count = integer_digits + exponent.unsigned_abs() as usize;
+    if digit_count == 0 || digit_count > 19 {
         return None;
     }
     if let Some(b'e' | b'E') = bytes.get(i) {
@@ -660,7 +729,7 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
         }
         exponent += if exponent_negative { -written } else { written };
     }
-    if i != bytes.len() || exponent.unsigned_abs() > 22 {
+    if i != bytes.len() || mantissa >= 1 << 53 || exponent.unsigned_abs() > 22 {
         return None;
     }
     let scale = POWERS_OF_TEN[exponent.unsigned_abs() as usize];
@@ -701,10 +770,23 @@ pub(super) struct ObjGeometry {
     /// models without any.
     pub uvs: Vec<Vec2>,
     pub triangles: Vec<[u32; 3]>,
-    /// Per triangle, the index of its material among the libraries' materials.
-    pub triangle_material_ids: Vec<Option<usize>>,
+    /// The material of the triangles, as runs: (first triangle, the index of the material among
+    /// the libraries' materials), each run lasting until the next.
+    pub material_runs: Vec<(usize, Option<usize>)>,
     /// The models (by name) where only some vertices have texture coordinates.
     pub models_with_partial_uvs: Vec<String>,
+}
+
+impl ObjGeometry {
+    /// The material of each triangle, in order (the runs expanded).
+    pub fn triangle_material_ids(&self) -> impl Iterator<Item = Option<usize>> + '_ {
+        let ends = self.material_runs.iter().skip(1).map(|&(first, _)| first);
+        let ends = ends.chain([self.triangles.len()]);
+        self.material_runs
+            .iter()
+            .zip(ends)
+            .flat_map(|(&(first, material), end)| std::iter::repeat_n(material, end - first))
+    }
 }
 
 /// Groups the faces of `text` into models and merges them (module documentation, step 3).
@@ -729,7 +811,7 @@ pub(super) fn assemble(
     {
         let mut done = 0;
         for (at, statement) in statements {
-            models.add_triangles(&triangles[done..*at], material);
+            models.add_triangles(triangles, done..*at, material);
             done = *at;
             match statement {
                 Statement::Group(name) => {
@@ -752,7 +834,7 @@ pub(super) fn assemble(
                 }
             }
         }
-        models.add_triangles(&triangles[done..], material);
+        models.add_triangles(triangles, done..triangles.len(), material);
     }
     models.finish_model();
     Ok(models.into_geometry())
@@ -794,11 +876,12 @@ impl<'a> ModelAssembly<'a> {
         ModelAssembly {
             text,
             geometry: ObjGeometry {
-                positions: Vec::new(),
+                // Most files have one vertex per position.
+                positions: Vec::with_capacity(position_count),
                 normals: FileNormals::None,
                 uvs: Vec::new(),
                 triangles: Vec::with_capacity(text.triangle_count()),
-                triangle_material_ids: Vec::with_capacity(text.triangle_count()),
+                material_runs: Vec::new(),
                 models_with_partial_uvs: Vec::new(),
             },
             name: UNNAMED_MODEL.to_string(),
@@ -813,16 +896,22 @@ impl<'a> ModelAssembly<'a> {
             newest_vertex_of_position: vec![ABSENT; position_count],
             model_of_position: vec![u32::MAX; position_count],
             model_number: 0,
-            previous_at_position: Vec::new(),
-            texcoord_and_normal: Vec::new(),
+            previous_at_position: Vec::with_capacity(position_count),
+            texcoord_and_normal: Vec::with_capacity(position_count),
         }
     }
 
-    fn add_triangles(&mut self, triangles: &[[Corner; 3]], material: Option<usize>) {
-        for triangle in triangles {
-            let vertices = triangle.map(|corner| self.vertex(corner));
+    fn add_triangles(&mut self, triangles: &RangeTriangles, range: Range<usize>, material: Option<usize>) {
+        if range.is_empty() {
+            return;
+        }
+        let runs = &mut self.geometry.material_runs;
+        if runs.last().is_none_or(|&(_, last)| last != material) {
+            runs.push((self.geometry.triangles.len(), material));
+        }
+        for index in range {
+            let vertices = triangles.corners(index).map(|corner| self.vertex(corner));
             self.geometry.triangles.push(vertices);
-            self.geometry.triangle_material_ids.push(material);
         }
     }
 
@@ -851,7 +940,10 @@ impl<'a> ModelAssembly<'a> {
             }
             None => Vec2::ZERO,
         };
-        self.geometry.uvs.push(uv);
+        // Kept only for files that have texture coordinates or normals at all.
+        if !self.text.texcoords.is_empty() {
+            self.geometry.uvs.push(uv);
+        }
         let file_normal = match self.text.normals.get(normal as usize) {
             Some(&file_normal) => {
                 self.with_normals += 1;
@@ -859,7 +951,9 @@ impl<'a> ModelAssembly<'a> {
             }
             None => Vec3::ZERO,
         };
-        self.file_normals.push(file_normal);
+        if !self.text.normals.is_empty() {
+            self.file_normals.push(file_normal);
+        }
         self.previous_at_position.push(self.newest_vertex_of_position[p]);
         self.texcoord_and_normal.push([texcoord, normal]);
         self.newest_vertex_of_position[p] = vertex;
@@ -878,7 +972,9 @@ impl<'a> ModelAssembly<'a> {
             if self.with_texcoords > 0 {
                 self.geometry.models_with_partial_uvs.push(self.name.clone());
             }
-            self.geometry.uvs[self.model_vertices..].fill(Vec2::ZERO);
+            if let Some(model_uvs) = self.geometry.uvs.get_mut(self.model_vertices..) {
+                model_uvs.fill(Vec2::ZERO);
+            }
         }
         self.vertices_with_normals += self.with_normals;
         self.vertices_without_normals += vertex_count - self.with_normals;
@@ -943,7 +1039,7 @@ mod tests {
             normals: FileNormals::None,
             uvs: Vec::new(),
             triangles: Vec::new(),
-            triangle_material_ids: Vec::new(),
+            material_runs: Vec::new(),
             models_with_partial_uvs: Vec::new(),
         };
         let mut normals = Vec::new();
@@ -976,8 +1072,11 @@ mod tests {
                 without_normals += vertex_count - mesh.normals.len() / 3;
             }
             for corners in mesh.indices.chunks_exact(3) {
+                let runs = &mut geometry.material_runs;
+                if runs.last().is_none_or(|&(_, last)| last != mesh.material_id) {
+                    runs.push((geometry.triangles.len(), mesh.material_id));
+                }
                 geometry.triangles.push([0, 1, 2].map(|k| offset + corners[k]));
-                geometry.triangle_material_ids.push(mesh.material_id);
             }
         }
         geometry.normals = match (with_normals, without_normals) {

@@ -150,6 +150,9 @@ struct CachedMesh {
     /// The mesh with tangents computed from its UVs, for objects whose scene material has a
     /// normal map (a mesh file without tangents of its own); made the first time one asks.
     with_tangents: Option<Arc<Mesh>>,
+    /// The mesh (or `with_tangents`, by the key's flag) without the arrays objects do not read,
+    /// by what they read and whether a scene material replaces the mesh's own.
+    trimmed: HashMap<(AttributesRead, bool, bool), Arc<Mesh>>,
     placed: Arc<Placed>,
     files_read: Vec<PathBuf>,
     warnings: Vec<String>,
@@ -158,6 +161,8 @@ struct CachedMesh {
 /// What an object's scene material reads from its mesh, beyond positions and normals.
 #[derive(Debug, Clone, Copy, Default)]
 struct SurfaceNeeds {
+    /// The object has a scene material, which replaces the mesh's own.
+    scene_material: bool,
     /// A `texture`: texture coordinates.
     texture: bool,
     /// A `normal_map`: texture coordinates and tangents.
@@ -167,6 +172,74 @@ struct SurfaceNeeds {
 impl SurfaceNeeds {
     fn uvs(self) -> bool {
         self.texture || self.normal_map
+    }
+}
+
+/// The per-vertex arrays besides positions, normals and colours that an object's materials
+/// read: texture coordinates of set 0 and 1, and tangents (normal maps).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+struct AttributesRead {
+    uvs: bool,
+    uvs1: bool,
+    tangents: bool,
+}
+
+impl AttributesRead {
+    /// What the object reads from `mesh`: what its scene material reads, or else what the
+    /// mesh's own materials do.
+    fn of(mesh: &Mesh, needs: SurfaceNeeds) -> Self {
+        if needs.scene_material {
+            return AttributesRead {
+                uvs: needs.uvs(),
+                uvs1: false,
+                tangents: needs.normal_map,
+            };
+        }
+        let mut read = AttributesRead::default();
+        for material in &mesh.materials {
+            let textures = material.textures;
+            for binding in [textures.diffuse, textures.ambient, textures.normal]
+                .into_iter()
+                .flatten()
+            {
+                match binding.uv_set {
+                    0 => read.uvs = true,
+                    _ => read.uvs1 = true,
+                }
+            }
+            read.tangents |= textures.normal.is_some();
+        }
+        read
+    }
+
+    /// Whether `mesh` has an array this does not read.
+    fn leaves_unread(self, mesh: &Mesh) -> bool {
+        (!mesh.uvs.is_empty() && !self.uvs)
+            || (!mesh.uvs1.is_empty() && !self.uvs1)
+            || (!mesh.tangents.is_empty() && !self.tangents)
+    }
+
+    /// `mesh` without the arrays this does not read; with a scene material (which replaces
+    /// the mesh's own), without the mesh's materials and textures too, whose bindings may
+    /// read what was dropped.
+    fn trim(self, mesh: &Mesh, scene_material: bool) -> Mesh {
+        fn keep<T: Clone>(kept: bool, array: &[T]) -> Vec<T> {
+            if kept { array.to_vec() } else { Vec::new() }
+        }
+        // Every field named, so that a new one gets a decision here.
+        Mesh {
+            positions: mesh.positions.clone(),
+            normals: mesh.normals.clone(),
+            triangles: mesh.triangles.clone(),
+            triangle_materials: keep(!scene_material, &mesh.triangle_materials),
+            materials: keep(!scene_material, &mesh.materials),
+            uvs: keep(self.uvs, &mesh.uvs),
+            uvs1: keep(self.uvs1, &mesh.uvs1),
+            colors: mesh.colors.clone(),
+            tangents: keep(self.tangents, &mesh.tangents),
+            textures: keep(!scene_material, &mesh.textures),
+            closed: mesh.closed,
+        }
     }
 }
 
@@ -1175,6 +1248,7 @@ impl Loader<'_> {
         // The material first: a texture or normal map decides what the mesh must carry.
         let needs = match &material {
             Some(Some(material)) => SurfaceNeeds {
+                scene_material: true,
                 texture: material.textures.diffuse.is_some(),
                 normal_map: material.textures.normal.is_some(),
             },
@@ -1486,6 +1560,7 @@ impl Loader<'_> {
                                 stamps: stamped.iter().map(|f| (f.clone(), modified(f))).collect(),
                                 mesh: Arc::new(mesh),
                                 with_tangents: None,
+                                trimmed: HashMap::new(),
                                 placed: Arc::new(Placed { lights, cameras }),
                                 files_read,
                                 warnings,
@@ -1518,6 +1593,21 @@ impl Loader<'_> {
                 mesh
             }
             (_, false) => cached.mesh.clone(),
+        };
+        // Texture coordinates and tangents that none of the object's materials reads are left
+        // out: the renderer takes its fast shading paths only for frames without such
+        // per-vertex arrays, and most scans and exports carry texture coordinates (an untextured
+        // cow from an OBJ with `vt`, Phong: 2.4× the frame time). Made once per mesh and need.
+        let read = AttributesRead::of(&mesh, needs);
+        let mesh = if read.leaves_unread(&mesh) {
+            let key = (read, wants_tangents, needs.scene_material);
+            let trimmed = cached
+                .trimmed
+                .entry(key)
+                .or_insert_with(|| Arc::new(read.trim(&mesh, needs.scene_material)));
+            trimmed.clone()
+        } else {
+            mesh
         };
         let placed = cached.placed.clone();
         // Files and warnings once per load, however many objects use the mesh.
@@ -2563,6 +2653,60 @@ mod tests {
             loaded.warnings[0].line_column(&loaded.sources).is_some(),
             "located"
         );
+    }
+
+    #[test]
+    fn texture_coordinates_and_tangents_no_material_reads_are_left_out() {
+        let folder = tempfile::tempdir().unwrap();
+        let png = std::fs::read(asset("gltf/Avocado/glTF/Avocado_normal.png")).unwrap();
+        std::fs::write(folder.path().join("t.png"), png).unwrap();
+        write(
+            folder.path(),
+            "uv.obj",
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n",
+        );
+        let avocado = asset("gltf/Avocado/glTF/Avocado.gltf");
+        let duck = asset("gltf/Duck/glTF/Duck.gltf");
+        let scene = write(
+            folder.path(),
+            "scene.ron",
+            &format!(
+                r#"(objects: [
+                (mesh: Obj("uv.obj")),
+                (mesh: Obj("uv.obj"), material: (diffuse: (1, 0, 0))),
+                (mesh: Obj("uv.obj"), material: (texture: "t.png")),
+                (mesh: Gltf({avocado:?})),
+                (mesh: Gltf({duck:?}), material: (diffuse: (1, 1, 0))),
+                (mesh: Gltf({duck:?})),
+                (mesh: Obj("uv.obj")),
+            ])"#
+            ),
+        );
+        let loaded = load_ok(&scene);
+        let meshes: Vec<&Mesh> = loaded.scene.objects.iter().map(|o| &*o.mesh).collect();
+        for mesh in &meshes {
+            mesh.check_invariant().unwrap();
+        }
+        let arrays = |mesh: &Mesh| {
+            (
+                !mesh.uvs.is_empty(),
+                !mesh.tangents.is_empty(),
+                mesh.materials.len(),
+            )
+        };
+        // Nothing reads the OBJ's coordinates but the scene texture.
+        assert_eq!(arrays(meshes[0]), (false, false, 0));
+        assert_eq!(arrays(meshes[1]), (false, false, 0));
+        assert_eq!(arrays(meshes[2]), (true, false, 0));
+        // The Avocado's own materials have a base colour texture and a normal map; the Duck's
+        // own texture goes with its material when a scene material replaces it.
+        assert_eq!(arrays(meshes[3]), (true, true, 1));
+        assert_eq!(arrays(meshes[4]), (false, false, 0));
+        assert!(meshes[4].textures.is_empty() && meshes[4].triangle_materials.is_empty());
+        assert_eq!(arrays(meshes[5]), (true, false, 1));
+        // One trimmed mesh per mesh and need.
+        let objects = &loaded.scene.objects;
+        assert!(Arc::ptr_eq(&objects[0].mesh, &objects[6].mesh));
     }
 
     #[test]

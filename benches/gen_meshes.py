@@ -1,14 +1,18 @@
 #!/usr/bin/env python3
-"""Writes benches/meshes/nefertiti-1m.obj: the nefertiti scan (assets/obj/nefertiti, 70,000
-triangles) refined by two levels of Loop subdivision into 1,120,000 triangles, the real-mesh bench
-scene of about a million triangles (benches/scenes/nefertiti-1m.ron, its llvmpipe anchor
-benches/anchors/s4_nefertiti_1m.json).
+"""Writes the two meshes of the real-mesh benchmarks that are generated rather than committed, into
+benches/meshes/ (ignored by git; benches/llvmpipe.py runs this script when one is missing).
+Deterministic, standard library only, a few seconds:
 
-The file is about 40 MB, so it is generated rather than committed (benches/meshes/ is ignored by
-git); benches/llvmpipe.py runs this script when the file is missing. Deterministic, standard
-library only, about half a minute:
+    python3 benches/gen_meshes.py
 
-    python3 benches/gen_dense_scan.py
+* nefertiti-1m.obj (about 40 MB): the nefertiti scan (assets/obj/nefertiti, 70,000 triangles)
+  refined by two levels of Loop subdivision into 1,120,000 triangles: the bench scene of about a
+  million triangles (benches/scenes/nefertiti-1m.ron; its llvmpipe anchor
+  benches/anchors/s4_nefertiti_1m.json).
+* duck.obj: the glTF Duck (assets/gltf/Duck/glTF) as llvmpipe's harness can read it (it reads OBJ
+  only): its one primitive with the scene's transform (the root node's scale of 0.01) applied to
+  the positions, and its normals, so that both renderers light the same normals
+  (benches/anchors/s4_duck.json; lampshade's scenes/bench/duck.ron reads the glTF itself).
 
 Loop subdivision (Loop 1987, with Warren's weights): every triangle becomes four, its corners
 moved to (1 - n*b) v + b * (sum of the n neighbours), b = 3/(8n) (3/16 when n = 3), and a new
@@ -20,13 +24,17 @@ it stays put. Each triangle's four children follow each other in the parent's pl
 keeps the scan's order of triangles; the corners keep their numbers and the edge vertices follow
 in the order their first triangle meets them.
 """
+import json
 import os
+import struct
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SOURCE = os.path.join(ROOT, "assets", "obj", "nefertiti", "nefertiti-lowres.obj")
 TARGET = os.path.join(ROOT, "benches", "meshes", "nefertiti-1m.obj")
 LEVELS = 2
+DUCK = os.path.join(ROOT, "assets", "gltf", "Duck", "glTF", "Duck.gltf")
+DUCK_TARGET = os.path.join(ROOT, "benches", "meshes", "duck.obj")
 
 
 def read_obj(path):
@@ -118,19 +126,63 @@ def subdivide(xs, ys, zs, faces):
     return nx, ny, nz, children
 
 
-def main():
+def write_atomically(path, text):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    temporary = path + ".partial"
+    with open(temporary, "w") as out:
+        out.write(text)
+    os.replace(temporary, path)
+
+
+def write_dense_scan():
     xs, ys, zs, faces = read_obj(SOURCE)
     for _ in range(LEVELS):
         xs, ys, zs, faces = subdivide(xs, ys, zs, faces)
-    os.makedirs(os.path.dirname(TARGET), exist_ok=True)
-    temporary = TARGET + ".partial"
-    with open(temporary, "w") as out:
-        out.write(f"# nefertiti-lowres.obj (assets/obj/nefertiti) after {LEVELS} levels of Loop subdivision;\n"
-                  "# written by benches/gen_dense_scan.py\n")
-        out.write("".join(f"v {x:.5f} {y:.5f} {z:.5f}\n" for x, y, z in zip(xs, ys, zs)))
-        out.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces))
-    os.replace(temporary, TARGET)
+    write_atomically(TARGET, "".join([
+        f"# nefertiti-lowres.obj (assets/obj/nefertiti) after {LEVELS} levels of Loop subdivision;\n",
+        "# written by benches/gen_meshes.py\n",
+        "".join(f"v {x:.5f} {y:.5f} {z:.5f}\n" for x, y, z in zip(xs, ys, zs)),
+        "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces),
+    ]))
     print(f"wrote {TARGET}: {len(xs):,} vertices, {len(faces):,} triangles", file=sys.stderr)
+
+
+def accessor(document, buffer, index):
+    """The elements of a float or unsigned-short accessor, as tuples (scalars as 1-tuples)."""
+    description = document["accessors"][index]
+    view = document["bufferViews"][description["bufferView"]]
+    width = {"SCALAR": 1, "VEC2": 2, "VEC3": 3}[description["type"]]
+    code, size = {5126: ("f", 4), 5123: ("H", 2), 5125: ("I", 4)}[description["componentType"]]
+    stride = view.get("byteStride", width * size)
+    start = view.get("byteOffset", 0) + description.get("byteOffset", 0)
+    return [struct.unpack_from(f"<{width}{code}", buffer, start + i * stride) for i in range(description["count"])]
+
+
+def write_duck():
+    with open(DUCK) as file:
+        document = json.load(file)
+    with open(os.path.join(os.path.dirname(DUCK), document["buffers"][0]["uri"]), "rb") as file:
+        buffer = file.read()
+    # The default scene: node 0 (a uniform scale, column-major) holds node 2, which has the mesh.
+    scale = document["nodes"][0]["matrix"][0]
+    assert document["nodes"][0]["matrix"] == [scale, 0, 0, 0, 0, scale, 0, 0, 0, 0, scale, 0, 0, 0, 0, 1]
+    primitive, = document["meshes"][0]["primitives"]
+    positions = accessor(document, buffer, primitive["attributes"]["POSITION"])
+    normals = accessor(document, buffer, primitive["attributes"]["NORMAL"])
+    indices = [i for i, in accessor(document, buffer, primitive["indices"])]
+    lines = ["# assets/gltf/Duck/glTF/Duck.gltf (© 2006 Sony Computer Entertainment Inc., SCEA Shared Source",
+             "# License 1.0, assets/licenses/SCEA.txt) scaled by its root node; written by benches/gen_meshes.py"]
+    lines += [f"v {x * scale:.7g} {y * scale:.7g} {z * scale:.7g}" for x, y, z in positions]
+    lines += [f"vn {x:.7g} {y:.7g} {z:.7g}" for x, y, z in normals]
+    lines += [f"f {a + 1}//{a + 1} {b + 1}//{b + 1} {c + 1}//{c + 1}"
+              for a, b, c in zip(indices[0::3], indices[1::3], indices[2::3])]
+    write_atomically(DUCK_TARGET, "\n".join(lines) + "\n")
+    print(f"wrote {DUCK_TARGET}: {len(positions):,} vertices, {len(indices) // 3:,} triangles", file=sys.stderr)
+
+
+def main():
+    write_dense_scan()
+    write_duck()
 
 
 if __name__ == "__main__":
