@@ -45,6 +45,13 @@ impl Floats {
         Floats(std::array::from_fn(|i| self.0[i].max(other.0[i])))
     }
 
+    /// `f32::min` per lane (the other operand where one is NaN), left to the compiler as
+    /// [`Floats::max`] is.
+    #[inline(always)]
+    pub fn min(self, other: Self) -> Self {
+        Floats(std::array::from_fn(|i| self.0[i].min(other.0[i])))
+    }
+
     /// `>` per lane: false where either side is NaN.
     #[inline(always)]
     pub fn gt(self, other: Self) -> Mask {
@@ -381,6 +388,16 @@ impl Vec3s {
         self.x * other.x + self.y * other.y + self.z * other.z
     }
 
+    /// `Vec3::cross`, component by component as glam writes it.
+    #[inline(always)]
+    pub fn cross(self, other: Self) -> Self {
+        Vec3s {
+            x: self.y * other.z - other.y * self.z,
+            y: self.z * other.x - other.z * self.x,
+            z: self.x * other.y - other.x * self.y,
+        }
+    }
+
     /// `Vec3::length`.
     #[inline(always)]
     pub fn length(self) -> Floats {
@@ -521,6 +538,8 @@ mod tests {
         let negated_dots = -la.dot(lb);
         let matrix = Mat3::from_cols(a[0], a[7], b[3]);
         let transformed = lb.transformed_by(matrix).to_array();
+        let crossed = la.cross(lb).to_array();
+        let (least, most) = (la.x.min(lb.y), la.x.max(lb.y));
         for i in 0..LANES {
             assert_eq!(dots.0[i].to_bits(), a[i].dot(b[i]).to_bits(), "dot, lane {i}");
             assert_eq!(
@@ -544,6 +563,13 @@ mod tests {
                 "negated dot, lane {i}"
             );
             assert!(same_bits(transformed[i], matrix * b[i]), "transform, lane {i}");
+            assert!(same_bits(crossed[i], a[i].cross(b[i])), "cross, lane {i}");
+            assert_eq!(
+                least.0[i].to_bits(),
+                a[i].x.min(b[i].y).to_bits(),
+                "min, lane {i}"
+            );
+            assert_eq!(most.0[i].to_bits(), a[i].x.max(b[i].y).to_bits(), "max, lane {i}");
         }
     }
 

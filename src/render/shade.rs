@@ -24,7 +24,7 @@ use crate::render::raster::{
     Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_steps_y,
     edge_values,
 };
-use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch};
+use crate::render::shade_fast::{FastLighting, FastPhong, LightingMemo, PhongBatch};
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
 /// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
@@ -93,6 +93,7 @@ struct TileCaches {
 #[derive(Default)]
 pub struct TileScratch<'f> {
     flat: FlatBatch<'f>,
+    lightings: LightingMemo<'f>,
     /// Per triangle of the tile: whether a pixel shows it (one more entry, never read, for the
     /// pixels that show nothing).
     seen: Vec<bool>,
@@ -334,6 +335,7 @@ fn shade_multisampled<'f>(
     let count = visibility.raster_ids.len();
     let TileScratch {
         flat,
+        lightings,
         flat_waiting,
         points: tile,
         ..
@@ -407,7 +409,7 @@ fn shade_multisampled<'f>(
         let id = visibility.raster_id(local as u32);
         let raster = frame.raster_triangle(id);
         let point_at = |index: u32| points[index as usize].at;
-        match TriangleShader::new(frame, raster, phong_allowed, caches, flat) {
+        match TriangleShader::new(frame, raster, phong_allowed, caches, flat, lightings) {
             TriangleShader::Solid(color) => {
                 for &index in mine {
                     colors[index as usize] = color;
@@ -590,6 +592,7 @@ fn shade_single_sample<'f>(
     }
     let TileScratch {
         flat,
+        lightings,
         seen,
         fills,
         sources,
@@ -641,7 +644,7 @@ fn shade_single_sample<'f>(
         }
         let id = visibility.raster_id(local as u32);
         let raster = frame.raster_triangle(id);
-        let shader = TriangleShader::new(frame, raster, phong_allowed, caches, flat);
+        let shader = TriangleShader::new(frame, raster, phong_allowed, caches, flat, lightings);
         let corners = match shader {
             TriangleShader::Solid(color) => {
                 fills[local] = color;
@@ -763,18 +766,22 @@ fn pixel_centre(p: u32) -> i64 {
     i64::from(p) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2
 }
 
-/// How the pixels of one triangle are shaded, decided once per triangle and tile. Each case computes exactly what [`shade_sample`] would, in the same order.
+/// How the pixels of one triangle are shaded, decided once per triangle and tile. Each case
+/// computes exactly what [`shade_sample`] would, in the same order.
 enum TriangleShader<'f> {
-    /// Flat or constant shading without a colour texture: one colour for the whole triangle.
+    /// One colour for the whole triangle: flat or constant shading without a colour texture
+    /// lit outside the lanes, and the normals view of flat and constant triangles.
     Solid(Vec3),
-    /// Flat shading on the fast path: the triangle waits in the tile's [`FlatBatch`] at this
-    /// index, and its pixels are written when the batch is lit.
+    /// Flat shading in lanes: the triangle waits in the tile's [`FlatBatch`] at this index, and
+    /// its pixels are written when the batch is lit.
     FlatWaiting(u16),
     /// Gouraud shading without a colour texture: the three vertex colours, interpolated.
     Gouraud([Vec3; 3]),
-    /// Phong shading in the common case (see [`FastPhong`]).
+    /// Pixel by pixel in lanes (see [`FastPhong`]): Phong shading without a texture, and the
+    /// depth and normals views of every mode whose pixels vary.
     Phong(FastPhong<'f>),
-    /// Everything else.
+    /// Everything else: textured materials, and every lit pixel of a frame with vertex
+    /// attributes.
     General,
 }
 
@@ -785,13 +792,26 @@ impl<'f> TriangleShader<'f> {
         phong_allowed: bool,
         caches: &mut TileCaches,
         flat: &mut FlatBatch<'f>,
+        lightings: &mut LightingMemo<'f>,
     ) -> Self {
         let triangle = &raster.triangle;
         let style = &frame.objects[triangle.object as usize];
         let material = &frame.materials[triangle.material as usize];
-        let plain = frame.debug_view.is_none()
-            && material.textures.diffuse.is_none()
-            && material.textures.ambient.is_none();
+        let mut per_pixel = || {
+            FastPhong::new(frame, triangle, raster.back_facing, lightings)
+                .map_or(TriangleShader::General, TriangleShader::Phong)
+        };
+        match (frame.debug_view, style.shading) {
+            (Some(DebugView::Depth), _) | (Some(DebugView::Normals), Shading::Gouraud | Shading::Phong) => {
+                return per_pixel();
+            }
+            (Some(DebugView::Normals), Shading::Flat | Shading::Constant) => {
+                let normal = style.side_normal(frame.face_normal(triangle), raster.back_facing);
+                return TriangleShader::Solid(normal * 0.5 + 0.5);
+            }
+            _ => {}
+        }
+        let plain = material.textures.diffuse.is_none() && material.textures.ambient.is_none();
         match style.shading {
             Shading::Constant if plain => {
                 TriangleShader::Solid(frame.constant_colors[triangle.material as usize])
@@ -802,7 +822,7 @@ impl<'f> TriangleShader<'f> {
                 }
                 let back_facing = raster.back_facing;
                 let fast = phong_allowed
-                    .then(|| FastLighting::new(frame, triangle.material, style, Shading::Flat, back_facing))
+                    .then(|| lightings.get(frame, triangle, Shading::Flat, back_facing))
                     .flatten();
                 if let Some(lighting) = fast {
                     let index = flat.add(lighting, raster.triangle, back_facing);
@@ -821,8 +841,7 @@ impl<'f> TriangleShader<'f> {
                 TriangleShader::Gouraud(colors.map(|(_, rest)| rest))
             }
             Shading::Gouraud if plain => TriangleShader::Gouraud(triangle.vertices.map(|v| frame.color(v))),
-            Shading::Phong if phong_allowed => FastPhong::new(frame, triangle, raster.back_facing)
-                .map_or(TriangleShader::General, TriangleShader::Phong),
+            Shading::Phong => per_pixel(),
             _ => TriangleShader::General,
         }
     }
@@ -1046,13 +1065,20 @@ pub(crate) fn renormalize_or_else(v: Vec3, fallback: impl FnOnce() -> Vec3) -> V
 /// from that towards the third by its weight. On an edge it is exactly the seed's two-point
 /// SLERP; inside it keeps unit length and equal angles per step along each of those arcs.
 pub fn slerp_triangle(normals: [Vec3; 3], weights: Vec3) -> Vec3 {
-    let first_two = weights.x + weights.y;
-    let edge = if first_two > 0.0 {
-        slerp(normals[0], normals[1], weights.y / first_two)
+    slerp_triangle_along(&NormalArc::new(normals[0], normals[1]), normals[2], weights)
+}
+
+/// [`slerp_triangle`] with the arc between the first two normals given: it is the same at every
+/// point of a triangle, so the per-pixel shading forms it once per triangle.
+#[inline]
+pub fn slerp_triangle_along(first_two: &NormalArc, third: Vec3, weights: Vec3) -> Vec3 {
+    let first_two_weight = weights.x + weights.y;
+    let edge = if first_two_weight > 0.0 {
+        first_two.at(weights.y / first_two_weight)
     } else {
-        normals[0]
+        first_two.start()
     };
-    slerp(edge, normals[2], weights.z)
+    NormalArc::new(edge, third).at(weights.z)
 }
 
 /// Seed 000's `n(t) = (sin((1 − t)θ)·n₀ + sin(tθ)·n₁) / sin θ`, evaluated in the equivalent
@@ -1064,20 +1090,62 @@ pub fn slerp_triangle(normals: [Vec3; 3], weights: Vec3) -> Vec3 {
 /// about an axis perpendicular to `n₀`, chosen from `n₀` alone so the result is deterministic.
 /// A zero input gives a linear interpolation.
 pub fn slerp(n0: Vec3, n1: Vec3, t: f32) -> Vec3 {
-    const SMALL_SINE: f32 = 1e-6;
-    let cos = n0.dot(n1);
-    let cross = n0.cross(n1);
-    let sin = cross.length();
-    if n0 == Vec3::ZERO || n1 == Vec3::ZERO || (sin < SMALL_SINE && cos > 0.0) {
-        return n0.lerp(n1, t).normalize_or_zero();
+    NormalArc::new(n0, n1).at(t)
+}
+
+/// The path [`slerp`] takes from one normal to another, formed once for any number of `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NormalArc {
+    /// Normals (nearly) parallel, or a zero one: the chord, renormalised.
+    Chord { start: Vec3, end: Vec3 },
+    /// `n(t) = cos(tθ)·start + sin(tθ)·towards`.
+    Turn { start: Vec3, towards: Vec3, angle: f32 },
+}
+
+impl NormalArc {
+    pub fn new(n0: Vec3, n1: Vec3) -> Self {
+        const SMALL_SINE: f32 = 1e-6;
+        let cos = n0.dot(n1);
+        let cross = n0.cross(n1);
+        let sin = cross.length();
+        if n0 == Vec3::ZERO || n1 == Vec3::ZERO || (sin < SMALL_SINE && cos > 0.0) {
+            return NormalArc::Chord { start: n0, end: n1 };
+        }
+        let (angle, towards) = if sin < SMALL_SINE {
+            (std::f32::consts::PI, n0.any_orthonormal_vector())
+        } else {
+            (sin.atan2(cos), (cross / sin).cross(n0))
+        };
+        NormalArc::Turn {
+            start: n0,
+            towards,
+            angle,
+        }
     }
-    let (theta, towards) = if sin < SMALL_SINE {
-        (std::f32::consts::PI, n0.any_orthonormal_vector())
-    } else {
-        (sin.atan2(cos), (cross / sin).cross(n0))
-    };
-    let (sin_t, cos_t) = (t * theta).sin_cos();
-    n0 * cos_t + towards * sin_t
+
+    /// The normal a share `t` of the way along.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        match *self {
+            NormalArc::Chord { start, end } => start.lerp(end, t).normalize_or_zero(),
+            NormalArc::Turn {
+                start,
+                towards,
+                angle,
+            } => {
+                let (sin_t, cos_t) = (t * angle).sin_cos();
+                start * cos_t + towards * sin_t
+            }
+        }
+    }
+
+    /// The normal it starts from.
+    #[inline]
+    pub fn start(&self) -> Vec3 {
+        match *self {
+            NormalArc::Chord { start, .. } | NormalArc::Turn { start, .. } => start,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -1144,6 +1212,7 @@ mod tests {
                 };
                 let (mut run_caches, mut general_caches) = (new_caches(), new_caches());
                 let mut flat = FlatBatch::default();
+                let mut lightings = LightingMemo::default();
                 let mut flat_lit = 0;
                 let (mut shaded, mut back_seen) = (0, 0);
                 for tile in 0..frame.tiles.count() {
@@ -1169,6 +1238,7 @@ mod tests {
                             phong_allowed,
                             &mut run_caches,
                             &mut flat,
+                            &mut lightings,
                         ) {
                             TriangleShader::FlatWaiting(index) => {
                                 flat.light(&frame);
