@@ -1178,31 +1178,38 @@ mod tests {
     }
     use crate::scene::{BackFaces, LightingModel};
 
-    /// Every visible pixel, shaded by the per-run shaders and by the general `shade_sample`:
-    /// the same bits, for each shading mode, back-face mode and light set.
+    /// Every visible pixel, shaded by the per-triangle shaders and by the general
+    /// `shade_sample`: the same bits, for each shading mode, back-face mode and light set, with
+    /// every lighting model, and with every component, interpolation and debug view (see
+    /// `shade_fast::tests::LOOKS`). None of these untextured scenes leaves a pixel to the
+    /// general path.
     #[test]
     fn triangle_shaders_equal_the_general_path_bit_for_bit() {
+        use shade_fast::tests::{LIGHTS, LOOKS, Look, MODELS, PLAIN};
         let modes = [Shading::Constant, Shading::Flat, Shading::Gouraud, Shading::Phong];
-        for (shading, lights) in modes
+        let lightings = LOOKS
+            .map(|look| ((LightingModel::BlinnPhong, Vec3::splat(0.5)), look))
             .into_iter()
-            .flat_map(|m| shade_fast::tests::LIGHTS.map(|l| (m, l)))
-        {
-            for (back_faces, view) in [
-                (BackFaces::ReverseLit, None),
-                (BackFaces::Lit, None),
-                (BackFaces::Unlit, None),
-                // Debug views take the general path; nothing to compare but that nothing breaks.
-                (BackFaces::Cull, Some(DebugView::Diffuse)),
-            ] {
-                let mut scene =
-                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces, lights);
+            .chain(MODELS.map(|model| (model, PLAIN)));
+        let cases = lightings.flat_map(|lighting| modes.map(|mode| (lighting, mode)));
+        for (((model, specular), look), shading) in cases {
+            let back_face_modes = [
+                BackFaces::ReverseLit,
+                BackFaces::Lit,
+                BackFaces::Unlit,
+                BackFaces::Cull,
+            ];
+            for (lights, back_faces) in LIGHTS.into_iter().flat_map(|l| back_face_modes.map(|b| (l, b))) {
+                let mut scene = shade_fast::tests::scene(model, specular, back_faces, lights);
                 scene.override_shading(shading);
+                Look::apply(look, &mut scene);
                 // Cut the spheres open so that back faces are seen too.
                 scene.camera.projection = crate::scene::Projection::Perspective {
                     fov_y_degrees: 40.0,
                     near: 4.9,
                     far: 100.0,
                 };
+                let view = look.view;
                 let frame = shade_fast::tests::frame_of(&scene, view);
                 let phong_allowed = FastPhong::frame_allows(&frame);
                 let new_caches = || TileCaches {
@@ -1218,6 +1225,9 @@ mod tests {
                 for tile in 0..frame.tiles.count() {
                     let rect = frame.tiles.rect(tile);
                     let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+                    // Flat triangles wait per tile, as `shade_tile` has them.
+                    flat.clear();
+                    run_caches.flat_waiting = TriangleColorCache::new();
                     for (slot, &id) in visibility.triangle.iter().enumerate() {
                         if id == NO_TRIANGLE {
                             continue;
@@ -1241,38 +1251,46 @@ mod tests {
                             &mut lightings,
                         ) {
                             TriangleShader::FlatWaiting(index) => {
-                                flat.light(&frame);
+                                if usize::from(index) >= flat.colors.len() {
+                                    flat.light(&frame);
+                                }
                                 flat_lit += 1;
                                 flat.colors[usize::from(index)]
                             }
                             TriangleShader::Solid(color) => color,
                             TriangleShader::Gouraud(colors) => GouraudColors::new(raster, &corners, colors)
                                 .at(edge_values(raster, at.0, at.1)),
-                            TriangleShader::Phong(fast) => fast.shade(source_weights(raster, &corners, at)),
-                            TriangleShader::General => continue,
+                            TriangleShader::Phong(fast) => {
+                                // Through the lanes: a batch of this one pixel.
+                                let mut color = [Vec3::NAN];
+                                let mut batch = PhongBatch::default();
+                                batch.push(&fast, source_weights(raster, &corners, at), 0, &mut color);
+                                batch.flush(&mut color);
+                                color[0]
+                            }
+                            TriangleShader::General => {
+                                panic!("{shading:?} {model:?} {look:?}: a pixel left to the general path")
+                            }
                         };
+                        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                         assert_eq!(
-                            run, general,
-                            "{shading:?} {back_faces:?} {view:?} {lights:?} at {px}, {py}"
+                            bits(run),
+                            bits(general),
+                            "{shading:?} {model:?} {look:?} {back_faces:?} {lights:?} at {px}, {py}"
                         );
                         shaded += 1;
                         back_seen += usize::from(raster.back_facing);
                     }
                 }
-                if view.is_some() {
-                    continue;
-                }
                 assert!(shaded > 100, "{shading:?} {lights:?}: {shaded} pixels compared");
-                if shading == Shading::Flat && back_faces != BackFaces::Unlit {
+                if shading == Shading::Flat && view.is_none() {
                     assert!(
                         flat_lit > 100,
                         "{back_faces:?}: {flat_lit} flat pixels lit in lanes"
                     );
                 }
-                // Culled back faces are not drawn; unlit Phong back faces take the general path.
-                let back_fast = back_faces != BackFaces::Cull
-                    && !(shading == Shading::Phong && back_faces == BackFaces::Unlit);
-                if back_fast {
+                // Culled back faces are not drawn.
+                if back_faces != BackFaces::Cull {
                     assert!(
                         back_seen > 20,
                         "{shading:?}: {back_seen} back-facing pixels compared"
@@ -1422,44 +1440,93 @@ mod tests {
 
     /// Multisampled tiles as `shade_tile` writes them (each pixel's triangles through the
     /// per-triangle shaders, then resolved) against the general path pixel by pixel, at 2, 4,
-    /// 8 and 16 samples: the same bits everywhere, for every shading mode, both lighting
-    /// models, the back-face modes and spot lights, and the depth view (whose mean leaves the
-    /// background out). The spheres are small on the screen, so that many pixels lie on an
+    /// 8 and 16 samples: the same bits everywhere, for every shading mode, every lighting
+    /// model, the back-face modes, light sets, Slerp, a component, and the debug views (the
+    /// depth view's mean leaves the background out). The spheres are small on the screen, so that many pixels lie on an
     /// edge between triangles, or between a triangle and the background.
     #[test]
     fn multisampled_tiles_equal_the_general_path_bit_for_bit() {
+        use crate::scene::{LightingComponent, MicrofacetDistribution, NormalInterpolation};
         use Shading::{Constant, Flat, Gouraud, Phong};
+        use shade_fast::tests::{Look, PLAIN, microfacet};
+        let slerp = Look {
+            interpolation: NormalInterpolation::Slerp,
+            ..PLAIN
+        };
+        let view = |view| Look {
+            view: Some(view),
+            ..PLAIN
+        };
         let cases = [
             (
                 Flat,
                 Gouraud,
                 LightingModel::BlinnPhong,
                 BackFaces::ReverseLit,
-                None,
+                PLAIN,
             ),
-            (Phong, Flat, LightingModel::Phong, BackFaces::Lit, None),
+            (Phong, Flat, LightingModel::Phong, BackFaces::Lit, PLAIN),
             (
                 Phong,
                 Phong,
                 LightingModel::BlinnPhong,
                 BackFaces::ReverseLit,
-                None,
+                slerp,
             ),
-            (Gouraud, Phong, LightingModel::Phong, BackFaces::Unlit, None),
-            (Constant, Gouraud, LightingModel::BlinnPhong, BackFaces::Lit, None),
+            (Gouraud, Phong, LightingModel::Phong, BackFaces::Unlit, PLAIN),
+            (
+                Constant,
+                Gouraud,
+                LightingModel::BlinnPhong,
+                BackFaces::Lit,
+                PLAIN,
+            ),
             (
                 Gouraud,
                 Flat,
                 LightingModel::BlinnPhong,
                 BackFaces::ReverseLit,
-                Some(DebugView::Depth),
+                view(DebugView::Depth),
+            ),
+            (
+                Phong,
+                Flat,
+                microfacet(MicrofacetDistribution::Beckmann),
+                BackFaces::Unlit,
+                Look {
+                    component: LightingComponent::Specular,
+                    ..slerp
+                },
+            ),
+            (
+                Flat,
+                Phong,
+                microfacet(MicrofacetDistribution::Ggx),
+                BackFaces::Lit,
+                PLAIN,
+            ),
+            (
+                Gouraud,
+                Phong,
+                LightingModel::Lambert,
+                BackFaces::ReverseLit,
+                view(DebugView::Normals),
+            ),
+            (
+                Phong,
+                Constant,
+                LightingModel::Unlit,
+                BackFaces::Lit,
+                view(DebugView::Diffuse),
             ),
         ];
         for samples in [2, 4, 8, 16] {
             let pattern = SamplePattern::new(samples).expect("a sample count");
-            for (first, second, model, back_faces, view) in cases {
+            for (first, second, model, back_faces, look) in cases {
                 for lights in shade_fast::tests::LIGHTS {
-                    let scene = cut_open_scene(model, back_faces, lights, [first, second], (130, 70));
+                    let mut scene = cut_open_scene(model, back_faces, lights, [first, second], (130, 70));
+                    look.apply(&mut scene);
+                    let view = look.view;
                     let background = scene.image.background;
                     let frame = shade_fast::tests::frame_sampled(&scene, pattern, view);
                     let width = scene.image.width as usize;
@@ -1500,7 +1567,7 @@ mod tests {
                             assert_eq!(
                                 bits(color[offset]),
                                 bits(expected),
-                                "{samples} samples {first:?}/{second:?} {model:?} {back_faces:?} {view:?} \
+                                "{samples} samples {first:?}/{second:?} {model:?} {back_faces:?} {look:?} \
                                  {lights:?} at {px}, {py}: {} against {expected}",
                                 color[offset]
                             );

@@ -1166,8 +1166,8 @@ pub(crate) mod tests {
         }
     }
 
-    /// Points of every triangle, both sides, shaded per pixel in lanes' arithmetic
-    /// (`FastPhong::shade`) against the general path's pieces (`Frame::light` with the normal
+    /// Points of every triangle, both sides, shaded per pixel in lanes ([`PhongBatch`], and
+    /// `FastPhong::shade`) against the general path's pieces (`Frame::light` with the normal
     /// interpolated as the object asks, or the debug view's value), bit for bit: every model,
     /// light set and back-face mode, and for two models every component, interpolation and view.
     #[test]
@@ -1183,9 +1183,11 @@ pub(crate) mod tests {
                 let mut scene = scene(model, specular, back_faces, lights);
                 look.apply(&mut scene);
                 let frame = frame_of(&scene, look.view);
-                let mut checked = 0;
                 let mut points = Vec::new();
-                for triangle in &frame_triangles(&frame) {
+                let (mut expected, mut batch) = (Vec::new(), PhongBatch::default());
+                let triangles = frame_triangles(&frame);
+                let mut colors = vec![Vec3::NAN; 6 * triangles.len()];
+                for triangle in &triangles {
                     for back_facing in [false, true] {
                         let fast =
                             FastPhong::new(&frame, triangle, back_facing, &mut LightingMemo::default())
@@ -1217,12 +1219,22 @@ pub(crate) mod tests {
                                 bits(general),
                                 "{model:?} {look:?} {back_faces:?} {lights:?}"
                             );
+                            batch.push(&fast, weights, expected.len(), &mut colors);
+                            expected.push(general);
                             points.push((position, style.side_normal(normal, back_facing)));
-                            checked += 1;
                         }
                     }
                 }
-                assert!(checked > 1000);
+                batch.flush(&mut colors);
+                for (lanes, general) in colors.iter().zip(&expected) {
+                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                    assert_eq!(
+                        bits(*lanes),
+                        bits(*general),
+                        "{model:?} {look:?} {back_faces:?} {lights:?}, in lanes"
+                    );
+                }
+                assert!(expected.len() > 1000);
                 if lights == Lights::Shadowed {
                     assert_shadows_cross(&frame, &points, 20);
                 }
