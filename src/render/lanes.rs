@@ -64,6 +64,12 @@ impl Floats {
         backend::le(self, other)
     }
 
+    /// `==` per lane: false where either side is NaN, true for `-0.0 == 0.0`.
+    #[inline(always)]
+    pub fn eq(self, other: Self) -> Mask {
+        backend::eq(self, other)
+    }
+
     /// `f32::is_finite` per lane, as an integer compare of the bits.
     #[inline(always)]
     pub fn is_finite(self) -> Mask {
@@ -198,6 +204,11 @@ mod portable {
     }
 
     #[inline(always)]
+    pub fn trunc(a: Floats) -> Floats {
+        Floats(a.0.map(super::truncate))
+    }
+
+    #[inline(always)]
     pub fn gt(a: Floats, b: Floats) -> Mask {
         compare(a, b, |a, b| a > b)
     }
@@ -205,6 +216,11 @@ mod portable {
     #[inline(always)]
     pub fn le(a: Floats, b: Floats) -> Mask {
         compare(a, b, |a, b| a <= b)
+    }
+
+    #[inline(always)]
+    pub fn eq(a: Floats, b: Floats) -> Mask {
+        compare(a, b, |a, b| a == b)
     }
 
     #[inline(always)]
@@ -244,9 +260,9 @@ mod portable {
 #[allow(unsafe_code)]
 mod sse {
     use std::arch::x86_64::{
-        __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps, _mm_cmpgt_ps, _mm_cmple_ps,
-        _mm_cmplt_epi32, _mm_div_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps,
-        _mm_sub_ps,
+        __m128, __m128i, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps, _mm_cmpeq_ps, _mm_cmpgt_ps,
+        _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps, _mm_cvttps_epi32, _mm_div_ps, _mm_movemask_ps,
+        _mm_mul_ps, _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps, _mm_sub_ps,
     };
 
     use super::{Floats, LANES, Mask};
@@ -290,6 +306,15 @@ mod sse {
         Floats(halves!(_mm_sqrt_ps(a)))
     }
 
+    /// `cvttps2dq` and back: towards zero, −2³¹ out of range ([`super::truncate`]).
+    #[inline(always)]
+    pub fn trunc(a: Floats) -> Floats {
+        let halves: [__m128; 2] = bytemuck::cast(a.0);
+        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+        let truncated = |half: __m128| unsafe { _mm_cvtepi32_ps(_mm_cvttps_epi32(half)) };
+        Floats(bytemuck::cast(halves.map(truncated)))
+    }
+
     /// An ordered compare, as Rust's `>`: false where either side is NaN.
     #[inline(always)]
     pub fn gt(a: Floats, b: Floats) -> Mask {
@@ -300,6 +325,12 @@ mod sse {
     #[inline(always)]
     pub fn le(a: Floats, b: Floats) -> Mask {
         Mask(halves!(_mm_cmple_ps(a, b)))
+    }
+
+    /// An ordered compare, as Rust's `==`.
+    #[inline(always)]
+    pub fn eq(a: Floats, b: Floats) -> Mask {
+        Mask(halves!(_mm_cmpeq_ps(a, b)))
     }
 
     #[inline(always)]
@@ -396,6 +427,13 @@ impl Vec3s {
             y: self.z * other.x - other.z * self.x,
             z: self.x * other.y - other.x * self.y,
         }
+    }
+
+    /// `v == Vec3::ZERO` per lane (each component `== 0.0`: true for `-0.0`, false for NaN).
+    #[inline(always)]
+    pub fn is_zero(self) -> Mask {
+        let zero = Floats::splat(0.0);
+        self.x.eq(zero).and(self.y.eq(zero)).and(self.z.eq(zero))
     }
 
     /// `Vec3::length`.
@@ -501,6 +539,105 @@ impl Mul for Vec3s {
     }
 }
 
+/// `x` rounded towards zero, as SSE2's conversion to a 32-bit integer and back does it: a whole
+/// number for |x| < 2³¹; −2³¹ outside that range and for NaN (the instruction's "indefinite
+/// integer"). One `f32` gets the lanes' result this way, on every target.
+#[inline(always)]
+pub fn truncate(x: f32) -> f32 {
+    if x.abs() < 2_147_483_648.0 {
+        x as i32 as f32
+    } else {
+        -2_147_483_648.0
+    }
+}
+
+/// The operations a formula needs, on one `f32` or on eight lanes, so that one generic function
+/// (`render::trig`) gives each lane exactly the bits it gives a single float.
+pub trait Real:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
+{
+    /// Where a condition holds: `bool`, or a [`Mask`].
+    type Mask: Copy + Not<Output = Self::Mask>;
+    fn splat(value: f32) -> Self;
+    /// `f32::abs`: the sign bit cleared.
+    fn abs(self) -> Self;
+    /// Towards zero ([`truncate`]).
+    fn trunc(self) -> Self;
+    /// `>`: false where either side is NaN.
+    fn gt(self, other: Self) -> Self::Mask;
+    fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask;
+    /// `if_true` where `mask` holds, `if_false` elsewhere.
+    fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
+}
+
+impl Real for f32 {
+    type Mask = bool;
+
+    #[inline(always)]
+    fn splat(value: f32) -> Self {
+        value
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+
+    #[inline(always)]
+    fn trunc(self) -> Self {
+        truncate(self)
+    }
+
+    #[inline(always)]
+    fn gt(self, other: Self) -> bool {
+        self > other
+    }
+
+    #[inline(always)]
+    fn and(a: bool, b: bool) -> bool {
+        a && b
+    }
+
+    #[inline(always)]
+    fn select(mask: bool, if_true: Self, if_false: Self) -> Self {
+        if mask { if_true } else { if_false }
+    }
+}
+
+impl Real for Floats {
+    type Mask = Mask;
+
+    #[inline(always)]
+    fn splat(value: f32) -> Self {
+        Floats::splat(value)
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Floats(self.0.map(f32::abs))
+    }
+
+    #[inline(always)]
+    fn trunc(self) -> Self {
+        backend::trunc(self)
+    }
+
+    #[inline(always)]
+    fn gt(self, other: Self) -> Mask {
+        Floats::gt(self, other)
+    }
+
+    #[inline(always)]
+    fn and(a: Mask, b: Mask) -> Mask {
+        a.and(b)
+    }
+
+    #[inline(always)]
+    fn select(mask: Mask, if_true: Self, if_false: Self) -> Self {
+        mask.select(if_true, if_false)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -539,6 +676,16 @@ mod tests {
         let matrix = Mat3::from_cols(a[0], a[7], b[3]);
         let transformed = lb.transformed_by(matrix).to_array();
         let crossed = la.cross(lb).to_array();
+        let zero = Vec3s::from_array(&[
+            Vec3::ZERO,
+            Vec3::splat(-0.0),
+            Vec3::X,
+            a[4],
+            a[6],
+            -Vec3::Z,
+            Vec3::NAN,
+            a[1],
+        ]);
         let (least, most) = (la.x.min(lb.y), la.x.max(lb.y));
         for i in 0..LANES {
             assert_eq!(dots.0[i].to_bits(), a[i].dot(b[i]).to_bits(), "dot, lane {i}");
@@ -564,6 +711,11 @@ mod tests {
             );
             assert!(same_bits(transformed[i], matrix * b[i]), "transform, lane {i}");
             assert!(same_bits(crossed[i], a[i].cross(b[i])), "cross, lane {i}");
+            assert_eq!(
+                zero.is_zero().lane(i),
+                zero.to_array()[i] == Vec3::ZERO,
+                "is_zero, lane {i}"
+            );
             assert_eq!(
                 least.0[i].to_bits(),
                 a[i].x.min(b[i].y).to_bits(),
@@ -594,8 +746,11 @@ mod tests {
             assert_eq!(bits(x * y), bits(portable::mul(x, y)), "mul");
             assert_eq!(bits(x / y), bits(portable::div(x, y)), "div");
             assert_eq!(bits(x.sqrt()), bits(portable::sqrt(x)), "sqrt");
+            assert_eq!(bits(Real::trunc(x)), bits(portable::trunc(x)), "trunc");
             assert_eq!(x.gt(y), portable::gt(x, y), "gt");
             assert_eq!(x.le(y), portable::le(x, y), "le");
+            assert_eq!(x.eq(y), portable::eq(x, y), "eq");
+            assert_eq!(x.eq(x), portable::eq(x, x), "eq");
             assert_eq!(x.is_finite(), portable::is_finite(x), "is_finite");
             let (m, n) = (x.gt(y), y.is_finite());
             assert_eq!(m.and(n), portable::and(m, n), "and");
@@ -603,6 +758,47 @@ mod tests {
             assert_eq!(m.any(), portable::any(m), "any");
             assert_eq!(bits(m.select(x, y)), bits(portable::select(m, x, y)), "select");
         }
+    }
+
+    #[test]
+    fn truncation_is_the_same_for_lanes_and_one_float() {
+        let edges = [
+            [
+                2.5f32,
+                -2.5,
+                0.999_999_94,
+                -0.0,
+                2_147_483_520.0,
+                -2_147_483_648.0,
+                2_147_483_648.0,
+                -3e9,
+            ],
+            [
+                f32::NAN,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                1e-45,
+                16_777_217.0,
+                -7.9,
+                123_456.7,
+                0.5,
+            ],
+        ];
+        for values in edges {
+            let truncated = Real::trunc(Floats(values));
+            for (lane, &x) in values.iter().enumerate() {
+                assert_eq!(truncated.0[lane].to_bits(), truncate(x).to_bits(), "{x}");
+                if x.abs() < 2_147_483_648.0 {
+                    assert_eq!(truncate(x), x.trunc(), "{x}");
+                }
+            }
+            assert_eq!(
+                portable::trunc(Floats(values)).0.map(f32::to_bits),
+                truncated.0.map(f32::to_bits)
+            );
+        }
+        assert_eq!(truncate(f32::NAN), -2_147_483_648.0);
+        assert_eq!(truncate(3e9), -2_147_483_648.0);
     }
 
     #[test]

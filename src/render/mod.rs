@@ -27,6 +27,7 @@ pub mod raster;
 pub mod shade;
 pub mod shade_fast;
 pub mod shadow;
+pub mod trig;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};

@@ -25,6 +25,7 @@ use crate::render::raster::{
     edge_values,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong, LightingMemo, PhongBatch};
+use crate::render::trig;
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
 /// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
@@ -1088,7 +1089,8 @@ pub fn slerp_triangle_along(first_two: &NormalArc, third: Vec3, weights: Vec3) -
 /// this form stays unit length and exact at t = 0 for every θ. Near θ = 0 the chord is the arc:
 /// linear interpolation, renormalised. At θ = π every great circle joins the two: the arc turns
 /// about an axis perpendicular to `n₀`, chosen from `n₀` alone so the result is deterministic.
-/// A zero input gives a linear interpolation.
+/// A zero input gives a linear interpolation. The sine, cosine and `atan2` are `trig`'s
+/// polynomials (within 2 units of the last place), which the lanes evaluate with the same bits.
 pub fn slerp(n0: Vec3, n1: Vec3, t: f32) -> Vec3 {
     NormalArc::new(n0, n1).at(t)
 }
@@ -1102,9 +1104,11 @@ pub enum NormalArc {
     Turn { start: Vec3, towards: Vec3, angle: f32 },
 }
 
+/// Below this `|n₀ × n₁|`, [`slerp`]'s normals are parallel or opposite.
+pub const SMALL_SINE: f32 = 1e-6;
+
 impl NormalArc {
     pub fn new(n0: Vec3, n1: Vec3) -> Self {
-        const SMALL_SINE: f32 = 1e-6;
         let cos = n0.dot(n1);
         let cross = n0.cross(n1);
         let sin = cross.length();
@@ -1114,7 +1118,7 @@ impl NormalArc {
         let (angle, towards) = if sin < SMALL_SINE {
             (std::f32::consts::PI, n0.any_orthonormal_vector())
         } else {
-            (sin.atan2(cos), (cross / sin).cross(n0))
+            (trig::atan2(sin, cos), (cross / sin).cross(n0))
         };
         NormalArc::Turn {
             start: n0,
@@ -1133,7 +1137,7 @@ impl NormalArc {
                 towards,
                 angle,
             } => {
-                let (sin_t, cos_t) = (t * angle).sin_cos();
+                let (sin_t, cos_t) = trig::sin_cos(t * angle);
                 start * cos_t + towards * sin_t
             }
         }

@@ -58,7 +58,8 @@ use crate::lighting::{
 use crate::render::DebugView;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer, shown_component};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
-use crate::render::shade::{NormalArc, renormalize_or_else, slerp_triangle_along};
+use crate::render::shade::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
+use crate::render::trig;
 use crate::scene::{
     Attenuation, BackFaces, LightingComponent, LightingModel, Material, Microfacet, MicrofacetDistribution,
     NormalInterpolation, Shading,
@@ -575,12 +576,13 @@ pub enum PixelOutput<'f> {
     Depth,
 }
 
-/// What the pixels of one batch share (in one frame): the view, or for lit pixels the
-/// material, object and side, which decide the lighting. Two integers, compared per pixel.
+/// What the pixels of one batch share (in one frame): the material and object (which decide
+/// the lighting and how normals are interpolated), and the side or the view. Two integers,
+/// compared per pixel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct BatchKey {
     /// The material and object.
-    lighting: u64,
+    surface: u64,
     /// 0 and 1 for the front and back of a lit surface, 2 and 3 for the normals and depth views.
     output: u8,
 }
@@ -588,24 +590,18 @@ struct BatchKey {
 impl BatchKey {
     /// No pixel's key: an empty batch's.
     const NONE: BatchKey = BatchKey {
-        lighting: u64::MAX,
+        surface: u64::MAX,
         output: u8::MAX,
     };
 
     #[inline(always)]
     fn of(output: &PixelOutput, triangle: &FrameTriangle, back_facing: bool) -> Self {
-        match output {
-            PixelOutput::Lit(_) => BatchKey {
-                lighting: u64::from(triangle.material) | u64::from(triangle.object) << 32,
-                output: u8::from(back_facing),
-            },
-            PixelOutput::Normals => BatchKey {
-                lighting: 0,
-                output: 2,
-            },
-            PixelOutput::Depth => BatchKey {
-                lighting: 0,
-                output: 3,
+        BatchKey {
+            surface: u64::from(triangle.material) | u64::from(triangle.object) << 32,
+            output: match output {
+                PixelOutput::Lit(_) => u8::from(back_facing),
+                PixelOutput::Normals => 2,
+                PixelOutput::Depth => 3,
             },
         }
     }
@@ -642,12 +638,18 @@ pub struct PhongBatch<'f> {
     shader: Option<(&'f Frame, PixelOutput<'f>)>,
     /// `shader`'s [`BatchKey`] ([`BatchKey::NONE`] while there is none).
     key: BatchKey,
+    /// Whether the waiting pixels' normals are slerped (they are of one object).
+    slerp: bool,
     len: usize,
     /// Where each pixel's colour goes.
     offsets: [usize; LANES],
     positions: [Vec3; LANES],
-    /// Interpolated, not yet renormalised.
+    /// With Nlerp: interpolated, not yet renormalised.
     normals: [Vec3; LANES],
+    /// With Slerp: each pixel's weights and its triangle's first arc and third normal.
+    weights: [Vec3; LANES],
+    arcs: [NormalArc; LANES],
+    thirds: [Vec3; LANES],
     triangles: [Option<&'f FrameTriangle>; LANES],
     reversed: [bool; LANES],
 }
@@ -657,10 +659,17 @@ impl Default for PhongBatch<'_> {
         PhongBatch {
             shader: None,
             key: BatchKey::NONE,
+            slerp: false,
             len: 0,
             offsets: [0; LANES],
             positions: [Vec3::ZERO; LANES],
             normals: [Vec3::ZERO; LANES],
+            weights: [Vec3::ZERO; LANES],
+            arcs: [NormalArc::Chord {
+                start: Vec3::ZERO,
+                end: Vec3::ZERO,
+            }; LANES],
+            thirds: [Vec3::ZERO; LANES],
             triangles: [None; LANES],
             reversed: [false; LANES],
         }
@@ -677,11 +686,19 @@ impl<'f> PhongBatch<'f> {
             self.flush(color);
             self.shader = Some((phong.frame, phong.output));
             self.key = phong.batch_key;
+            self.slerp = matches!(phong.normals, NormalStage::Slerp { .. });
         }
         let lane = self.len;
         self.offsets[lane] = offset;
         self.positions[lane] = interpolate(phong.positions, weights);
-        self.normals[lane] = phong.interpolated_normal(weights);
+        match phong.normals {
+            NormalStage::Nlerp(normals) => self.normals[lane] = interpolate(normals, weights),
+            NormalStage::Slerp { first_two, third } => {
+                self.weights[lane] = weights;
+                self.arcs[lane] = first_two;
+                self.thirds[lane] = third;
+            }
+        }
         self.triangles[lane] = Some(phong.triangle);
         self.reversed[lane] = phong.reversed;
         self.len += 1;
@@ -702,6 +719,9 @@ impl<'f> PhongBatch<'f> {
         for lane in self.len..LANES {
             self.positions[lane] = self.positions[self.len - 1];
             self.normals[lane] = self.normals[self.len - 1];
+            self.weights[lane] = self.weights[self.len - 1];
+            self.arcs[lane] = self.arcs[self.len - 1];
+            self.thirds[lane] = self.thirds[self.len - 1];
             self.triangles[lane] = self.triangles[self.len - 1];
             self.reversed[lane] = self.reversed[self.len - 1];
         }
@@ -727,7 +747,11 @@ impl<'f> PhongBatch<'f> {
     /// where `|v|² > 1e-12`, else the face normal) and turned to the side shaded.
     #[inline(always)]
     fn side_normals(&self, frame: &Frame) -> [Vec3; LANES] {
-        let interpolated = Vec3s::from_array(&self.normals);
+        let interpolated = if self.slerp {
+            slerp_triangle_lanes(&self.arcs, &self.thirds, &self.weights)
+        } else {
+            Vec3s::from_array(&self.normals)
+        };
         let length_squared = interpolated.dot(interpolated);
         let usable = length_squared.gt(Floats::splat(1e-12));
         let mut normals = interpolated.divide(length_squared.sqrt()).to_array();
@@ -746,11 +770,90 @@ impl<'f> PhongBatch<'f> {
     }
 }
 
-/// `slerp_triangle_along`, out of line, so that the Nlerp pixels' loop stays small enough to
-/// inline.
-#[inline(never)]
-fn slerped_normal(first_two: &NormalArc, third: Vec3, weights: Vec3) -> Vec3 {
-    slerp_triangle_along(first_two, third, weights)
+/// `slerp_triangle_along` for the lanes' weights, first arcs and third normals: lane by lane
+/// the same operations, `trig`'s sine, cosine and `atan2` included.
+#[inline(always)]
+fn slerp_triangle_lanes(arcs: &[NormalArc; LANES], thirds: &[Vec3; LANES], weights: &[Vec3; LANES]) -> Vec3s {
+    let weights = Vec3s::from_array(weights);
+    let first = ArcLanes::of(arcs);
+    let first_two_weight = weights.x + weights.y;
+    let on_edge = first_two_weight.gt(Floats::splat(0.0));
+    let edge = on_edge.select3(first.at(weights.y / first_two_weight), first.start);
+    ArcLanes::new(edge, Vec3s::from_array(thirds)).at(weights.z)
+}
+
+/// [`NormalArc`]s in lanes: where each starts, where it goes (a chord's end, a turn's
+/// `towards`), its angle (a turn's), and which lanes are chords.
+struct ArcLanes {
+    start: Vec3s,
+    other: Vec3s,
+    angle: Floats,
+    chord: Mask,
+}
+
+impl ArcLanes {
+    /// The lanes of `arcs`.
+    #[inline(always)]
+    fn of(arcs: &[NormalArc; LANES]) -> Self {
+        let mut other = [Vec3::ZERO; LANES];
+        let mut angle = [0.0; LANES];
+        let mut chord = [false; LANES];
+        for (lane, arc) in arcs.iter().enumerate() {
+            match *arc {
+                NormalArc::Chord { end, .. } => (other[lane], chord[lane]) = (end, true),
+                NormalArc::Turn {
+                    towards, angle: a, ..
+                } => (other[lane], angle[lane]) = (towards, a),
+            }
+        }
+        ArcLanes {
+            start: Vec3s::from_array(&arcs.map(|arc| arc.start())),
+            other: Vec3s::from_array(&other),
+            angle: Floats(angle),
+            chord: Mask::from_bools(chord),
+        }
+    }
+
+    /// `NormalArc::new` lane by lane; a half turn's perpendicular (`any_orthonormal_vector`)
+    /// per lane where one occurs.
+    #[inline(always)]
+    fn new(n0: Vec3s, n1: Vec3s) -> Self {
+        let zero = Floats::splat(0.0);
+        let cos = n0.dot(n1);
+        let cross = n0.cross(n1);
+        let sin = cross.length();
+        let small = Floats::splat(SMALL_SINE).gt(sin);
+        let chord = n0.is_zero().or(n1.is_zero()).or(small.and(cos.gt(zero)));
+        let half_turn = small.and(!chord);
+        let mut towards = cross.divide(sin).cross(n0);
+        if half_turn.any() {
+            let (starts, mut perpendiculars) = (n0.to_array(), towards.to_array());
+            for lane in (0..LANES).filter(|&lane| half_turn.lane(lane)) {
+                perpendiculars[lane] = starts[lane].any_orthonormal_vector();
+            }
+            towards = Vec3s::from_array(&perpendiculars);
+        }
+        ArcLanes {
+            start: n0,
+            other: chord.select3(n1, towards),
+            angle: small.select(Floats::splat(std::f32::consts::PI), trig::atan2(sin, cos)),
+            chord,
+        }
+    }
+
+    /// `NormalArc::at(t)` lane by lane (the chord only where a lane has one: rare, normals
+    /// nearly parallel).
+    #[inline(always)]
+    fn at(&self, t: Floats) -> Vec3s {
+        let (sine, cosine) = trig::sin_cos(t * self.angle);
+        let turn = self.start.scale(cosine) + self.other.scale(sine);
+        if !self.chord.any() {
+            return turn;
+        }
+        let one = Floats::splat(1.0);
+        let chord = (self.start.scale(one - t) + self.other.scale(t)).normalize_or_zero();
+        self.chord.select3(chord, turn)
+    }
 }
 
 /// The value at barycentric `weights` of a triangle whose corners have `values`.
@@ -807,11 +910,10 @@ impl<'f> FastPhong<'f> {
     }
 
     /// The normal at `weights` as the object interpolates it, before renormalisation.
-    #[inline(always)]
     fn interpolated_normal(&self, weights: Vec3) -> Vec3 {
         match &self.normals {
             NormalStage::Nlerp(normals) => interpolate(*normals, weights),
-            NormalStage::Slerp { first_two, third } => slerped_normal(first_two, *third, weights),
+            NormalStage::Slerp { first_two, third } => slerp_triangle_along(first_two, *third, weights),
         }
     }
 
@@ -1377,12 +1479,14 @@ pub(crate) mod tests {
             let triangles = frame_triangles(&frame);
             let mut colors = vec![Vec3::splat(-1.0); 3 * triangles.len()];
             let stride = triangles.len() / 13; // visits both objects, alternating runs
+            let mut fallbacks = 0;
             for (n, triangle) in triangles.iter().step_by(stride.max(1)).enumerate() {
                 let mut fast = FastPhong::new(&frame, triangle, n % 3 == 0, &mut LightingMemo::default())
                     .expect("eligible");
-                if n % 4 == 1 {
+                if n % 4 == 1 && matches!(fast.normals, NormalStage::Nlerp(_)) {
                     // Opposite vertex normals: halfway between the first two, nothing is left.
                     fast.normals = NormalStage::Nlerp([Vec3::X, -Vec3::X, Vec3::Y]);
+                    fallbacks += 1;
                 }
                 let count = 1 + n % 3;
                 for &w in &weights[..count] {
@@ -1391,7 +1495,7 @@ pub(crate) mod tests {
                 }
             }
             batch.flush(&mut colors);
-            assert!(expected.len() > 20);
+            assert!(expected.len() > 20 && fallbacks > 1);
             for (i, want) in expected.iter().enumerate() {
                 let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                 assert_eq!(
@@ -1401,6 +1505,58 @@ pub(crate) mod tests {
                 );
             }
         }
+    }
+
+    /// Slerp in lanes against `slerp_triangle` (`NormalArc`) on awkward triangles, bit for bit:
+    /// normals parallel, nearly parallel, opposite (the half turn), zero, unnormalised, and
+    /// weights on corners and edges (a zero weight for the first two).
+    #[test]
+    fn slerp_in_lanes_equals_slerp_bit_for_bit() {
+        let tilt = |angle: f32| Vec3::new(angle.sin(), 0.0, angle.cos());
+        let normal_sets = [
+            [Vec3::X, Vec3::Y, Vec3::Z],
+            [Vec3::Z, Vec3::Z, Vec3::Z],
+            [Vec3::Z, tilt(1e-7), tilt(2e-6)],
+            [Vec3::Z, -Vec3::Z, Vec3::X],
+            [Vec3::Z, tilt(std::f32::consts::PI - 1e-7), -Vec3::Z],
+            [Vec3::ZERO, Vec3::Y, Vec3::Z],
+            [Vec3::X, Vec3::ZERO, -Vec3::X],
+            [
+                Vec3::new(0.6, 0.0, 0.8),
+                Vec3::new(0.0, 0.6, 0.8),
+                Vec3::new(-0.48, -0.6, 0.64),
+            ],
+            [tilt(0.3), tilt(-2.9), Vec3::new(1.0, 2.0, -0.5)],
+        ];
+        let weights = [
+            Vec3::new(0.2, 0.3, 0.5),
+            Vec3::X,
+            Vec3::Y,
+            Vec3::Z,
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::new(0.0, 0.25, 0.75),
+            Vec3::splat(1.0 / 3.0),
+            Vec3::new(0.7, 0.0, 0.3),
+        ];
+        let mut compared = 0;
+        for (set, normals) in normal_sets.iter().enumerate() {
+            // Each lane another triangle of the sets, each with its own weights.
+            let lanes: [([Vec3; 3], Vec3); LANES] =
+                std::array::from_fn(|lane| (normal_sets[(set + lane) % normal_sets.len()], weights[lane]));
+            let arcs = lanes.map(|(n, _)| NormalArc::new(n[0], n[1]));
+            let slerped = slerp_triangle_lanes(&arcs, &lanes.map(|(n, _)| n[2]), &lanes.map(|(_, w)| w));
+            for (lane, (normals, weights)) in lanes.iter().enumerate() {
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!(
+                    bits(slerped.to_array()[lane]),
+                    bits(slerp_triangle(*normals, *weights)),
+                    "{normals:?} at {weights}"
+                );
+                compared += 1;
+            }
+            assert!(normals.iter().all(|n| n.is_finite()));
+        }
+        assert_eq!(compared, normal_sets.len() * LANES);
     }
 
     /// Gouraud vertex colours, lit by the fast path in the geometry stage, against the general
