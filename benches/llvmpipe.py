@@ -12,8 +12,10 @@ the image difference of our frame against llvmpipe's. With `--scaling` it also m
 against triangle count (10^3 ... 10^7) and resolution (480p ... 4K), and peak memory per triangle.
 
 The feature scenes (S1 with one feature: a spot light, 4x MSAA, a shadow map, a texture, a ground
-plane; the anchor's FEATURES.md) get a table of their own with each one's cost over plain S1 in the
-same run ("x plain S1"), for both renderers: for every mode, thread count and repeat, plain S1 runs
+plane; the anchor's FEATURES.md; a point light, whose scene for llvmpipe is ours, in
+benches/anchors/; and, for lampshade alone, Slerp and Cook-Torrance, which llvmpipe's harness cannot
+express) get a table of their own with each one's cost over plain S1 in the same run
+("x plain S1"), for both renderers: for every mode, thread count and repeat, plain S1 runs
 (both renderers) before and after the feature scenes of that mode, and each feature's ratio is its
 frame over the mean of those two S1 frames; the table gives the medians over the repeats. The
 scenes with the ground plane also get their ratio to `s1_ground` of the same repeat ("x ground"):
@@ -34,6 +36,7 @@ compare. Needs a release build: `cargo build --release`.
 """
 
 import argparse
+import collections
 import fnmatch
 import json
 import os
@@ -52,18 +55,25 @@ SCENES = [
 ]
 MODES = ["flat", "gouraud", "phong", "blinn"]
 SHADED = ["phong", "blinn"]
-# (anchor JSON stem, our scene file, modes, the scene it adds one feature to when that is not plain
-# S1): S1 with one feature each (anchor FEATURES.md); llvmpipe's frames are in the anchor's
-# out/features/.
+# S1 with one feature each. `stem`: the row's name, and the JSON scene's for llvmpipe; `scene`: ours;
+# `modes`: the rows' modes; `base`: the scene it adds one feature to when that is not plain S1;
+# `llvmpipe`: where llvmpipe's scene is: "anchor" (the anchor's scenes/, its frames in out/features/,
+# FEATURES.md), a JSON file of ours (its frames are kept from the run), or None (lampshade alone);
+# `ours_mode`: the `lampshade bench` mode when it is not the row's ("scene": the scene's own shading
+# and lighting model, which the other modes would replace).
+Feature = collections.namedtuple("Feature", "stem scene modes base llvmpipe ours_mode")
 FEATURE_SCENES = [
-    ("s1_spot", "scenes/bench/spot.ron", MODES, None),
-    ("s1_spot_ground", "scenes/bench/spot-ground.ron", MODES, "s1_ground"),
-    ("s1_msaa4", "scenes/bench/msaa4.ron", MODES, None),
-    ("s1_ground", "scenes/bench/ground.ron", MODES, None),
-    ("s1_shadow", "scenes/bench/shadow.ron", SHADED, "s1_ground"),
-    ("s1_shadow2", "scenes/bench/shadow2.ron", SHADED, "s1_ground"),
-    ("s1_shadow_noplane", "scenes/bench/shadow-noplane.ron", SHADED, None),
-    ("s1_textured", "scenes/bench/textured.ron", MODES, None),
+    Feature("s1_spot", "scenes/bench/spot.ron", MODES, None, "anchor", None),
+    Feature("s1_spot_ground", "scenes/bench/spot-ground.ron", MODES, "s1_ground", "anchor", None),
+    Feature("s1_point", "scenes/bench/point.ron", MODES, None, "benches/anchors/s1_point.json", None),
+    Feature("s1_msaa4", "scenes/bench/msaa4.ron", MODES, None, "anchor", None),
+    Feature("s1_ground", "scenes/bench/ground.ron", MODES, None, "anchor", None),
+    Feature("s1_shadow", "scenes/bench/shadow.ron", SHADED, "s1_ground", "anchor", None),
+    Feature("s1_shadow2", "scenes/bench/shadow2.ron", SHADED, "s1_ground", "anchor", None),
+    Feature("s1_shadow_noplane", "scenes/bench/shadow-noplane.ron", SHADED, None, "anchor", None),
+    Feature("s1_textured", "scenes/bench/textured.ron", MODES, None, "anchor", None),
+    Feature("s1_slerp", "scenes/bench/slerp.ron", SHADED, None, None, None),
+    Feature("s1_cook_torrance", "scenes/bench/cook-torrance.ron", ["phong"], None, None, "scene"),
 ]
 PLAIN_S1 = ("s1_two_spheres", "scenes/bench/two-spheres.ron")
 # Real meshes (anchor JSON stem in benches/anchors/, our scene file): scans, Spot, the glTF Duck and
@@ -89,19 +99,29 @@ LAMPSHADE = os.path.join(ROOT, "target", "release", "lampshade")
 
 
 def build_glref(anchors):
-    """Builds llvmpipe's harness in a temporary copy of the anchor folder."""
+    """Builds llvmpipe's harness in a temporary copy of the anchor folder, with our own JSON scenes
+    beside the anchor's, and a folder for the frames of ours (`OWN_FRAMES`)."""
     work = tempfile.mkdtemp(prefix="glref-")
     for name in ("Makefile", "src", "scenes"):
         source = os.path.join(anchors, name)
         target = os.path.join(work, name)
         (shutil.copytree if os.path.isdir(source) else shutil.copy)(source, target)
+    for feature in FEATURE_SCENES:
+        if feature.llvmpipe not in ("anchor", None):
+            shutil.copy(os.path.join(ROOT, feature.llvmpipe), os.path.join(work, "scenes", feature.stem + ".json"))
+    os.mkdir(os.path.join(work, OWN_FRAMES))
     subprocess.run(["make", "-s", "-C", work], check=True)
     return work
 
 
+# In the harness's folder: llvmpipe's last frame of each of our own JSON scenes and mode, named as
+# the anchor's out/features/ names them, for `lampshade bench --anchors`.
+OWN_FRAMES = "own-frames"
+
+
 def glref_median(work, scene, mode, threads, frames, out=None):
     """llvmpipe's median frame of `scene` (an anchor stem in the anchor folder's scenes/, or a
-    path to a JSON file), writing its last frame to `out`."""
+    path to a JSON file), writing its last frame to `out` and to `OWN_FRAMES`."""
     out = out or os.path.join(work, "frame.png")
     result = os.path.join(work, "result.jsonl")
     if os.path.exists(result):
@@ -115,6 +135,8 @@ def glref_median(work, scene, mode, threads, frames, out=None):
     with open(result) as lines:
         line = json.loads(lines.readlines()[-1])
     FOREIGN_CORES.append(line.get("foreign_cores", float("nan")))
+    stem = os.path.splitext(os.path.basename(scene))[0]
+    shutil.copy(out, os.path.join(work, OWN_FRAMES, f"{stem}__{mode}.png"))
     return line["median_ms"]
 
 
@@ -127,7 +149,7 @@ def lampshade_bench(scene, modes, threads, frames, extra=()):
 
 def selected(stem, patterns):
     return patterns is None or any(
-        (pattern == "features" and stem in {f[0] for f in FEATURE_SCENES})
+        (pattern == "features" and stem in {f.stem for f in FEATURE_SCENES})
         or (pattern == "meshes" and stem in {m[0] for m in MESH_SCENES})
         or fnmatch.fnmatch(stem, pattern)
         for pattern in patterns)
@@ -168,14 +190,14 @@ def image_columns(info):
 
 def compare_features(args, work):
     """The feature scenes, each mode's group bracketed by plain S1 runs (module documentation)."""
-    out_dir = os.path.join(args.anchors, "out", "features")
-    features = [f for f in FEATURE_SCENES if selected(f[0], args.scenes)]
+    anchor_frames = os.path.join(args.anchors, "out", "features")
+    features = [f for f in FEATURE_SCENES if selected(f.stem, args.scenes)]
     if not features:
         return
     # (stem, mode, threads) -> {"ours": [ms], "theirs": [ms], "ours_x": [ratio], "theirs_x": [ratio],
     #                           "ours_base": [ratio], "theirs_base": [ratio], "info": json}
     results = {}
-    bases = {f[0]: f[3] for f in features}
+    bases = {f.stem: f.base for f in features}
     load_before = os.getloadavg()[0]
     del FOREIGN_CORES[:]
 
@@ -183,20 +205,26 @@ def compare_features(args, work):
         return results.setdefault(key, {"ours": [], "theirs": [], "ours_x": [], "theirs_x": [],
                                         "ours_base": [], "theirs_base": [], "info": info})
 
-    def pair(stem, scene, mode, threads):
-        theirs = glref_median(work, stem, mode, threads, args.frames)
-        info = lampshade_bench(scene, [mode], threads, args.frames, ["--anchors", out_dir])[0]
+    def pair(feature, mode, threads):
+        """(our median, llvmpipe's or None, our JSON line) of one run of each."""
+        theirs = None
+        if feature.llvmpipe is not None:
+            theirs = glref_median(work, feature.stem, mode, threads, args.frames)
+        frames = anchor_frames if feature.llvmpipe == "anchor" else os.path.join(work, OWN_FRAMES)
+        info = lampshade_bench(feature.scene, [feature.ours_mode or mode], threads, args.frames,
+                               ["--anchors", frames])[0]
         return info["median_ms"], theirs, info
 
+    plain = Feature(*PLAIN_S1, MODES, None, "anchor", None)
     for mode in MODES:
-        group = [f for f in features if mode in f[2]]
+        group = [f for f in features if mode in f.modes]
         if not group:
             continue
         for threads in args.threads:
             for _ in range(args.repeats):
-                before = pair(*PLAIN_S1, mode, threads)
-                measured = {stem: pair(stem, scene, mode, threads) for stem, scene, _, _ in group}
-                after = pair(*PLAIN_S1, mode, threads)
+                before = pair(plain, mode, threads)
+                measured = {f.stem: pair(f, mode, threads) for f in group}
+                after = pair(plain, mode, threads)
                 ours_s1 = (before[0] + after[0]) / 2
                 theirs_s1 = (before[1] + after[1]) / 2
                 row = row_of((PLAIN_S1[0], mode, threads), before[2])
@@ -205,14 +233,18 @@ def compare_features(args, work):
                 for stem, (ours, theirs, info) in measured.items():
                     row = row_of((stem, mode, threads), info)
                     row["ours"].append(ours)
-                    row["theirs"].append(theirs)
                     row["ours_x"].append(ours / ours_s1)
-                    row["theirs_x"].append(theirs / theirs_s1)
+                    if theirs is not None:
+                        row["theirs"].append(theirs)
+                        row["theirs_x"].append(theirs / theirs_s1)
                     if bases[stem] in measured:
                         row["ours_base"].append(ours / measured[bases[stem]][0])
-                        row["theirs_base"].append(theirs / measured[bases[stem]][1])
-                    print(f"{stem} {mode} {threads}: ours {ours:.1f} ms (x{ours / ours_s1:.2f} S1), "
-                          f"llvmpipe {theirs:.1f} ms (x{theirs / theirs_s1:.2f} S1)", file=sys.stderr)
+                        if theirs is not None:
+                            row["theirs_base"].append(theirs / measured[bases[stem]][1])
+                    llvmpipe = (f"llvmpipe {theirs:.1f} ms (x{theirs / theirs_s1:.2f} S1)" if theirs is not None
+                                else "no llvmpipe scene")
+                    print(f"{stem} {mode} {threads}: ours {ours:.1f} ms (x{ours / ours_s1:.2f} S1), {llvmpipe}",
+                          file=sys.stderr)
     print("\n| scene | triangles | mode | threads | lampshade ms | llvmpipe ms | ratio | lampshade × plain S1 | "
           "llvmpipe × plain S1 | lampshade × ground | llvmpipe × ground | mean abs diff | max abs diff | "
           "pixels > 2/255 |")
@@ -220,17 +252,22 @@ def compare_features(args, work):
 
     def ratio(values, empty):
         return f"{statistics.median(values):.2f}" if values else empty
-    for stem in [PLAIN_S1[0]] + [f[0] for f in features]:
+    for stem in [PLAIN_S1[0]] + [f.stem for f in features]:
         for mode in MODES:
             for threads in args.threads:
                 row = results.get((stem, mode, threads))
                 if row is None:
                     continue
-                ours, theirs = statistics.median(row["ours"]), statistics.median(row["theirs"])
-                print(f"| {stem} | {row['info']['triangles']:,} | {mode} | {threads} | {ours:.1f} | {theirs:.1f} | "
-                      f"{ours / theirs:.2f} | {ratio(row['ours_x'], '1')} | {ratio(row['theirs_x'], '1')} | "
-                      f"{ratio(row['ours_base'], '–')} | {ratio(row['theirs_base'], '–')} | "
-                      f"{image_columns(row['info'])} |")
+                ours = statistics.median(row["ours"])
+                if row["theirs"]:
+                    theirs = statistics.median(row["theirs"])
+                    llvmpipe = f"{theirs:.1f} | {ours / theirs:.2f}"
+                    images = image_columns(row["info"])
+                else:
+                    llvmpipe, images = "– | –", "– | – | –"
+                print(f"| {stem} | {row['info']['triangles']:,} | {mode} | {threads} | {ours:.1f} | {llvmpipe} | "
+                      f"{ratio(row['ours_x'], '1')} | {ratio(row['theirs_x'], '–' if not row['theirs'] else '1')} | "
+                      f"{ratio(row['ours_base'], '–')} | {ratio(row['theirs_base'], '–')} | {images} |")
     print(f"\nLoad average (1 min) {load_before:.2f} before the feature runs, {os.getloadavg()[0]:.2f} after; "
           f"other processes used a median of {statistics.median(FOREIGN_CORES):.2f} cores "
           f"(max {max(FOREIGN_CORES):.2f}) during llvmpipe's timed frames ({len(FOREIGN_CORES)} runs).")

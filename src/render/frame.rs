@@ -279,11 +279,26 @@ impl Frame {
         normal: Vec3,
         back_facing: bool,
     ) -> (Vec3, Vec3) {
-        let unlit = back_facing && style.back_faces == BackFaces::Unlit;
+        let lit_side = !(back_facing && style.back_faces == BackFaces::Unlit);
         let normal = style.side_normal(normal, back_facing);
+        self.light_side(material, style.component, position, normal, lit_side)
+    }
+
+    /// [`Frame::light_material`] on a side already chosen: `normal` is the side's normal (flipped
+    /// or not), and the frame's lights reach the side only if `lit_side` (not the back of an
+    /// object whose back faces are unlit). The specification the lanes are held to
+    /// (`shade_fast::FastLighting`).
+    pub fn light_side(
+        &self,
+        material: &Material,
+        component: LightingComponent,
+        position: Vec3,
+        normal: Vec3,
+        lit_side: bool,
+    ) -> (Vec3, Vec3) {
         let terms = illuminate_with_visibility(
             material,
-            if unlit { &[] } else { &self.lights },
+            if lit_side { &self.lights } else { &[] },
             self.ambient_light,
             position,
             normal,
@@ -293,12 +308,12 @@ impl Frame {
                 _ => 1.0,
             },
         );
-        select_component_split(self.debug_view, style.component, &terms)
+        select_component_split(self.debug_view, component, &terms)
     }
 }
 
 /// The component a pixel shows: the debug view's if one is asked, else the object's.
-fn shown_component(view: Option<DebugView>, component: LightingComponent) -> LightingComponent {
+pub(crate) fn shown_component(view: Option<DebugView>, component: LightingComponent) -> LightingComponent {
     match view {
         Some(DebugView::Ambient) => LightingComponent::Ambient,
         Some(DebugView::Diffuse) => LightingComponent::Diffuse,

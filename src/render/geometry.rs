@@ -31,7 +31,7 @@ use crate::render::raster::{
     GUARD_BAND_PIXELS, RasterTriangle, SamplePattern, ScreenVertex, SnappedVertex, SourceTriangle,
     sample_bounds, setup_triangle, setup_within,
 };
-use crate::render::shade_fast::{FastLighting, FastPhong};
+use crate::render::shade_fast::FastLighting;
 use crate::render::shadow::ShadowMap;
 use crate::render::surface_lanes::SurfaceLanes;
 use crate::scene::presets::default_material;
@@ -223,7 +223,6 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
     // while it reads the frame's lights and materials (which never read the vertices).
     let mut vertices = std::mem::take(&mut frame.vertices);
     let lit_frame = &*frame;
-    let fast_allowed = FastPhong::frame_allows(lit_frame);
     // Per chunk, the textured parts of its vertices that have one (rare: allocated only then).
     let textured_parts: Vec<Vec<(usize, Vec3)>> = colors
         .par_chunks_mut(VERTEX_CHUNK)
@@ -267,36 +266,33 @@ fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObje
                         .unwrap_or(Vec3::ZERO)
                 });
                 let style = &lit_frame.objects[object];
-                if fast_allowed {
-                    let lighting = match fast {
-                        Some((o, m, lighting)) if o == object && m == material => lighting,
-                        _ => {
-                            if let Some((.., Some(previous))) = fast {
-                                batch.flush(&previous, colors, vertices, &mut textured_parts);
-                            }
-                            let lighting =
-                                FastLighting::new(lit_frame, material, style, Shading::Gouraud, false);
-                            fast = Some((object, material, lighting));
-                            batch.normal_matrix = place.normal_when_lit.then_some(place.normal_matrix);
-                            batch.tinted = !scene.objects[object].mesh.colors.is_empty();
-                            lighting
+                let lighting = match fast {
+                    Some((o, m, lighting)) if o == object && m == material => lighting,
+                    _ => {
+                        if let Some((.., Some(previous))) = fast {
+                            batch.flush(&previous, colors, vertices, &mut textured_parts);
                         }
-                    };
-                    if let Some(lighting) = lighting {
-                        // The front side's normal is the vertex normal (`side_normal(n, false)`).
-                        let vertex = &vertices[offset];
-                        let normal = model_normal.unwrap_or(vertex.normal);
-                        // Multiplying by white keeps every bit: untinted vertices take it.
-                        let tint = scene.objects[object]
-                            .mesh
-                            .colors
-                            .get(v)
-                            .map_or(Vec3::ONE, |tint| tint.truncate());
-                        if batch.push(offset, vertex.position, normal, tint) {
-                            batch.flush(&lighting, colors, vertices, &mut textured_parts);
-                        }
-                        continue;
+                        let lighting = FastLighting::new(lit_frame, material, style, Shading::Gouraud, false);
+                        fast = Some((object, material, lighting));
+                        batch.normal_matrix = place.normal_when_lit.then_some(place.normal_matrix);
+                        batch.tinted = !scene.objects[object].mesh.colors.is_empty();
+                        lighting
                     }
+                };
+                if let Some(lighting) = lighting {
+                    // The front side's normal is the vertex normal (`side_normal(n, false)`).
+                    let vertex = &vertices[offset];
+                    let normal = model_normal.unwrap_or(vertex.normal);
+                    // Multiplying by white keeps every bit: untinted vertices take it.
+                    let tint = scene.objects[object]
+                        .mesh
+                        .colors
+                        .get(v)
+                        .map_or(Vec3::ONE, |tint| tint.truncate());
+                    if batch.push(offset, vertex.position, normal, tint) {
+                        batch.flush(&lighting, colors, vertices, &mut textured_parts);
+                    }
+                    continue;
                 }
                 let vertex = &mut vertices[offset];
                 if let Some(normal) = model_normal {

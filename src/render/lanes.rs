@@ -60,6 +60,13 @@ impl Floats {
         Floats(std::array::from_fn(|i| self.0[i].max(other.0[i])))
     }
 
+    /// `f32::min` per lane (the other operand where one is NaN), left to the compiler as
+    /// [`Floats::max`] is.
+    #[inline(always)]
+    pub fn min(self, other: Self) -> Self {
+        Floats(std::array::from_fn(|i| self.0[i].min(other.0[i])))
+    }
+
     /// `>` per lane: false where either side is NaN.
     #[inline(always)]
     pub fn gt(self, other: Self) -> Mask {
@@ -70,6 +77,12 @@ impl Floats {
     #[inline(always)]
     pub fn le(self, other: Self) -> Mask {
         backend::le(self, other)
+    }
+
+    /// `==` per lane: false where either side is NaN, true for `-0.0 == 0.0`.
+    #[inline(always)]
+    pub fn eq(self, other: Self) -> Mask {
+        backend::eq(self, other)
     }
 
     /// `f32::is_finite` per lane, as an integer compare of the bits.
@@ -265,6 +278,11 @@ mod portable {
     }
 
     #[inline(always)]
+    pub fn trunc(a: Floats) -> Floats {
+        Floats(a.0.map(super::truncate))
+    }
+
+    #[inline(always)]
     pub fn gt(a: Floats, b: Floats) -> Mask {
         compare(a, b, |a, b| a > b)
     }
@@ -272,6 +290,11 @@ mod portable {
     #[inline(always)]
     pub fn le(a: Floats, b: Floats) -> Mask {
         compare(a, b, |a, b| a <= b)
+    }
+
+    #[inline(always)]
+    pub fn eq(a: Floats, b: Floats) -> Mask {
+        compare(a, b, |a, b| a == b)
     }
 
     #[inline(always)]
@@ -331,9 +354,10 @@ mod portable {
 #[allow(unsafe_code)]
 mod sse {
     use std::arch::x86_64::{
-        __m128, __m128i, _mm_add_epi32, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps,
-        _mm_cmpgt_epi32, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_div_ps, _mm_movemask_ps,
-        _mm_mul_ps, _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps, _mm_sub_epi32, _mm_sub_ps,
+        __m128, __m128i, _mm_add_epi32, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps, _mm_cmpeq_ps,
+        _mm_cmpgt_epi32, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps, _mm_cvttps_epi32,
+        _mm_div_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps, _mm_sub_epi32,
+        _mm_sub_ps,
     };
 
     use super::{Floats, Ints, LANES, Mask};
@@ -407,6 +431,15 @@ mod sse {
         Floats(halves!(_mm_sqrt_ps(a)))
     }
 
+    /// `cvttps2dq` and back: towards zero, −2³¹ out of range ([`super::truncate`]).
+    #[inline(always)]
+    pub fn trunc(a: Floats) -> Floats {
+        let halves: [__m128; 2] = bytemuck::cast(a.0);
+        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+        let truncated = |half: __m128| unsafe { _mm_cvtepi32_ps(_mm_cvttps_epi32(half)) };
+        Floats(bytemuck::cast(halves.map(truncated)))
+    }
+
     /// An ordered compare, as Rust's `>`: false where either side is NaN.
     #[inline(always)]
     pub fn gt(a: Floats, b: Floats) -> Mask {
@@ -417,6 +450,12 @@ mod sse {
     #[inline(always)]
     pub fn le(a: Floats, b: Floats) -> Mask {
         Mask(halves!(_mm_cmple_ps(a, b)))
+    }
+
+    /// An ordered compare, as Rust's `==`.
+    #[inline(always)]
+    pub fn eq(a: Floats, b: Floats) -> Mask {
+        Mask(halves!(_mm_cmpeq_ps(a, b)))
     }
 
     #[inline(always)]
@@ -516,6 +555,23 @@ impl Vec3s {
         self.x * other.x + self.y * other.y + self.z * other.z
     }
 
+    /// `Vec3::cross`, component by component as glam writes it.
+    #[inline(always)]
+    pub fn cross(self, other: Self) -> Self {
+        Vec3s {
+            x: self.y * other.z - other.y * self.z,
+            y: self.z * other.x - other.z * self.x,
+            z: self.x * other.y - other.x * self.y,
+        }
+    }
+
+    /// `v == Vec3::ZERO` per lane (each component `== 0.0`: true for `-0.0`, false for NaN).
+    #[inline(always)]
+    pub fn is_zero(self) -> Mask {
+        let zero = Floats::splat(0.0);
+        self.x.eq(zero).and(self.y.eq(zero)).and(self.z.eq(zero))
+    }
+
     /// `Vec3::length`.
     #[inline(always)]
     pub fn length(self) -> Floats {
@@ -557,16 +613,6 @@ impl Vec3s {
         let reciprocal = Floats::splat(1.0) / self.length();
         let usable = reciprocal.is_finite().and(reciprocal.gt(Floats::splat(0.0)));
         usable.select3(self.scale(reciprocal), Vec3s::splat(Vec3::ZERO))
-    }
-
-    /// `Vec3::cross`, each component's products in glam's order.
-    #[inline(always)]
-    pub fn cross(self, other: Self) -> Self {
-        Vec3s {
-            x: self.y * other.z - other.y * self.z,
-            y: self.z * other.x - other.z * self.x,
-            z: self.x * other.y - other.x * self.y,
-        }
     }
 }
 
@@ -713,6 +759,105 @@ impl Mul for Vec3s {
     }
 }
 
+/// `x` rounded towards zero, as SSE2's conversion to a 32-bit integer and back does it: a whole
+/// number for |x| < 2³¹; −2³¹ outside that range and for NaN (the instruction's "indefinite
+/// integer"). One `f32` gets the lanes' result this way, on every target.
+#[inline(always)]
+pub fn truncate(x: f32) -> f32 {
+    if x.abs() < 2_147_483_648.0 {
+        x as i32 as f32
+    } else {
+        -2_147_483_648.0
+    }
+}
+
+/// The operations a formula needs, on one `f32` or on eight lanes, so that one generic function
+/// (`render::trig`) gives each lane exactly the bits it gives a single float.
+pub trait Real:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
+{
+    /// Where a condition holds: `bool`, or a [`Mask`].
+    type Mask: Copy + Not<Output = Self::Mask>;
+    fn splat(value: f32) -> Self;
+    /// `f32::abs`: the sign bit cleared.
+    fn abs(self) -> Self;
+    /// Towards zero ([`truncate`]).
+    fn trunc(self) -> Self;
+    /// `>`: false where either side is NaN.
+    fn gt(self, other: Self) -> Self::Mask;
+    fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask;
+    /// `if_true` where `mask` holds, `if_false` elsewhere.
+    fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
+}
+
+impl Real for f32 {
+    type Mask = bool;
+
+    #[inline(always)]
+    fn splat(value: f32) -> Self {
+        value
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+
+    #[inline(always)]
+    fn trunc(self) -> Self {
+        truncate(self)
+    }
+
+    #[inline(always)]
+    fn gt(self, other: Self) -> bool {
+        self > other
+    }
+
+    #[inline(always)]
+    fn and(a: bool, b: bool) -> bool {
+        a && b
+    }
+
+    #[inline(always)]
+    fn select(mask: bool, if_true: Self, if_false: Self) -> Self {
+        if mask { if_true } else { if_false }
+    }
+}
+
+impl Real for Floats {
+    type Mask = Mask;
+
+    #[inline(always)]
+    fn splat(value: f32) -> Self {
+        Floats::splat(value)
+    }
+
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Floats(self.0.map(f32::abs))
+    }
+
+    #[inline(always)]
+    fn trunc(self) -> Self {
+        backend::trunc(self)
+    }
+
+    #[inline(always)]
+    fn gt(self, other: Self) -> Mask {
+        Floats::gt(self, other)
+    }
+
+    #[inline(always)]
+    fn and(a: Mask, b: Mask) -> Mask {
+        a.and(b)
+    }
+
+    #[inline(always)]
+    fn select(mask: Mask, if_true: Self, if_false: Self) -> Self {
+        mask.select(if_true, if_false)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -755,6 +900,17 @@ mod tests {
         let planar_b = Vec2s::from_array(&b.map(|v| v.truncate()));
         let planar_lengths = planar_a.length();
         let planar = planar_a + planar_b.scale(Floats::splat(2.0)) - planar_a;
+        let zero = Vec3s::from_array(&[
+            Vec3::ZERO,
+            Vec3::splat(-0.0),
+            Vec3::X,
+            a[4],
+            a[6],
+            -Vec3::Z,
+            Vec3::NAN,
+            a[1],
+        ]);
+        let (least, most) = (la.x.min(lb.y), la.x.max(lb.y));
         for i in 0..LANES {
             assert_eq!(dots.0[i].to_bits(), a[i].dot(b[i]).to_bits(), "dot, lane {i}");
             assert_eq!(
@@ -791,6 +947,17 @@ mod tests {
                 combined,
                 "Vec2 arithmetic, lane {i}"
             );
+            assert_eq!(
+                zero.is_zero().lane(i),
+                zero.to_array()[i] == Vec3::ZERO,
+                "is_zero, lane {i}"
+            );
+            assert_eq!(
+                least.0[i].to_bits(),
+                a[i].x.min(b[i].y).to_bits(),
+                "min, lane {i}"
+            );
+            assert_eq!(most.0[i].to_bits(), a[i].x.max(b[i].y).to_bits(), "max, lane {i}");
         }
     }
 
@@ -843,8 +1010,11 @@ mod tests {
             assert_eq!(bits(x * y), bits(portable::mul(x, y)), "mul");
             assert_eq!(bits(x / y), bits(portable::div(x, y)), "div");
             assert_eq!(bits(x.sqrt()), bits(portable::sqrt(x)), "sqrt");
+            assert_eq!(bits(Real::trunc(x)), bits(portable::trunc(x)), "trunc");
             assert_eq!(x.gt(y), portable::gt(x, y), "gt");
             assert_eq!(x.le(y), portable::le(x, y), "le");
+            assert_eq!(x.eq(y), portable::eq(x, y), "eq");
+            assert_eq!(x.eq(x), portable::eq(x, x), "eq");
             assert_eq!(x.is_finite(), portable::is_finite(x), "is_finite");
             let (m, n) = (x.gt(y), y.is_finite());
             assert_eq!(m.and(n), portable::and(m, n), "and");
@@ -857,6 +1027,47 @@ mod tests {
             assert_eq!(i.and(j), portable::and_ints(i, j), "and_ints");
             assert_eq!(i.gt(j), portable::gt_ints(i, j), "gt_ints");
         }
+    }
+
+    #[test]
+    fn truncation_is_the_same_for_lanes_and_one_float() {
+        let edges = [
+            [
+                2.5f32,
+                -2.5,
+                0.999_999_94,
+                -0.0,
+                2_147_483_520.0,
+                -2_147_483_648.0,
+                2_147_483_648.0,
+                -3e9,
+            ],
+            [
+                f32::NAN,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                1e-45,
+                16_777_217.0,
+                -7.9,
+                123_456.7,
+                0.5,
+            ],
+        ];
+        for values in edges {
+            let truncated = Real::trunc(Floats(values));
+            for (lane, &x) in values.iter().enumerate() {
+                assert_eq!(truncated.0[lane].to_bits(), truncate(x).to_bits(), "{x}");
+                if x.abs() < 2_147_483_648.0 {
+                    assert_eq!(truncate(x), x.trunc(), "{x}");
+                }
+            }
+            assert_eq!(
+                portable::trunc(Floats(values)).0.map(f32::to_bits),
+                truncated.0.map(f32::to_bits)
+            );
+        }
+        assert_eq!(truncate(f32::NAN), -2_147_483_648.0);
+        assert_eq!(truncate(3e9), -2_147_483_648.0);
     }
 
     #[test]

@@ -31,6 +31,7 @@ pub mod shade_fast;
 pub mod shadow;
 pub mod surface_lanes;
 pub mod texture_lanes;
+pub mod trig;
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};

@@ -24,8 +24,9 @@ use crate::render::raster::{
     Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_steps_y,
     edge_values,
 };
-use crate::render::shade_fast::{FastLighting, FastPhong, PhongBatch, SurfaceBatch};
+use crate::render::shade_fast::{FastLighting, FastPhong, LightingMemo, PhongBatch, SurfaceBatch};
 use crate::render::surface_lanes::{RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, texture_colors};
+use crate::render::trig;
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
 /// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
@@ -94,6 +95,7 @@ struct TileCaches {
 #[derive(Default)]
 pub struct TileScratch<'f> {
     flat: FlatBatch<'f>,
+    lightings: LightingMemo<'f>,
     /// Per triangle of the tile: whether a pixel shows it (one more entry, never read, for the
     /// pixels that show nothing).
     seen: Vec<bool>,
@@ -366,6 +368,7 @@ fn shade_multisampled<'f>(
     let count = visibility.raster_ids.len();
     let TileScratch {
         flat,
+        lightings,
         flat_waiting,
         points: tile,
         ..
@@ -429,7 +432,6 @@ fn shade_multisampled<'f>(
     }
     flat.clear();
     flat_waiting.clear();
-    let phong_allowed = FastPhong::frame_allows(frame);
     let mut phong = PhongBatch::default();
     let mut surface = SurfaceBatch::default();
     let mut modulated = ModulatedBatch::default();
@@ -441,7 +443,7 @@ fn shade_multisampled<'f>(
         let id = visibility.raster_id(local as u32);
         let raster = frame.raster_triangle(id);
         let point_at = |index: u32| points[index as usize].at;
-        match TriangleShader::new(frame, raster, phong_allowed, caches, flat) {
+        match TriangleShader::new(frame, raster, caches, flat, lightings) {
             TriangleShader::Solid(color) => {
                 for &index in mine {
                     colors[index as usize] = color;
@@ -644,6 +646,7 @@ fn shade_single_sample<'f>(
     }
     let TileScratch {
         flat,
+        lightings,
         seen,
         fills,
         sources,
@@ -687,7 +690,6 @@ fn shade_single_sample<'f>(
 
     // One shader per seen triangle, in the order they were rasterized. Triangles shaded pixel by
     // pixel are shaded at once; the others get their colour in `fills`.
-    let phong_allowed = FastPhong::frame_allows(frame);
     let mut phong = PhongBatch::default();
     let mut surface = SurfaceBatch::default();
     let mut modulated = ModulatedBatch::default();
@@ -697,7 +699,7 @@ fn shade_single_sample<'f>(
         }
         let id = visibility.raster_id(local as u32);
         let raster = frame.raster_triangle(id);
-        let shader = TriangleShader::new(frame, raster, phong_allowed, caches, flat);
+        let shader = TriangleShader::new(frame, raster, caches, flat, lightings);
         let corners = match shader {
             TriangleShader::Solid(color) => {
                 fills[local] = color;
@@ -901,20 +903,23 @@ fn pixel_centre(p: u32) -> i64 {
     i64::from(p) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2
 }
 
-/// How the pixels of one triangle are shaded, decided once per triangle and tile. Each case computes exactly what [`shade_sample`] would, in the same order.
+/// How the pixels of one triangle are shaded, decided once per triangle and tile. Each case
+/// computes exactly what [`shade_sample`] would, in the same order.
 enum TriangleShader<'f> {
-    /// Flat or constant shading without a colour texture: one colour for the whole triangle.
+    /// One colour for the whole triangle: flat or constant shading without a colour texture
+    /// lit outside the lanes, and the normals view of flat and constant triangles.
     Solid(Vec3),
-    /// Flat shading on the fast path: the triangle waits in the tile's [`FlatBatch`] at this
-    /// index, and its pixels are written when the batch is lit.
+    /// Flat shading in lanes: the triangle waits in the tile's [`FlatBatch`] at this index, and
+    /// its pixels are written when the batch is lit.
     FlatWaiting(u16),
     /// Gouraud shading without a colour texture: the three vertex colours, interpolated.
     Gouraud([Vec3; 3]),
-    /// Phong shading in the common case (see [`FastPhong`]), of a surface that does not vary.
+    /// Pixel by pixel in lanes (see [`FastPhong`]): Phong shading of a surface that does not
+    /// vary, and the depth and normals views of every mode whose pixels vary.
     Phong(FastPhong<'f>),
-    /// A surface that textures or vertex colours vary pixel by pixel.
+    /// A surface that textures or vertex colours vary pixel by pixel, in lanes.
     Varying(VaryingShader<'f>),
-    /// Everything else.
+    /// Everything else (see [`FastPhong::new`]).
     General,
 }
 
@@ -935,32 +940,42 @@ impl<'f> TriangleShader<'f> {
     fn new(
         frame: &'f Frame,
         raster: &'f RasterTriangle,
-        phong_allowed: bool,
         caches: &mut TileCaches,
         flat: &mut FlatBatch<'f>,
+        lightings: &mut LightingMemo<'f>,
     ) -> Self {
         let triangle = &raster.triangle;
         let style = &frame.objects[triangle.object as usize];
         let material = &frame.materials[triangle.material as usize];
-        let plain = frame.debug_view.is_none() && !has_color_texture(material);
+        let mut per_pixel = || match FastPhong::new(frame, triangle, raster.back_facing, lightings) {
+            Some(fast) if fast.varies() => TriangleShader::Varying(VaryingShader::Phong(fast)),
+            Some(fast) => TriangleShader::Phong(fast),
+            None => TriangleShader::General,
+        };
+        match (frame.debug_view, style.shading) {
+            (Some(DebugView::Depth), _) | (Some(DebugView::Normals), Shading::Gouraud | Shading::Phong) => {
+                return per_pixel();
+            }
+            (Some(DebugView::Normals), Shading::Flat | Shading::Constant) => {
+                let normal = style.side_normal(frame.face_normal(triangle), raster.back_facing);
+                return TriangleShader::Solid(normal * 0.5 + 0.5);
+            }
+            _ => {}
+        }
+        let plain = !has_color_texture(material);
         let modulation = || Modulation {
             vertices: triangle.vertices,
             texture: material.textures.diffuse.as_ref(),
         };
         match style.shading {
-            // Textures do not reach constant colours.
-            Shading::Constant if frame.debug_view.is_none() => {
-                TriangleShader::Solid(frame.constant_colors[triangle.material as usize])
-            }
+            // Textures and debug views of terms do not reach constant colours.
+            Shading::Constant => TriangleShader::Solid(frame.constant_colors[triangle.material as usize]),
             Shading::Flat if plain => {
                 if let Some(index) = caches.flat_waiting.get(raster.source) {
                     return TriangleShader::FlatWaiting(index);
                 }
                 let back_facing = raster.back_facing;
-                let fast = phong_allowed
-                    .then(|| FastLighting::new(frame, triangle.material, style, Shading::Flat, back_facing))
-                    .flatten();
-                if let Some(lighting) = fast {
+                if let Some(lighting) = lightings.get(frame, triangle, Shading::Flat, back_facing) {
                     let index = flat.add(lighting, raster.triangle, back_facing);
                     caches.flat_waiting.insert(raster.source, index);
                     return TriangleShader::FlatWaiting(index);
@@ -970,8 +985,8 @@ impl<'f> TriangleShader<'f> {
                     .get_or_insert_with(raster.source, || frame.flat_colors(triangle, back_facing));
                 TriangleShader::Solid(rest)
             }
-            // With a colour texture (and no debug view).
-            Shading::Flat if phong_allowed => {
+            // With a colour texture.
+            Shading::Flat => {
                 let colors = caches
                     .flat
                     .get_or_insert_with(raster.source, || frame.flat_colors(triangle, raster.back_facing));
@@ -984,7 +999,7 @@ impl<'f> TriangleShader<'f> {
                 TriangleShader::Gouraud(colors.map(|(_, rest)| rest))
             }
             Shading::Gouraud if plain => TriangleShader::Gouraud(triangle.vertices.map(|v| frame.color(v))),
-            Shading::Gouraud if phong_allowed => {
+            Shading::Gouraud => {
                 let colors = if raster.back_facing {
                     caches.back.get_or_insert_with(raster.source, || {
                         back_gouraud_colors(frame, triangle, material, style)
@@ -997,12 +1012,7 @@ impl<'f> TriangleShader<'f> {
                 };
                 TriangleShader::Varying(VaryingShader::Gouraud(modulation(), colors))
             }
-            Shading::Phong if phong_allowed => match FastPhong::new(frame, triangle, raster.back_facing) {
-                Some(fast) if fast.varies() => TriangleShader::Varying(VaryingShader::Phong(fast)),
-                Some(fast) => TriangleShader::Phong(fast),
-                None => TriangleShader::General,
-            },
-            _ => TriangleShader::General,
+            Shading::Phong => per_pixel(),
         }
     }
 }
@@ -1350,13 +1360,20 @@ pub(crate) fn renormalize_or_else(v: Vec3, fallback: impl FnOnce() -> Vec3) -> V
 /// from that towards the third by its weight. On an edge it is exactly the seed's two-point
 /// SLERP; inside it keeps unit length and equal angles per step along each of those arcs.
 pub fn slerp_triangle(normals: [Vec3; 3], weights: Vec3) -> Vec3 {
-    let first_two = weights.x + weights.y;
-    let edge = if first_two > 0.0 {
-        slerp(normals[0], normals[1], weights.y / first_two)
+    slerp_triangle_along(&NormalArc::new(normals[0], normals[1]), normals[2], weights)
+}
+
+/// [`slerp_triangle`] with the arc between the first two normals given: it is the same at every
+/// point of a triangle, so the per-pixel shading forms it once per triangle.
+#[inline]
+pub fn slerp_triangle_along(first_two: &NormalArc, third: Vec3, weights: Vec3) -> Vec3 {
+    let first_two_weight = weights.x + weights.y;
+    let edge = if first_two_weight > 0.0 {
+        first_two.at(weights.y / first_two_weight)
     } else {
-        normals[0]
+        first_two.start()
     };
-    slerp(edge, normals[2], weights.z)
+    NormalArc::new(edge, third).at(weights.z)
 }
 
 /// Seed 000's `n(t) = (sin((1 − t)θ)·n₀ + sin(tθ)·n₁) / sin θ`, evaluated in the equivalent
@@ -1366,22 +1383,67 @@ pub fn slerp_triangle(normals: [Vec3; 3], weights: Vec3) -> Vec3 {
 /// this form stays unit length and exact at t = 0 for every θ. Near θ = 0 the chord is the arc:
 /// linear interpolation, renormalised. At θ = π every great circle joins the two: the arc turns
 /// about an axis perpendicular to `n₀`, chosen from `n₀` alone so the result is deterministic.
-/// A zero input gives a linear interpolation.
+/// A zero input gives a linear interpolation. The sine, cosine and `atan2` are `trig`'s
+/// polynomials (within 2 units of the last place), which the lanes evaluate with the same bits.
 pub fn slerp(n0: Vec3, n1: Vec3, t: f32) -> Vec3 {
-    const SMALL_SINE: f32 = 1e-6;
-    let cos = n0.dot(n1);
-    let cross = n0.cross(n1);
-    let sin = cross.length();
-    if n0 == Vec3::ZERO || n1 == Vec3::ZERO || (sin < SMALL_SINE && cos > 0.0) {
-        return n0.lerp(n1, t).normalize_or_zero();
+    NormalArc::new(n0, n1).at(t)
+}
+
+/// The path [`slerp`] takes from one normal to another, formed once for any number of `t`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NormalArc {
+    /// Normals (nearly) parallel, or a zero one: the chord, renormalised.
+    Chord { start: Vec3, end: Vec3 },
+    /// `n(t) = cos(tθ)·start + sin(tθ)·towards`.
+    Turn { start: Vec3, towards: Vec3, angle: f32 },
+}
+
+/// Below this `|n₀ × n₁|`, [`slerp`]'s normals are parallel or opposite.
+pub const SMALL_SINE: f32 = 1e-6;
+
+impl NormalArc {
+    pub fn new(n0: Vec3, n1: Vec3) -> Self {
+        let cos = n0.dot(n1);
+        let cross = n0.cross(n1);
+        let sin = cross.length();
+        if n0 == Vec3::ZERO || n1 == Vec3::ZERO || (sin < SMALL_SINE && cos > 0.0) {
+            return NormalArc::Chord { start: n0, end: n1 };
+        }
+        let (angle, towards) = if sin < SMALL_SINE {
+            (std::f32::consts::PI, n0.any_orthonormal_vector())
+        } else {
+            (trig::atan2(sin, cos), (cross / sin).cross(n0))
+        };
+        NormalArc::Turn {
+            start: n0,
+            towards,
+            angle,
+        }
     }
-    let (theta, towards) = if sin < SMALL_SINE {
-        (std::f32::consts::PI, n0.any_orthonormal_vector())
-    } else {
-        (sin.atan2(cos), (cross / sin).cross(n0))
-    };
-    let (sin_t, cos_t) = (t * theta).sin_cos();
-    n0 * cos_t + towards * sin_t
+
+    /// The normal a share `t` of the way along.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        match *self {
+            NormalArc::Chord { start, end } => start.lerp(end, t).normalize_or_zero(),
+            NormalArc::Turn {
+                start,
+                towards,
+                angle,
+            } => {
+                let (sin_t, cos_t) = trig::sin_cos(t * angle);
+                start * cos_t + towards * sin_t
+            }
+        }
+    }
+
+    /// The normal it starts from.
+    #[inline]
+    pub fn start(&self) -> Vec3 {
+        match *self {
+            NormalArc::Chord { start, .. } | NormalArc::Turn { start, .. } => start,
+        }
+    }
 }
 
 #[cfg(test)]
@@ -1464,37 +1526,60 @@ mod tests {
         Some(Surfaces::AmbientOrNormalOnly),
     ];
 
-    /// Every visible pixel, shaded by the per-run shaders and by the general `shade_sample`:
-    /// the same bits, for each shading mode, back-face mode, light set and surface.
+    /// Every visible pixel, shaded by the per-triangle shaders and by the general
+    /// `shade_sample`: the same bits, for each shading mode, back-face mode and light set, with
+    /// every lighting model, and with every component, interpolation and debug view (see
+    /// `shade_fast::tests::LOOKS`), on plain surfaces and on surfaces that vertex colours,
+    /// textures and normal maps vary. Only a varying surface with Slerp, or whose lighting is
+    /// one colour, is left to the general path.
     #[test]
     fn triangle_shaders_equal_the_general_path_bit_for_bit() {
+        use shade_fast::tests::{LIGHTS, LOOKS, Look, MODELS, PLAIN};
         let modes = [Shading::Constant, Shading::Flat, Shading::Gouraud, Shading::Phong];
-        for ((shading, lights), surfaces) in modes
+        // Plain surfaces: every model and look. Varying ones: the looks and models whose
+        // surfaces are handled apart (Slerp, one-colour lighting, Cook-Torrance, views).
+        let varied_lightings = [
+            ((LightingModel::BlinnPhong, Vec3::splat(0.5)), LOOKS[0]),
+            ((LightingModel::BlinnPhong, Vec3::splat(0.5)), LOOKS[1]),
+            ((LightingModel::BlinnPhong, Vec3::splat(0.5)), LOOKS[2]),
+            ((LightingModel::BlinnPhong, Vec3::splat(0.5)), LOOKS[6]),
+            ((LightingModel::BlinnPhong, Vec3::splat(0.5)), LOOKS[7]),
+            (MODELS[5], PLAIN),
+            (MODELS[6], PLAIN),
+        ];
+        let lightings = LOOKS
+            .map(|look| ((LightingModel::BlinnPhong, Vec3::splat(0.5)), look))
             .into_iter()
-            .flat_map(|m| shade_fast::tests::LIGHTS.map(|l| (m, l)))
-            .flat_map(|c| SURFACES.map(|s| (c, s)))
-        {
-            for (back_faces, view) in [
-                (BackFaces::ReverseLit, None),
-                (BackFaces::Lit, None),
-                (BackFaces::Unlit, None),
-                // Debug views take the general path; nothing to compare but that nothing breaks.
-                (BackFaces::Cull, Some(DebugView::Diffuse)),
-            ] {
-                let mut scene =
-                    shade_fast::tests::scene(LightingModel::BlinnPhong, Vec3::splat(0.5), back_faces, lights);
+            .chain(MODELS.map(|model| (model, PLAIN)))
+            .map(|lighting| (lighting, None))
+            .chain(
+                SURFACES[1..]
+                    .iter()
+                    .flat_map(|&surfaces| varied_lightings.map(|lighting| (lighting, surfaces))),
+            );
+        let cases = lightings.flat_map(|lighting| modes.map(|mode| (lighting, mode)));
+        for ((((model, specular), look), surfaces), shading) in cases {
+            let back_face_modes = [
+                BackFaces::ReverseLit,
+                BackFaces::Lit,
+                BackFaces::Unlit,
+                BackFaces::Cull,
+            ];
+            for (lights, back_faces) in LIGHTS.into_iter().flat_map(|l| back_face_modes.map(|b| (l, b))) {
+                let mut scene = shade_fast::tests::scene(model, specular, back_faces, lights);
                 if let Some(surfaces) = surfaces {
                     shade_fast::tests::vary_surfaces(&mut scene, surfaces);
                 }
                 scene.override_shading(shading);
+                Look::apply(look, &mut scene);
                 // Cut the spheres open so that back faces are seen too.
                 scene.camera.projection = crate::scene::Projection::Perspective {
                     fov_y_degrees: 40.0,
                     near: 4.9,
                     far: 100.0,
                 };
+                let view = look.view;
                 let frame = shade_fast::tests::frame_of(&scene, view);
-                let phong_allowed = FastPhong::frame_allows(&frame);
                 let new_caches = || TileCaches {
                     flat: TriangleColorCache::new(),
                     back: TriangleColorCache::new(),
@@ -1502,11 +1587,15 @@ mod tests {
                 };
                 let (mut run_caches, mut general_caches) = (new_caches(), new_caches());
                 let mut flat = FlatBatch::default();
-                let (mut flat_lit, mut varying) = (0, 0);
+                let mut lightings = LightingMemo::default();
+                let (mut flat_lit, mut varying, mut general_left) = (0, 0, 0);
                 let (mut shaded, mut back_seen) = (0, 0);
                 for tile in 0..frame.tiles.count() {
                     let rect = frame.tiles.rect(tile);
                     let visibility = rasterize_tile(rect, SamplePattern::SINGLE, &frame.raster, tile);
+                    // Flat triangles wait per tile, as `shade_tile` has them.
+                    flat.clear();
+                    run_caches.flat_waiting = TriangleColorCache::new();
                     for (slot, &id) in visibility.triangle.iter().enumerate() {
                         if id == NO_TRIANGLE {
                             continue;
@@ -1524,61 +1613,90 @@ mod tests {
                         let run = match TriangleShader::new(
                             &frame,
                             raster,
-                            phong_allowed,
                             &mut run_caches,
                             &mut flat,
+                            &mut lightings,
                         ) {
                             TriangleShader::FlatWaiting(index) => {
-                                flat.light(&frame);
+                                if usize::from(index) >= flat.colors.len() {
+                                    flat.light(&frame);
+                                }
                                 flat_lit += 1;
                                 flat.colors[usize::from(index)]
                             }
                             TriangleShader::Solid(color) => color,
                             TriangleShader::Gouraud(colors) => GouraudColors::new(raster, &corners, colors)
                                 .at(edge_values(raster, at.0, at.1)),
-                            TriangleShader::Phong(fast) => fast.shade(source_weights(raster, &corners, at)),
+                            TriangleShader::Phong(fast) => {
+                                // Through the lanes: a batch of this one pixel.
+                                let mut color = [Vec3::NAN];
+                                let mut batch = PhongBatch::default();
+                                batch.push(&fast, source_weights(raster, &corners, at), 0, &mut color);
+                                batch.flush(&mut color);
+                                color[0]
+                            }
                             TriangleShader::Varying(shader) => {
                                 varying += 1;
                                 shade_one_varying(&frame, raster, &corners, shader, at)
                             }
-                            TriangleShader::General => continue,
+                            TriangleShader::General => {
+                                general_left += 1;
+                                back_seen += usize::from(raster.back_facing);
+                                continue;
+                            }
                         };
+                        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                         assert_eq!(
-                            run.to_array().map(f32::to_bits),
-                            general.to_array().map(f32::to_bits),
-                            "{shading:?} {back_faces:?} {view:?} {lights:?} {surfaces:?} at {px}, {py}: \
-                             {run} against {general}"
+                            bits(run),
+                            bits(general),
+                            "{shading:?} {model:?} {look:?} {surfaces:?} {back_faces:?} {lights:?} at {px}, {py}"
                         );
                         shaded += 1;
                         back_seen += usize::from(raster.back_facing);
                     }
                 }
-                if view.is_some() {
-                    continue;
+                assert!(
+                    shaded + general_left > 100,
+                    "{shading:?} {lights:?}: {shaded} pixels compared"
+                );
+                // What the lanes leave: a varying surface lit with Slerp, or whose lighting is
+                // one colour (the ambient term alone, an unlit material, an unlit back side).
+                let one_colour = look.component == crate::scene::LightingComponent::Ambient
+                    || model == LightingModel::Unlit;
+                let slerp = look.interpolation == NormalInterpolation::Slerp;
+                let lit_view = !matches!(look.view, Some(DebugView::Normals | DebugView::Depth));
+                let varying_phong = surfaces.is_some() && shading == Shading::Phong && lit_view;
+                if !(varying_phong && (slerp || one_colour || back_faces == BackFaces::Unlit)) {
+                    assert_eq!(
+                        general_left, 0,
+                        "{shading:?} {model:?} {look:?} {surfaces:?} {back_faces:?}: pixels left to the general path"
+                    );
+                } else if slerp || one_colour {
+                    assert!(
+                        general_left > 100,
+                        "{model:?} {look:?} {surfaces:?}: {general_left}"
+                    );
                 }
-                assert!(shaded > 100, "{shading:?} {lights:?}: {shaded} pixels compared");
                 // Textured flat and Gouraud pixels, and varying Phong ones, are shaded in lanes.
                 let lanes_expected = match surfaces {
                     Some(Surfaces::Tinted) => shading == Shading::Phong,
                     Some(_) => shading != Shading::Constant,
                     None => false,
                 };
-                if lanes_expected && back_faces != BackFaces::Unlit {
+                if lanes_expected && look == PLAIN && !one_colour && back_faces != BackFaces::Unlit {
                     assert!(
                         varying > 100,
                         "{shading:?} {surfaces:?}: {varying} pixels with varying surfaces compared"
                     );
                 }
-                if shading == Shading::Flat && back_faces != BackFaces::Unlit {
+                if shading == Shading::Flat && view.is_none() && !(surfaces.is_some() && one_colour) {
                     assert!(
                         flat_lit + varying > 100,
                         "{back_faces:?}: {flat_lit} flat pixels lit in lanes, {varying} modulated"
                     );
                 }
-                // Culled back faces are not drawn; unlit Phong back faces take the general path.
-                let back_fast = back_faces != BackFaces::Cull
-                    && !(shading == Shading::Phong && back_faces == BackFaces::Unlit);
-                if back_fast {
+                // Culled back faces are not drawn.
+                if back_faces != BackFaces::Cull {
                     assert!(
                         back_seen > 20,
                         "{shading:?}: {back_seen} back-facing pixels compared"
@@ -1732,49 +1850,98 @@ mod tests {
 
     /// Multisampled tiles as `shade_tile` writes them (each pixel's triangles through the
     /// per-triangle shaders, then resolved) against the general path pixel by pixel, at 2, 4,
-    /// 8 and 16 samples: the same bits everywhere, for every shading mode, both lighting
-    /// models, the back-face modes and spot lights, and the depth view (whose mean leaves the
-    /// background out). The spheres are small on the screen, so that many pixels lie on an
+    /// 8 and 16 samples: the same bits everywhere, for every shading mode, every lighting
+    /// model, the back-face modes, light sets, Slerp, a component, and the debug views (the
+    /// depth view's mean leaves the background out). The spheres are small on the screen, so that many pixels lie on an
     /// edge between triangles, or between a triangle and the background.
     #[test]
     fn multisampled_tiles_equal_the_general_path_bit_for_bit() {
+        use crate::scene::{LightingComponent, MicrofacetDistribution, NormalInterpolation};
         use Shading::{Constant, Flat, Gouraud, Phong};
+        use shade_fast::tests::{Look, PLAIN, microfacet};
+        let slerp = Look {
+            interpolation: NormalInterpolation::Slerp,
+            ..PLAIN
+        };
+        let view = |view| Look {
+            view: Some(view),
+            ..PLAIN
+        };
         let cases = [
             (
                 Flat,
                 Gouraud,
                 LightingModel::BlinnPhong,
                 BackFaces::ReverseLit,
-                None,
+                PLAIN,
             ),
-            (Phong, Flat, LightingModel::Phong, BackFaces::Lit, None),
+            (Phong, Flat, LightingModel::Phong, BackFaces::Lit, PLAIN),
             (
                 Phong,
                 Phong,
                 LightingModel::BlinnPhong,
                 BackFaces::ReverseLit,
-                None,
+                slerp,
             ),
-            (Gouraud, Phong, LightingModel::Phong, BackFaces::Unlit, None),
-            (Constant, Gouraud, LightingModel::BlinnPhong, BackFaces::Lit, None),
+            (Gouraud, Phong, LightingModel::Phong, BackFaces::Unlit, PLAIN),
+            (
+                Constant,
+                Gouraud,
+                LightingModel::BlinnPhong,
+                BackFaces::Lit,
+                PLAIN,
+            ),
             (
                 Gouraud,
                 Flat,
                 LightingModel::BlinnPhong,
                 BackFaces::ReverseLit,
-                Some(DebugView::Depth),
+                view(DebugView::Depth),
+            ),
+            (
+                Phong,
+                Flat,
+                microfacet(MicrofacetDistribution::Beckmann),
+                BackFaces::Unlit,
+                Look {
+                    component: LightingComponent::Specular,
+                    ..slerp
+                },
+            ),
+            (
+                Flat,
+                Phong,
+                microfacet(MicrofacetDistribution::Ggx),
+                BackFaces::Lit,
+                PLAIN,
+            ),
+            (
+                Gouraud,
+                Phong,
+                LightingModel::Lambert,
+                BackFaces::ReverseLit,
+                view(DebugView::Normals),
+            ),
+            (
+                Phong,
+                Constant,
+                LightingModel::Unlit,
+                BackFaces::Lit,
+                view(DebugView::Diffuse),
             ),
         ];
         for samples in [2, 4, 8, 16] {
             let pattern = SamplePattern::new(samples).expect("a sample count");
-            for ((first, second, model, back_faces, view), surfaces) in
+            for ((first, second, model, back_faces, look), surfaces) in
                 cases.into_iter().flat_map(|c| SURFACES.map(|s| (c, s)))
             {
                 for lights in shade_fast::tests::LIGHTS {
                     let mut scene = cut_open_scene(model, back_faces, lights, [first, second], (130, 70));
+                    look.apply(&mut scene);
                     if let Some(surfaces) = surfaces {
                         shade_fast::tests::vary_surfaces(&mut scene, surfaces);
                     }
+                    let view = look.view;
                     let background = scene.image.background;
                     let frame = shade_fast::tests::frame_sampled(&scene, pattern, view);
                     let width = scene.image.width as usize;
@@ -1815,7 +1982,7 @@ mod tests {
                             assert_eq!(
                                 bits(color[offset]),
                                 bits(expected),
-                                "{samples} samples {first:?}/{second:?} {model:?} {back_faces:?} {view:?} \
+                                "{samples} samples {first:?}/{second:?} {model:?} {back_faces:?} {look:?} \
                                  {lights:?} {surfaces:?} at {px}, {py}: {} against {expected}",
                                 color[offset]
                             );

@@ -1,16 +1,20 @@
-//! The common case of per-pixel shading, without the general path's branches per pixel.
+//! Shading in lanes: pixels, flat triangles and Gouraud vertices, textured or not.
 //!
-//! Most pixels of most scenes are Phong-shaded (interpolated normals, lit per pixel) with a
-//! Phong or Blinn-Phong material. For those, everything that does not change from pixel to
-//! pixel is decided once per triangle ([`FastPhong::new`] returns `None` for anything else, and
-//! the general path in `shade` handles it), and the lighting loop is specialised per light kind
-//! and model. Textures, vertex colours and normal maps are not the lighting's business: the
-//! surface stage (`surface_lanes`) turns them into each lane's `k_a`, `k_d` and normal first
-//! ([`SurfaceBatch`], [`FastLighting::light_surface_lanes`]).
+//! What does not change from point to point is decided once per triangle or material, as a
+//! choice of stages rather than branches per pixel: the lighting model ([`FastLighting::new`]
+//! picks one loop per model), the terms shown (the object's component or the debug view), the
+//! side (an unlit back side is one colour), how normals are interpolated (Nlerp or Slerp) and
+//! what a pixel shows ([`PixelOutput`]: the lit colour, or the normals or depth debug view).
+//! Textures, vertex colours and normal maps are not the lighting's business: the surface stage
+//! (`surface_lanes`) turns them into each lane's `k_a`, `k_d` and normal first
+//! ([`SurfaceBatch`], [`FastLighting::light_surface_lanes`]). The general path in `shade` is
+//! left only what has no lane form yet: a surface that varies with Slerp, or whose lighting
+//! is one colour (unlit materials, unlit back sides, the ambient term alone) while its
+//! coefficients vary.
 //!
 //! The arithmetic is the general path's (`lighting::illuminate_with_visibility` followed by the
-//! split of `Frame::light_material`), operation for operation and in the same order, so a pixel
-//! has the same bits whichever path shaded it; a test holds the two together.
+//! split of `Frame::light_side`), operation for operation and in the same order, so a pixel
+//! has the same bits whichever path shaded it; tests hold the two together.
 //!
 //! Eight points are lit at once ([`FastLighting::light_lanes`]), each scalar step of
 //! `lighting::incidence` and `illuminate_with_visibility` becoming the same IEEE operation on
@@ -33,62 +37,94 @@
 //!                                                  facing the point
 //! ```
 //!
-//! `powf` has no lane-wise form with the scalar bits, so an exponent that is not a whole number
-//! up to `MAX_SQUARED_EXPONENT` (the OpenGL table's shininess 76.8, a spot exponent of 2.5) costs
-//! one call per lane that needs it.
+//! Then each model adds its terms where a lane is lit ([`Reflectance`], one implementation per
+//! model):
+//!
+//! ```text
+//! Lambert          k_d·I·(N·L)                         (also Phong and Blinn-Phong with k_s = 0)
+//! Phong            + k_s·I·max(R·V, 0)^n
+//! Blinn-Phong      + k_s·I·max(N·H, 0)^n
+//! Cook-Torrance    k_d·(1 − F)·I·(N·L) + π·F·D·G/(4(N·V)(N·L))·I·(N·L)   F by squaring ((1 − V·H)^5
+//!                  is `powi(5)`'s multiplications), G as one minimum of three ratios
+//!                  (`f32::min` lane by lane), D lane-wise for GGX; Beckmann's `exp` lane by lane
+//! unlit, or an unlit back side, or the ambient term alone: one colour, lit once
+//! ```
+//!
+//! `powf` and `exp` have no lane-wise form with the scalar bits, so an exponent that is not a
+//! whole number up to `MAX_SQUARED_EXPONENT` (the OpenGL table's shininess 76.8, a spot exponent
+//! of 2.5) costs one call per lane that needs it, and so does Beckmann's distribution.
+
+use std::f32::consts::PI;
 
 use glam::Vec3;
 
 use crate::lighting::{
-    MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, incidence, power_by_squaring, reflect, specular_power,
-    whole_exponent,
+    MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, power_by_squaring, specular_power, whole_exponent,
 };
-use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer};
+use crate::render::DebugView;
+use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer, shown_component};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
-use crate::render::shade::renormalize_or_else;
+use crate::render::shade::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
 use crate::render::shadow::shadow_visibility_lanes;
 use crate::render::surface_lanes::{
     RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, surface_lanes, varies,
 };
+use crate::render::trig;
 use crate::scene::{
-    Attenuation, BackFaces, LightingComponent, LightingModel, Material, NormalInterpolation, Shading,
+    Attenuation, BackFaces, LightingComponent, LightingModel, Material, Microfacet, MicrofacetDistribution,
+    NormalInterpolation, Shading,
 };
 
-/// Eight points lit, split as `Frame::light_material` splits a point's light: the part a
-/// colour texture multiplies (ambient and diffuse) and the rest (specular and emission). Their
-/// sum is the colour.
+/// Eight points lit, split as `Frame::light_side` splits a point's light: the part a colour
+/// texture multiplies (ambient and diffuse, or the shown terms of them) and the rest (specular
+/// and emission). Their sum is the colour.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LitLanes {
     pub textured: Vec3s,
     pub rest: Vec3s,
 }
 
-/// A lighting model the fast path evaluates.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Specular {
-    /// `k_s = 0`: no specular term at all.
-    None,
-    /// `max(R·V, 0)^n`.
+/// How a material reflects light, as the lanes evaluate it: chosen once per material and side.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum LaneModel {
+    /// The same colour at every point (`Frame::light_side`'s two parts, computed once): an
+    /// unlit material, the back side of an object whose back faces are unlit, or the ambient
+    /// term alone, on a surface that does not vary.
+    Constant {
+        textured: Vec3,
+        rest: Vec3,
+    },
+    /// Lambert's diffuse term alone; also Phong and Blinn-Phong without a specular colour, which
+    /// add nothing else.
+    Lambert,
     Phong,
-    /// `max(N·H, 0)^n`.
     BlinnPhong,
+    /// Cook-Torrance with Beckmann's distribution (the material's `Microfacet`).
+    Beckmann,
+    /// Cook-Torrance with the GGX distribution.
+    Ggx,
 }
 
-/// The lighting of one material on one side of an object, for the fast paths: what does not
-/// change from point to point decided once, and the loop specialised per model.
+/// The lighting of one material on one side of an object, in lanes: what does not change from
+/// point to point decided once, and the loop specialised per model.
 #[derive(Clone, Copy)]
 pub struct FastLighting<'f> {
     frame: &'f Frame,
     material: &'f Material,
-    specular: Specular,
+    model: LaneModel,
+    /// The terms shown: the debug view's, or else the object's.
+    component: LightingComponent,
+    /// Whether the frame's lights reach the side (all but unlit back sides).
+    lit_side: bool,
 }
 
 impl<'f> FastLighting<'f> {
-    /// The fast lighting of `material` on an object of `style` shaded with `shading`, or `None`
-    /// when it needs the general path: a Phong or Blinn-Phong material, all lighting
-    /// components, and a side that is lit. Textures and vertex colours are the caller's: it
-    /// lights the surface they make ([`FastLighting::light_surface_lanes`]). Only for frames
-    /// that [`FastPhong::frame_allows`].
+    /// The lighting of `material` on an object of `style` shaded with `shading`, or `None` when
+    /// it needs the general path: a lighting that is one colour (an unlit material, an unlit
+    /// back side, the ambient term alone) on a surface that varies (`surface_lanes::varies`),
+    /// whose colour would differ from point to point. Textures and vertex colours are the
+    /// caller's: it lights the surface they make ([`FastLighting::light_surface_lanes`]).
+    #[inline]
     pub fn new(
         frame: &'f Frame,
         material: u32,
@@ -96,23 +132,38 @@ impl<'f> FastLighting<'f> {
         shading: Shading,
         back_facing: bool,
     ) -> Option<Self> {
-        debug_assert!(FastPhong::frame_allows(frame));
         let material = &frame.materials[material as usize];
-        let specular = match material.model {
-            _ if material.specular == Vec3::ZERO => Specular::None,
-            LightingModel::Phong => Specular::Phong,
-            LightingModel::BlinnPhong => Specular::BlinnPhong,
-            _ => return None,
-        };
-        let eligible = style.shading == shading
-            && style.component == LightingComponent::All
-            && matches!(material.model, LightingModel::Phong | LightingModel::BlinnPhong)
-            && !(back_facing && style.back_faces == BackFaces::Unlit);
-        eligible.then_some(FastLighting {
+        if style.shading != shading {
+            return None;
+        }
+        let mut lighting = FastLighting {
             frame,
             material,
-            specular,
-        })
+            model: LaneModel::Lambert,
+            component: shown_component(frame.debug_view, style.component),
+            lit_side: !(back_facing && style.back_faces == BackFaces::Unlit),
+        };
+        let one_colour = !lighting.lit_side
+            || lighting.component == LightingComponent::Ambient
+            || material.model == LightingModel::Unlit;
+        if one_colour && varies(frame, material) {
+            return None;
+        }
+        lighting.model = match material.model {
+            _ if one_colour => lighting.constant(),
+            LightingModel::Unlit => lighting.constant(),
+            LightingModel::Phong | LightingModel::BlinnPhong if material.specular == Vec3::ZERO => {
+                LaneModel::Lambert
+            }
+            LightingModel::Lambert => LaneModel::Lambert,
+            LightingModel::Phong => LaneModel::Phong,
+            LightingModel::BlinnPhong => LaneModel::BlinnPhong,
+            LightingModel::CookTorrance(surface) => match surface.distribution {
+                MicrofacetDistribution::Beckmann => LaneModel::Beckmann,
+                MicrofacetDistribution::Ggx => LaneModel::Ggx,
+            },
+        };
+        Some(lighting)
     }
 
     /// The material lit.
@@ -121,28 +172,42 @@ impl<'f> FastLighting<'f> {
         self.material
     }
 
-    /// Whether `other` lights exactly as `self` does (the same material, so points of both may
-    /// share one [`FastLighting::light_lanes`] call).
-    #[inline]
+    /// The colour where no term shown depends on the point: lit once, anywhere.
+    #[cold]
+    #[inline(never)]
+    fn constant(&self) -> LaneModel {
+        let (textured, rest) = self.frame.light_side(
+            self.material,
+            self.component,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            self.lit_side,
+        );
+        LaneModel::Constant { textured, rest }
+    }
+
+    /// Whether `other` lights exactly as `self` does (the same material, terms and side, which
+    /// decide the model, so points of both may share one [`FastLighting::light_lanes`] call).
+    #[inline(always)]
     pub fn same_as(&self, other: &FastLighting) -> bool {
-        std::ptr::eq(self.material, other.material) && std::ptr::eq(self.frame, other.frame)
+        std::ptr::eq(self.material, other.material)
+            && std::ptr::eq(self.frame, other.frame)
+            && self.component == other.component
+            && self.lit_side == other.lit_side
     }
 
-    /// The lighting at `position` with the (side) normal `normal`: `Frame::light_material`'s
-    /// two parts, summed. The renderer lights through [`FastLighting::light_lanes`]; this
-    /// one-point form is the specification the lanes are tested against, operation for operation
-    /// the general path's.
-    #[inline]
-    pub fn light(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
-        match self.specular {
-            Specular::None => self.light_model::<0>(position, normal, to_viewer),
-            Specular::Phong => self.light_model::<1>(position, normal, to_viewer),
-            Specular::BlinnPhong => self.light_model::<2>(position, normal, to_viewer),
-        }
+    /// The lighting at `position` with the side's normal `normal`: `Frame::light_side`, the
+    /// general path itself. The renderer lights through [`FastLighting::light_lanes`]; this
+    /// one-point form is the specification the lanes are tested against.
+    pub fn light(&self, position: Vec3, normal: Vec3) -> Vec3 {
+        let (textured, rest) =
+            self.frame
+                .light_side(self.material, self.component, position, normal, self.lit_side);
+        textured + rest
     }
 
-    /// [`FastLighting::light`] of `LANES` points at once (the viewer's direction computed here),
-    /// with the same bits per point as the one-point call; many times faster per point.
+    /// [`FastLighting::light`] of `LANES` points at once, with the same bits per point as the
+    /// one-point call; many times faster per point.
     #[inline]
     pub fn light_lanes(&self, positions: &[Vec3; LANES], normals: &[Vec3; LANES]) -> [Vec3; LANES] {
         self.light_lanes_of(Vec3s::from_array(positions), Vec3s::from_array(normals))
@@ -151,49 +216,63 @@ impl<'f> FastLighting<'f> {
     /// [`FastLighting::light_lanes`] of points already in lanes.
     #[inline]
     pub fn light_lanes_of(&self, position: Vec3s, normal: Vec3s) -> [Vec3; LANES] {
-        let surface = SurfaceLanes::of(self.material);
-        let to_viewer = self.viewer_directions(position);
-        let lit = match self.specular {
-            Specular::None => self.light_model_lanes::<0>(position, normal, to_viewer, &surface),
-            Specular::Phong => self.light_model_lanes::<1>(position, normal, to_viewer, &surface),
-            Specular::BlinnPhong => self.light_model_lanes::<2>(position, normal, to_viewer, &surface),
-        };
+        let lit = self.light_surface_lanes(position, normal, &SurfaceLanes::of(self.material));
         (lit.textured + lit.rest).to_array()
     }
 
-    /// `Viewer::to_viewer` of each lane's position.
-    #[inline(always)]
-    fn viewer_directions(&self, position: Vec3s) -> Vec3s {
-        match self.frame.viewer {
-            Viewer::Local => (-position).normalize_or_zero(),
-            Viewer::Infinite { to_viewer } => Vec3s::splat(to_viewer),
-        }
-    }
-
-    /// The lighting of points whose `k_a` and `k_d` vary from lane to lane (vertex colours,
-    /// textures: `surface_lanes`), in `Frame::light_material`'s two parts; each lane has the
-    /// bits of the general path's lighting of the material it sees.
+    /// The lighting of points whose `k_a` and `k_d` may vary from lane to lane (vertex colours,
+    /// textures: `surface_lanes`), in `Frame::light_side`'s two parts; each lane has the bits of
+    /// the general path's lighting of the material it sees.
     #[inline]
     pub fn light_surface_lanes(&self, position: Vec3s, normal: Vec3s, surface: &SurfaceLanes) -> LitLanes {
-        let to_viewer = self.viewer_directions(position);
-        match self.specular {
-            Specular::None => self.light_model_lanes::<0>(position, normal, to_viewer, surface),
-            Specular::Phong => self.light_model_lanes::<1>(position, normal, to_viewer, surface),
-            Specular::BlinnPhong => self.light_model_lanes::<2>(position, normal, to_viewer, surface),
+        match self.model {
+            LaneModel::Constant { textured, rest } => LitLanes {
+                textured: Vec3s::splat(textured),
+                rest: Vec3s::splat(rest),
+            },
+            LaneModel::Lambert => self.light_model_lanes(Lambert, position, normal, surface),
+            LaneModel::Phong => self.light_model_lanes(Phong, position, normal, surface),
+            LaneModel::BlinnPhong => self.light_model_lanes(BlinnPhong, position, normal, surface),
+            LaneModel::Beckmann => {
+                let model = CookTorrance::<false>(self.microfacet());
+                self.light_model_lanes(model, position, normal, surface)
+            }
+            LaneModel::Ggx => {
+                let model = CookTorrance::<true>(self.microfacet());
+                self.light_model_lanes(model, position, normal, surface)
+            }
         }
     }
 
-    /// [`FastLighting::light_model`] lane by lane: the same operations in the same order, its
-    /// `continue`s turned into masks (a masked-off lane keeps its sums untouched, not `+ 0`),
-    /// with each lane's own `k_a` and `k_d` (`surface`).
-    #[inline(always)]
-    fn light_model_lanes<const SPECULAR: u8>(
+    /// The material's microfacet surface (a Cook-Torrance material's; unused for the others).
+    #[inline]
+    fn microfacet(&self) -> Microfacet {
+        match self.material.model {
+            LightingModel::CookTorrance(surface) => surface,
+            _ => Microfacet {
+                roughness: 1.0,
+                fresnel: Vec3::ZERO,
+                distribution: MicrofacetDistribution::Ggx,
+            },
+        }
+    }
+
+    /// `illuminate_with_visibility` lane by lane, with `reflectance` the model's terms and each
+    /// lane's own `k_a` and `k_d` (`surface`), then the shown terms split as `Frame::light_side`
+    /// splits them: the same operations in the same order, its `continue`s turned into masks (a
+    /// masked-off lane keeps its sums untouched, not `+ 0`).
+    #[inline]
+    fn light_model_lanes<R: Reflectance>(
         &self,
+        reflectance: R,
         position: Vec3s,
         normal: Vec3s,
-        to_viewer: Vec3s,
         surface: &SurfaceLanes,
     ) -> LitLanes {
+        let to_viewer = match self.frame.viewer {
+            Viewer::Local => (-position).normalize_or_zero(),
+            Viewer::Infinite { to_viewer } => Vec3s::splat(to_viewer),
+        };
         let material = self.material;
         let ambient = surface.ambient * Vec3s::splat(self.frame.ambient_light);
         let mut diffuse = Vec3s::splat(Vec3::ZERO);
@@ -244,70 +323,244 @@ impl<'f> FastLighting<'f> {
             if !lit.any() {
                 continue;
             }
-            let color = Vec3s::splat(light.color);
-            let irradiance = color.scale(strength).scale(n_dot_l);
-            diffuse = lit.select3(diffuse + surface.diffuse * irradiance, diffuse);
-            if SPECULAR != 0 {
-                let cosine = if SPECULAR == 2 {
-                    normal.dot((to_light + to_viewer).normalize_or_zero())
-                } else {
-                    let reflected = normal.scale(Floats::splat(2.0) * normal.dot(to_light)) - to_light;
-                    reflected.dot(to_viewer)
-                };
-                let intensity = color.scale(strength);
-                let power = specular_power_lanes(cosine, material.shininess, lit);
-                let added = specular + (Vec3s::splat(material.specular) * intensity).scale(power);
-                specular = lit.select3(added, specular);
-            }
-        }
-        LitLanes {
-            textured: ambient + diffuse,
-            rest: specular + Vec3s::splat(material.emission),
-        }
-    }
-
-    /// `illuminate_with_visibility` for a Phong or Blinn-Phong material, then
-    /// `(ambient + diffuse) + (specular + emission)`. `SPECULAR` is [`Specular`] as a number so
-    /// each model gets its own loop. Each light's direction and strength (attenuation, spot
-    /// factor) come from the general path's own `incidence`.
-    #[inline]
-    fn light_model<const SPECULAR: u8>(&self, position: Vec3, normal: Vec3, to_viewer: Vec3) -> Vec3 {
-        let material = self.material;
-        let ambient = material.ambient * self.frame.ambient_light;
-        let mut diffuse = Vec3::ZERO;
-        let mut specular = Vec3::ZERO;
-        for (index, light) in self.frame.lights.iter().enumerate() {
-            let Some((to_light, strength)) = incidence(light, position) else {
-                continue;
+            let intensity = Vec3s::splat(light.color).scale(strength);
+            let at = LightAtLanes {
+                normal,
+                to_light,
+                to_viewer,
+                n_dot_l,
+                intensity,
+                irradiance: intensity.scale(n_dot_l),
+                lit,
             };
-            let n_dot_l = normal.dot(to_light);
-            if n_dot_l <= 0.0 || strength <= 0.0 {
-                continue;
-            }
-            let visibility = match self.frame.shadows.get(index) {
-                Some(Some(map)) => map.visibility(position, normal, to_light),
-                _ => 1.0,
-            };
-            let strength = strength * visibility;
-            if strength <= 0.0 {
-                continue;
-            }
-            let irradiance = light.color * strength * n_dot_l;
-            diffuse += material.diffuse * irradiance;
-            if SPECULAR != 0 {
-                let cosine = if SPECULAR == 2 {
-                    normal.dot((to_light + to_viewer).normalize_or_zero())
-                } else {
-                    reflect(to_light, normal).dot(to_viewer)
-                };
-                let intensity = light.color * strength;
-                specular += material.specular * intensity * specular_power(cosine, material.shininess);
+            let (diffuse_added, specular_added) = reflectance.reflect(material, surface, &at);
+            diffuse = lit.select3(diffuse + diffuse_added, diffuse);
+            if R::SPECULAR {
+                specular = lit.select3(specular + specular_added, specular);
             }
         }
-        (ambient + diffuse) + (specular + material.emission)
+        let none = Vec3s::splat(Vec3::ZERO);
+        // `select_component_split`'s two parts.
+        let (textured, rest) = match self.component {
+            LightingComponent::All => (ambient + diffuse, specular + Vec3s::splat(material.emission)),
+            LightingComponent::Ambient => (ambient, none),
+            LightingComponent::Diffuse => (diffuse, none),
+            LightingComponent::Specular => (none, specular),
+        };
+        LitLanes { textured, rest }
     }
 }
 
+/// The last lighting [`LightingMemo::get`] formed, kept for the next triangle: a tile's
+/// triangles come in runs of one object, material and side, and forming a lighting anew costs
+/// about as much as interpolating a pixel.
+#[derive(Default)]
+pub struct LightingMemo<'f> {
+    last: Option<(LightingKey, Option<FastLighting<'f>>)>,
+}
+
+/// What a [`FastLighting`] depends on: (material, object, shading, back-facing).
+type LightingKey = (u32, u32, Shading, bool);
+
+impl<'f> LightingMemo<'f> {
+    /// [`FastLighting::new`] for `triangle`'s material and object (of `frame`, the same at
+    /// every call).
+    #[inline(always)]
+    pub fn get(
+        &mut self,
+        frame: &'f Frame,
+        triangle: &FrameTriangle,
+        shading: Shading,
+        back_facing: bool,
+    ) -> Option<FastLighting<'f>> {
+        let key = (triangle.material, triangle.object, shading, back_facing);
+        match self.last {
+            Some((last, lighting)) if last == key => lighting,
+            _ => self.form(frame, key),
+        }
+    }
+
+    #[inline(never)]
+    fn form(&mut self, frame: &'f Frame, key: LightingKey) -> Option<FastLighting<'f>> {
+        let (material, object, shading, back_facing) = key;
+        let style = &frame.objects[object as usize];
+        let lighting = FastLighting::new(frame, material, style, shading, back_facing);
+        self.last = Some((key, lighting));
+        lighting
+    }
+}
+
+/// One light at eight points, where [`Reflectance::reflect`] reads it.
+struct LightAtLanes {
+    /// The side's normal `N`.
+    normal: Vec3s,
+    /// `L`, towards the light.
+    to_light: Vec3s,
+    /// `V`, towards the viewer.
+    to_viewer: Vec3s,
+    n_dot_l: Floats,
+    /// The light's colour times its strength (attenuation, spot factor, shadow): `I`.
+    intensity: Vec3s,
+    /// `I·(N·L)`, as `illuminate_with_visibility` forms it.
+    irradiance: Vec3s,
+    /// Where the light reaches and faces the point: only these lanes' results are used.
+    lit: Mask,
+}
+
+/// What a lighting model adds for one light at a lit point: the model's arm of
+/// `illuminate_with_visibility`'s loop, lane-wise. One implementation per model, chosen once
+/// per material ([`LaneModel`]), so the light loop has no branch on the model.
+trait Reflectance: Copy {
+    /// Whether the model adds to the specular sum at all.
+    const SPECULAR: bool;
+    /// (what is added to the diffuse sum, what is added to the specular sum) at each lane.
+    fn reflect(self, material: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s);
+}
+
+/// `k_d·I·(N·L)`.
+#[derive(Clone, Copy)]
+struct Lambert;
+
+impl Reflectance for Lambert {
+    const SPECULAR: bool = false;
+
+    #[inline(always)]
+    fn reflect(self, _: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+        (surface.diffuse * light.irradiance, Vec3s::splat(Vec3::ZERO))
+    }
+}
+
+/// Lambert's term and `k_s·I·max(R·V, 0)^n`, `R = 2(N·L)N − L`.
+#[derive(Clone, Copy)]
+struct Phong;
+
+impl Reflectance for Phong {
+    const SPECULAR: bool = true;
+
+    #[inline(always)]
+    fn reflect(self, material: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+        let reflected = light.normal.scale(Floats::splat(2.0) * light.n_dot_l) - light.to_light;
+        let cosine = reflected.dot(light.to_viewer);
+        (
+            Lambert.reflect(material, surface, light).0,
+            phong_specular_lanes(material, light, cosine),
+        )
+    }
+}
+
+/// Lambert's term and `k_s·I·max(N·H, 0)^n`, `H = (L + V)/|L + V|`.
+#[derive(Clone, Copy)]
+struct BlinnPhong;
+
+impl Reflectance for BlinnPhong {
+    const SPECULAR: bool = true;
+
+    #[inline(always)]
+    fn reflect(self, material: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+        let cosine = light
+            .normal
+            .dot((light.to_light + light.to_viewer).normalize_or_zero());
+        (
+            Lambert.reflect(material, surface, light).0,
+            phong_specular_lanes(material, light, cosine),
+        )
+    }
+}
+
+/// `k_s·I·max(cosine, 0)^n`, for the lanes where `light` is lit.
+#[inline(always)]
+fn phong_specular_lanes(material: &Material, light: &LightAtLanes, cosine: Floats) -> Vec3s {
+    let power = specular_power_lanes(cosine, material.shininess, light.lit);
+    (Vec3s::splat(material.specular) * light.intensity).scale(power)
+}
+
+/// `lighting::cook_torrance` and its use in `illuminate_with_visibility`: the diffuse term
+/// weighted by `1 − F`, and the microfacet term; `GGX` picks the distribution.
+#[derive(Clone, Copy)]
+struct CookTorrance<const GGX: bool>(Microfacet);
+
+impl<const GGX: bool> Reflectance for CookTorrance<GGX> {
+    const SPECULAR: bool = true;
+
+    #[inline(always)]
+    fn reflect(self, _: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+        let (fresnel, specular) = self.reflection(light);
+        let diffuse = surface.diffuse * (Vec3s::splat(Vec3::ONE) - fresnel) * light.irradiance;
+        (diffuse, specular * light.irradiance)
+    }
+}
+
+impl<const GGX: bool> CookTorrance<GGX> {
+    /// `lighting::cook_torrance`'s `(F, π·F·D·G / (4(N·V)(N·L)))` lane-wise. Its early return
+    /// (a viewer, light or half vector below the surface: no microfacet term) is a select.
+    #[inline(always)]
+    fn reflection(self, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+        let surface = self.0;
+        let (zero, one) = (Floats::splat(0.0), Floats::splat(1.0));
+        let LightAtLanes {
+            normal,
+            to_light,
+            to_viewer,
+            n_dot_l,
+            lit,
+            ..
+        } = *light;
+        let half = (to_light + to_viewer).normalize_or_zero();
+        let v_dot_h = to_viewer.dot(half).max(zero);
+        // `powi(5)` multiplies as binary exponentiation does: x·(x²)².
+        let grazing = power_by_squaring(one - v_dot_h, one, 5);
+        let fresnel =
+            Vec3s::splat(surface.fresnel) + Vec3s::splat(Vec3::ONE - surface.fresnel).scale(grazing);
+        let n_dot_v = normal.dot(to_viewer);
+        let n_dot_h = normal.dot(half);
+        let away = n_dot_v
+            .le(zero)
+            .or(n_dot_l.le(zero))
+            .or(n_dot_h.le(zero))
+            .or(v_dot_h.le(zero));
+        let reflects = lit.and(!away);
+        let distribution = if GGX {
+            ggx_lanes(&surface, n_dot_h)
+        } else {
+            beckmann_lanes(&surface, n_dot_h, reflects)
+        };
+        let two = Floats::splat(2.0);
+        let g_over_nv_nl = (one / (n_dot_v * n_dot_l))
+            .min(two * n_dot_h / (v_dot_h * n_dot_l))
+            .min(two * n_dot_h / (v_dot_h * n_dot_v));
+        let factor = Floats::splat(PI) * distribution * g_over_nv_nl / Floats::splat(4.0);
+        let specular = reflects.select3(fresnel.scale(factor), Vec3s::splat(Vec3::ZERO));
+        (fresnel, specular)
+    }
+}
+
+/// `lighting::microfacet_distribution` for Beckmann's `exp((cos²α − 1)/(m² cos²α)) / (π m² cos⁴α)`
+/// lane-wise but for `exp`, which is called for the lanes in `wanted` only (the others get 0).
+#[inline(always)]
+fn beckmann_lanes(surface: &Microfacet, n_dot_h: Floats, wanted: Mask) -> Floats {
+    let m2 = surface.roughness * surface.roughness;
+    let cos2 = n_dot_h * n_dot_h;
+    let exponent = (cos2 - Floats::splat(1.0)) / (Floats::splat(m2) * cos2);
+    let exponential = Floats(std::array::from_fn(|lane| {
+        if wanted.lane(lane) {
+            exponent.0[lane].exp()
+        } else {
+            0.0
+        }
+    }));
+    let zero = Floats::splat(0.0);
+    let distribution = exponential / (Floats::splat(PI * m2) * cos2 * cos2);
+    cos2.le(zero).select(zero, distribution)
+}
+
+/// `lighting::microfacet_distribution` for GGX's `α² / (π((N·H)²(α² − 1) + 1)²)` lane-wise.
+#[inline(always)]
+fn ggx_lanes(surface: &Microfacet, n_dot_h: Floats) -> Floats {
+    let m2 = surface.roughness * surface.roughness;
+    let cos2 = n_dot_h * n_dot_h;
+    let d = cos2 * Floats::splat(m2 - 1.0) + Floats::splat(1.0);
+    Floats::splat(m2) / (Floats::splat(PI) * d * d)
+}
 /// `lighting::direction_and_distance` lane-wise, from the points `position` towards the light at
 /// `light_position`: the unit direction, the distance, and where the light has a direction
 /// (a distance above 0 and finite; elsewhere the direction is not used).
@@ -352,65 +605,156 @@ fn specular_power_lanes(base: Floats, exponent: f32, wanted: Mask) -> Floats {
     }
 }
 
-/// One Phong-shaded triangle, ready to shade pixel after pixel.
-pub struct FastPhong<'f> {
-    lighting: FastLighting<'f>,
-    /// Whether vertex colours or textures make the material's `k_a`, `k_d` or normal vary
-    /// from point to point (`surface_lanes::varies`).
-    varies: bool,
-    triangle: &'f FrameTriangle,
-    style: &'f ObjectStyle,
-    positions: [Vec3; 3],
-    normals: [Vec3; 3],
-    back_facing: bool,
+/// What the pixels of a triangle shaded one by one show, decided once per triangle.
+#[derive(Clone, Copy)]
+pub enum PixelOutput<'f> {
+    /// The lit colour.
+    Lit(FastLighting<'f>),
+    /// The normals debug view: the side's normal mapped from [−1, 1] to [0, 1] per axis.
+    Normals,
+    /// The depth debug view: the distance along the view axis (the frame scales it afterwards).
+    Depth,
 }
 
-/// Up to [`LANES`] pixels of fast-path Phong triangles with the same lighting, waiting to be lit
-/// together by [`FastLighting::light_lanes`]: [`FastPhong::shade`] for each, with the same bits,
-/// but the square roots, divisions and lighting done lane-wise. For surfaces that do not vary
-/// (else [`SurfaceBatch`]).
-#[derive(Default)]
+/// What the pixels of one batch share (in one frame): the material and object (which decide
+/// the lighting and how normals are interpolated), and the side or the view. Two integers,
+/// compared per pixel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct BatchKey {
+    /// The material and object.
+    surface: u64,
+    /// 0 and 1 for the front and back of a lit surface, 2 and 3 for the normals and depth views.
+    output: u8,
+}
+
+impl BatchKey {
+    /// No pixel's key: an empty batch's.
+    const NONE: BatchKey = BatchKey {
+        surface: u64::MAX,
+        output: u8::MAX,
+    };
+
+    #[inline(always)]
+    fn of(output: &PixelOutput, triangle: &FrameTriangle, back_facing: bool) -> Self {
+        BatchKey {
+            surface: u64::from(triangle.material) | u64::from(triangle.object) << 32,
+            output: match output {
+                PixelOutput::Lit(_) => u8::from(back_facing),
+                PixelOutput::Normals => 2,
+                PixelOutput::Depth => 3,
+            },
+        }
+    }
+}
+
+/// One triangle shaded pixel by pixel (Phong shading, and every mode's normals and depth views),
+/// its stages chosen once: how the normal is interpolated, and what a pixel shows.
+pub struct FastPhong<'f> {
+    frame: &'f Frame,
+    output: PixelOutput<'f>,
+    batch_key: BatchKey,
+    triangle: &'f FrameTriangle,
+    positions: [Vec3; 3],
+    normals: NormalStage,
+    /// Whether the side shaded uses the surface's normal flipped (`ObjectStyle::side_normal`).
+    reversed: bool,
+    /// Whether vertex colours or textures make the material's `k_a`, `k_d` or normal vary
+    /// from point to point (`surface_lanes::varies`): the pixels are then lit through a
+    /// [`SurfaceBatch`], not a [`PhongBatch`].
+    varies: bool,
+}
+
+/// How a triangle's pixels interpolate its vertex normals (before renormalising), chosen once.
+#[derive(Clone, Copy)]
+enum NormalStage {
+    /// Component by component: the vertex normals.
+    Nlerp([Vec3; 3]),
+    /// `slerp_triangle`: the arc between the first two normals (the same at every pixel), and
+    /// the third normal.
+    Slerp { first_two: NormalArc, third: Vec3 },
+}
+
+/// Up to [`LANES`] pixels of [`FastPhong`] triangles with the same output, waiting to be computed
+/// together: [`FastPhong::shade`] for each, with the same bits, but the square roots, divisions
+/// and lighting done lane-wise. For surfaces that do not vary (else [`SurfaceBatch`]).
 pub struct PhongBatch<'f> {
-    lighting: Option<FastLighting<'f>>,
+    /// The frame and what the waiting pixels show.
+    shader: Option<(&'f Frame, PixelOutput<'f>)>,
+    /// `shader`'s [`BatchKey`] ([`BatchKey::NONE`] while there is none).
+    key: BatchKey,
+    /// Whether the waiting pixels' normals are slerped (they are of one object).
+    slerp: bool,
     len: usize,
     /// Where each pixel's colour goes.
     offsets: [usize; LANES],
     positions: [Vec3; LANES],
-    /// Interpolated, not yet renormalised.
+    /// With Nlerp: interpolated, not yet renormalised.
     normals: [Vec3; LANES],
+    /// With Slerp: each pixel's weights and its triangle's first arc and third normal.
+    weights: [Vec3; LANES],
+    arcs: [NormalArc; LANES],
+    thirds: [Vec3; LANES],
     triangles: [Option<&'f FrameTriangle>; LANES],
     reversed: [bool; LANES],
 }
 
+impl Default for PhongBatch<'_> {
+    fn default() -> Self {
+        PhongBatch {
+            shader: None,
+            key: BatchKey::NONE,
+            slerp: false,
+            len: 0,
+            offsets: [0; LANES],
+            positions: [Vec3::ZERO; LANES],
+            normals: [Vec3::ZERO; LANES],
+            weights: [Vec3::ZERO; LANES],
+            arcs: [NormalArc::Chord {
+                start: Vec3::ZERO,
+                end: Vec3::ZERO,
+            }; LANES],
+            thirds: [Vec3::ZERO; LANES],
+            triangles: [None; LANES],
+            reversed: [false; LANES],
+        }
+    }
+}
+
 impl<'f> PhongBatch<'f> {
     /// Queues the pixel with source-triangle weights `weights` of `phong`'s triangle; its
-    /// colour goes to `color[offset]` when the batch is lit (when full, when a pixel with other
-    /// lighting comes, or on [`PhongBatch::flush`]).
-    #[inline]
+    /// colour goes to `color[offset]` when the batch is computed (when full, when a pixel with
+    /// another output comes, or on [`PhongBatch::flush`]).
+    #[inline(always)]
     pub fn push(&mut self, phong: &FastPhong<'f>, weights: Vec3, offset: usize, color: &mut [Vec3]) {
         debug_assert!(!phong.varies());
-        if let Some(lighting) = self.lighting
-            && !lighting.same_as(&phong.lighting)
-        {
+        if self.key != phong.batch_key {
             self.flush(color);
+            self.shader = Some((phong.frame, phong.output));
+            self.key = phong.batch_key;
+            self.slerp = matches!(phong.normals, NormalStage::Slerp { .. });
         }
-        self.lighting = Some(phong.lighting);
         let lane = self.len;
-        let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
         self.offsets[lane] = offset;
-        self.positions[lane] = interpolate(phong.positions);
-        self.normals[lane] = interpolate(phong.normals);
+        self.positions[lane] = interpolate(phong.positions, weights);
+        match phong.normals {
+            NormalStage::Nlerp(normals) => self.normals[lane] = interpolate(normals, weights),
+            NormalStage::Slerp { first_two, third } => {
+                self.weights[lane] = weights;
+                self.arcs[lane] = first_two;
+                self.thirds[lane] = third;
+            }
+        }
         self.triangles[lane] = Some(phong.triangle);
-        self.reversed[lane] = phong.style.reverses_normal(phong.back_facing);
+        self.reversed[lane] = phong.reversed;
         self.len += 1;
         if self.len == LANES {
             self.flush(color);
         }
     }
 
-    /// Lights the waiting pixels into `color` and empties the batch.
+    /// Computes the waiting pixels into `color` and empties the batch.
     pub fn flush(&mut self, color: &mut [Vec3]) {
-        let Some(lighting) = self.lighting else {
+        let Some((frame, output)) = self.shader else {
             return;
         };
         if self.len == 0 {
@@ -420,19 +764,136 @@ impl<'f> PhongBatch<'f> {
         for lane in self.len..LANES {
             self.positions[lane] = self.positions[self.len - 1];
             self.normals[lane] = self.normals[self.len - 1];
+            self.weights[lane] = self.weights[self.len - 1];
+            self.arcs[lane] = self.arcs[self.len - 1];
+            self.thirds[lane] = self.thirds[self.len - 1];
             self.triangles[lane] = self.triangles[self.len - 1];
             self.reversed[lane] = self.reversed[self.len - 1];
         }
-        let normals = renormalize_lanes(lighting.frame, Vec3s::from_array(&self.normals), &self.triangles);
-        let normals = Mask::from_bools(self.reversed)
-            .select3(-normals, normals)
-            .to_array();
-        let lit = lighting.light_lanes(&self.positions, &normals);
-        for (&offset, &lit) in self.offsets[..self.len].iter().zip(&lit) {
-            color[offset] = lit;
+        let shaded = match output {
+            PixelOutput::Depth => {
+                let depth = Vec3s::from_array(&self.positions).dot(Vec3s::splat(frame.forward));
+                depth.0.map(Vec3::splat)
+            }
+            PixelOutput::Lit(lighting) => lighting.light_lanes(&self.positions, &self.side_normals(frame)),
+            PixelOutput::Normals => {
+                let normals = Vec3s::from_array(&self.side_normals(frame));
+                let half = Floats::splat(0.5);
+                (normals.scale(half) + Vec3s::splat(Vec3::splat(0.5))).to_array()
+            }
+        };
+        for (&offset, &shaded) in self.offsets[..self.len].iter().zip(&shaded) {
+            color[offset] = shaded;
         }
         self.len = 0;
     }
+
+    /// The waiting pixels' normals renormalised (`renormalize_or_else`, lane-wise: `v / |v|`
+    /// where `|v|² > 1e-12`, else the face normal) and turned to the side shaded.
+    #[inline(always)]
+    fn side_normals(&self, frame: &Frame) -> [Vec3; LANES] {
+        let interpolated = if self.slerp {
+            slerp_triangle_lanes(&self.arcs, &self.thirds, &self.weights)
+        } else {
+            Vec3s::from_array(&self.normals)
+        };
+        let normals = renormalize_lanes(frame, interpolated, &self.triangles);
+        Mask::from_bools(self.reversed)
+            .select3(-normals, normals)
+            .to_array()
+    }
+}
+
+/// `slerp_triangle_along` for the lanes' weights, first arcs and third normals: lane by lane
+/// the same operations, `trig`'s sine, cosine and `atan2` included.
+#[inline(always)]
+fn slerp_triangle_lanes(arcs: &[NormalArc; LANES], thirds: &[Vec3; LANES], weights: &[Vec3; LANES]) -> Vec3s {
+    let weights = Vec3s::from_array(weights);
+    let first = ArcLanes::of(arcs);
+    let first_two_weight = weights.x + weights.y;
+    let on_edge = first_two_weight.gt(Floats::splat(0.0));
+    let edge = on_edge.select3(first.at(weights.y / first_two_weight), first.start);
+    ArcLanes::new(edge, Vec3s::from_array(thirds)).at(weights.z)
+}
+
+/// [`NormalArc`]s in lanes: where each starts, where it goes (a chord's end, a turn's
+/// `towards`), its angle (a turn's), and which lanes are chords.
+struct ArcLanes {
+    start: Vec3s,
+    other: Vec3s,
+    angle: Floats,
+    chord: Mask,
+}
+
+impl ArcLanes {
+    /// The lanes of `arcs`.
+    #[inline(always)]
+    fn of(arcs: &[NormalArc; LANES]) -> Self {
+        let mut other = [Vec3::ZERO; LANES];
+        let mut angle = [0.0; LANES];
+        let mut chord = [false; LANES];
+        for (lane, arc) in arcs.iter().enumerate() {
+            match *arc {
+                NormalArc::Chord { end, .. } => (other[lane], chord[lane]) = (end, true),
+                NormalArc::Turn {
+                    towards, angle: a, ..
+                } => (other[lane], angle[lane]) = (towards, a),
+            }
+        }
+        ArcLanes {
+            start: Vec3s::from_array(&arcs.map(|arc| arc.start())),
+            other: Vec3s::from_array(&other),
+            angle: Floats(angle),
+            chord: Mask::from_bools(chord),
+        }
+    }
+
+    /// `NormalArc::new` lane by lane; a half turn's perpendicular (`any_orthonormal_vector`)
+    /// per lane where one occurs.
+    #[inline(always)]
+    fn new(n0: Vec3s, n1: Vec3s) -> Self {
+        let zero = Floats::splat(0.0);
+        let cos = n0.dot(n1);
+        let cross = n0.cross(n1);
+        let sin = cross.length();
+        let small = Floats::splat(SMALL_SINE).gt(sin);
+        let chord = n0.is_zero().or(n1.is_zero()).or(small.and(cos.gt(zero)));
+        let half_turn = small.and(!chord);
+        let mut towards = cross.divide(sin).cross(n0);
+        if half_turn.any() {
+            let (starts, mut perpendiculars) = (n0.to_array(), towards.to_array());
+            for lane in (0..LANES).filter(|&lane| half_turn.lane(lane)) {
+                perpendiculars[lane] = starts[lane].any_orthonormal_vector();
+            }
+            towards = Vec3s::from_array(&perpendiculars);
+        }
+        ArcLanes {
+            start: n0,
+            other: chord.select3(n1, towards),
+            angle: small.select(Floats::splat(std::f32::consts::PI), trig::atan2(sin, cos)),
+            chord,
+        }
+    }
+
+    /// `NormalArc::at(t)` lane by lane (the chord only where a lane has one: rare, normals
+    /// nearly parallel).
+    #[inline(always)]
+    fn at(&self, t: Floats) -> Vec3s {
+        let (sine, cosine) = trig::sin_cos(t * self.angle);
+        let turn = self.start.scale(cosine) + self.other.scale(sine);
+        if !self.chord.any() {
+            return turn;
+        }
+        let one = Floats::splat(1.0);
+        let chord = (self.start.scale(one - t) + self.other.scale(t)).normalize_or_zero();
+        self.chord.select3(chord, turn)
+    }
+}
+
+/// The value at barycentric `weights` of a triangle whose corners have `values`.
+#[inline(always)]
+fn interpolate([a, b, c]: [Vec3; 3], weights: Vec3) -> Vec3 {
+    a * weights.x + b * weights.y + c * weights.z
 }
 
 /// `renormalize_or_else` lane-wise: `v / |v|` where `|v|² > 1e-12`, else the face normal of the
@@ -445,7 +906,12 @@ fn renormalize_lanes(
 ) -> Vec3s {
     let length_squared = interpolated.dot(interpolated);
     let usable = length_squared.gt(Floats::splat(1e-12));
-    let mut normals = interpolated.divide(length_squared.sqrt()).to_array();
+    let normals = interpolated.divide(length_squared.sqrt());
+    // Rare (opposite vertex normals): one test for the whole batch.
+    if usable.all() {
+        return normals;
+    }
+    let mut normals = normals.to_array();
     for (lane, (normal, triangle)) in normals.iter_mut().zip(triangles).enumerate() {
         if !usable.lane(lane) {
             *normal = frame.face_normal(triangle.expect("every lane holds a pixel"));
@@ -506,18 +972,23 @@ impl<'f> SurfaceBatch<'f> {
     /// (flushing the waiting pixels into `color` first if it lights otherwise).
     #[inline]
     pub fn begin(&mut self, phong: &FastPhong<'f>, plane: RasterPlane, color: &mut [Vec3]) {
-        if let Some(lighting) = self.lighting
-            && !lighting.same_as(&phong.lighting)
+        // `FastPhong::new` lets a surface vary only where it lights it, interpolating normals
+        // component by component.
+        let (PixelOutput::Lit(lighting), NormalStage::Nlerp(normals)) = (phong.output, phong.normals) else {
+            unreachable!("a varying surface is lit, with Nlerp");
+        };
+        if let Some(waiting) = self.lighting
+            && !waiting.same_as(&lighting)
         {
             self.flush(color);
         }
-        self.lighting = Some(phong.lighting);
+        self.lighting = Some(lighting);
         self.current = SurfaceTriangle {
             triangle: Some(phong.triangle),
             plane,
             positions: phong.positions,
-            normals: phong.normals,
-            reversed: phong.style.reverses_normal(phong.back_facing),
+            normals,
+            reversed: phong.reversed,
         };
         self.current_entry = None;
     }
@@ -589,31 +1060,45 @@ impl<'f> SurfaceBatch<'f> {
 }
 
 impl<'f> FastPhong<'f> {
-    /// Whether any triangle of `frame` may take the fast path: no debug view. Every light
-    /// kind, shadowed or not, is lit in lanes, and textures, vertex colours and normal maps
-    /// applied in lanes. Asked once per tile.
-    pub fn frame_allows(frame: &Frame) -> bool {
-        frame.debug_view.is_none()
-    }
-
-    /// The fast path for `triangle` seen from the front or the back, or `None` when it needs the
-    /// general path: another shading mode or model, Slerp, or a single lighting component (see
-    /// [`FastLighting::new`]). Only for frames that [`FastPhong::frame_allows`].
-    pub fn new(frame: &'f Frame, triangle: &'f FrameTriangle, back_facing: bool) -> Option<Self> {
+    /// The per-pixel shading of `triangle` seen from the front or the back, or `None` when it
+    /// needs the general path: a lit pixel whose lighting does not take lanes (see
+    /// [`FastLighting::new`]), or of a surface that varies with Slerp. The debug views of normals and
+    /// depth take any triangle; the caller asks them for every mode whose pixels they vary over
+    /// (depth: all; normals: Gouraud and Phong). `lightings` forms the lighting.
+    #[inline(always)]
+    pub fn new(
+        frame: &'f Frame,
+        triangle: &'f FrameTriangle,
+        back_facing: bool,
+        lightings: &mut LightingMemo<'f>,
+    ) -> Option<Self> {
         let style = &frame.objects[triangle.object as usize];
-        if style.normal_interpolation != NormalInterpolation::Nlerp {
-            return None;
-        }
-        let lighting = FastLighting::new(frame, triangle.material, style, Shading::Phong, back_facing)?;
+        let output = match frame.debug_view {
+            Some(DebugView::Depth) => PixelOutput::Depth,
+            Some(DebugView::Normals) => PixelOutput::Normals,
+            _ => PixelOutput::Lit(lightings.get(frame, triangle, Shading::Phong, back_facing)?),
+        };
+        let varies = matches!(output, PixelOutput::Lit(lighting) if varies(frame, lighting.material));
         let vertices = triangle.vertices.map(|v| &frame.vertices[v as usize]);
+        let [n0, n1, n2] = vertices.map(|v| v.normal);
+        let normals = match style.normal_interpolation {
+            NormalInterpolation::Nlerp => NormalStage::Nlerp([n0, n1, n2]),
+            // The surface stage interpolates normals component by component only.
+            NormalInterpolation::Slerp if varies => return None,
+            NormalInterpolation::Slerp => NormalStage::Slerp {
+                first_two: NormalArc::new(n0, n1),
+                third: n2,
+            },
+        };
         Some(FastPhong {
-            lighting,
-            varies: varies(frame, lighting.material),
+            frame,
+            output,
+            batch_key: BatchKey::of(&output, triangle, back_facing),
+            varies,
             triangle,
-            style,
             positions: vertices.map(|v| v.position),
-            normals: vertices.map(|v| v.normal),
-            back_facing,
+            normals,
+            reversed: style.reverses_normal(back_facing),
         })
     }
 
@@ -624,21 +1109,30 @@ impl<'f> FastPhong<'f> {
         self.varies
     }
 
+    /// The normal at `weights` as the object interpolates it, before renormalisation.
+    fn interpolated_normal(&self, weights: Vec3) -> Vec3 {
+        match &self.normals {
+            NormalStage::Nlerp(normals) => interpolate(*normals, weights),
+            NormalStage::Slerp { first_two, third } => slerp_triangle_along(first_two, *third, weights),
+        }
+    }
+
     /// The colour at the point with source-triangle weights `weights`: what [`PhongBatch`]
     /// computes for each pixel it queues (the renderer shades through the batch; tests hold the
-    /// two, and this and the general path, together bit for bit). For a surface that does not
-    /// vary (no texture, no vertex colours; tests hold the batches of the others to the general
-    /// path).
-    #[inline]
+    /// two, and this and the general path, together bit for bit).
     pub fn shade(&self, weights: Vec3) -> Vec3 {
-        let frame = self.lighting.frame;
+        let frame = self.frame;
         debug_assert!(!self.varies);
-        let interpolate = |[a, b, c]: [Vec3; 3]| a * weights.x + b * weights.y + c * weights.z;
-        let position = interpolate(self.positions);
-        let normal = renormalize_or_else(interpolate(self.normals), || frame.face_normal(self.triangle));
-        let normal = self.style.side_normal(normal, self.back_facing);
-        self.lighting
-            .light(position, normal, frame.viewer.to_viewer(position))
+        let position = interpolate(self.positions, weights);
+        let normal = renormalize_or_else(self.interpolated_normal(weights), || {
+            frame.face_normal(self.triangle)
+        });
+        let normal = if self.reversed { -normal } else { normal };
+        match self.output {
+            PixelOutput::Lit(lighting) => lighting.light(position, normal),
+            PixelOutput::Normals => normal * 0.5 + 0.5,
+            PixelOutput::Depth => Vec3::splat(position.dot(frame.forward)),
+        }
     }
 }
 
@@ -649,21 +1143,92 @@ pub(crate) mod tests {
     use glam::{DVec3, Vec2, Vec4};
 
     use super::*;
+    use crate::lighting::{cook_torrance, incidence};
     use crate::mesh::primitives;
     use crate::render::frame::{has_color_texture, tinted};
     use crate::render::raster::SamplePattern;
+    use crate::render::shade::slerp_triangle;
     use crate::render::{RenderOptions, geometry::build_frame, render};
     use crate::scene::{
         Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene, ShadowSettings, TextureBinding,
     };
     use crate::texture::{Sampler, Texture, Wrap};
 
-    /// The lightings the fast path specialises: Phong, Blinn-Phong, and no specular term.
-    const MODELS: [(LightingModel, Vec3); 3] = [
+    /// A rough Cook-Torrance surface with a coloured Fresnel term, under `distribution`.
+    pub(crate) const fn microfacet(distribution: MicrofacetDistribution) -> LightingModel {
+        LightingModel::CookTorrance(Microfacet {
+            roughness: 0.35,
+            fresnel: Vec3::new(0.04, 0.3, 0.9),
+            distribution,
+        })
+    }
+
+    /// Every lighting model with the specular colour it is tested with: Phong and Blinn-Phong
+    /// with and without a specular term, Lambert, Cook-Torrance with each distribution, unlit.
+    pub(crate) const MODELS: [(LightingModel, Vec3); 7] = [
         (LightingModel::Phong, Vec3::splat(0.7)),
         (LightingModel::BlinnPhong, Vec3::splat(0.7)),
         (LightingModel::Phong, Vec3::ZERO),
+        (LightingModel::Lambert, Vec3::splat(0.7)),
+        (microfacet(MicrofacetDistribution::Beckmann), Vec3::splat(0.7)),
+        (microfacet(MicrofacetDistribution::Ggx), Vec3::splat(0.7)),
+        (LightingModel::Unlit, Vec3::splat(0.7)),
     ];
+
+    /// What an object shows and how it interpolates normals, beside its lighting: a component,
+    /// Nlerp or Slerp, and the frame's debug view.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    pub(crate) struct Look {
+        pub component: LightingComponent,
+        pub interpolation: NormalInterpolation,
+        pub view: Option<DebugView>,
+    }
+
+    pub(crate) const PLAIN: Look = Look {
+        component: LightingComponent::All,
+        interpolation: NormalInterpolation::Nlerp,
+        view: None,
+    };
+
+    /// Every component, both interpolations and every debug view, each at least once.
+    pub(crate) const LOOKS: [Look; 9] = {
+        use DebugView as V;
+        use LightingComponent as C;
+        use NormalInterpolation::{Nlerp, Slerp};
+        [
+            PLAIN,
+            Look::new(C::All, Slerp, None),
+            Look::new(C::Ambient, Nlerp, None),
+            Look::new(C::Diffuse, Slerp, None),
+            Look::new(C::Specular, Nlerp, None),
+            Look::new(C::All, Nlerp, Some(V::Diffuse)),
+            Look::new(C::Diffuse, Slerp, Some(V::Specular)),
+            Look::new(C::All, Slerp, Some(V::Normals)),
+            Look::new(C::Specular, Nlerp, Some(V::Depth)),
+        ]
+    };
+
+    impl Look {
+        const fn new(
+            component: LightingComponent,
+            interpolation: NormalInterpolation,
+            view: Option<DebugView>,
+        ) -> Self {
+            Look {
+                component,
+                interpolation,
+                view,
+            }
+        }
+
+        /// `scene` with every object showing `self` (the view is the frame's: see [`frame_of`]).
+        pub(crate) fn apply(self, scene: &mut Scene) {
+            for object in &mut scene.objects {
+                object.component = self.component;
+                object.normal_interpolation = self.interpolation;
+            }
+        }
+    }
 
     /// The light sets the fast path is held to the general path under.
     #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -987,106 +1552,207 @@ pub(crate) mod tests {
 
     /// Every visible pixel of the fast path's scenes against the general path (`Frame::light`
     /// with the same interpolated normal), bit for bit, per model and light set.
+    /// Points of every triangle, both sides, shaded per pixel in lanes ([`PhongBatch`], and
+    /// `FastPhong::shade`) against the general path's pieces (`Frame::light` with the normal
+    /// interpolated as the object asks, or the debug view's value), bit for bit: every model,
+    /// light set and back-face mode, and for two models every component, interpolation and view.
     #[test]
     fn fast_path_equals_the_general_lighting_bit_for_bit() {
-        for ((model, specular), lights) in MODELS.into_iter().flat_map(|m| LIGHTS.map(|l| (m, l))) {
-            for back_faces in [BackFaces::ReverseLit, BackFaces::Lit] {
-                let scene = scene(model, specular, back_faces, lights);
-                let frame = frame_of(&scene, None);
-                let mut checked = 0;
+        let cases = MODELS.into_iter().enumerate().flat_map(|(index, model)| {
+            let looks: &[Look] = if matches!(index, 0 | 5) { &LOOKS } else { &[PLAIN] };
+            looks
+                .iter()
+                .flat_map(move |&look| LIGHTS.map(|lights| (model, look, lights)))
+        });
+        for ((model, specular), look, lights) in cases {
+            for back_faces in [BackFaces::ReverseLit, BackFaces::Lit, BackFaces::Unlit] {
+                let mut scene = scene(model, specular, back_faces, lights);
+                look.apply(&mut scene);
+                let frame = frame_of(&scene, look.view);
                 let mut points = Vec::new();
-                for triangle in &frame_triangles(&frame) {
+                let (mut expected, mut batch) = (Vec::new(), PhongBatch::default());
+                let triangles = frame_triangles(&frame);
+                let mut colors = vec![Vec3::NAN; 6 * triangles.len()];
+                for triangle in &triangles {
                     for back_facing in [false, true] {
-                        let fast = FastPhong::new(&frame, triangle, back_facing).expect("eligible");
+                        let fast =
+                            FastPhong::new(&frame, triangle, back_facing, &mut LightingMemo::default())
+                                .expect("eligible");
                         for weights in [Vec3::new(0.2, 0.3, 0.5), Vec3::splat(1.0 / 3.0), Vec3::X] {
                             let [a, b, c] = triangle.vertices.map(|v| frame.vertices[v as usize]);
                             let position =
                                 a.position * weights.x + b.position * weights.y + c.position * weights.z;
-                            let normal = renormalize_or_else(
-                                a.normal * weights.x + b.normal * weights.y + c.normal * weights.z,
-                                || frame.face_normal(triangle),
-                            );
+                            let interpolated = match look.interpolation {
+                                NormalInterpolation::Nlerp => {
+                                    a.normal * weights.x + b.normal * weights.y + c.normal * weights.z
+                                }
+                                NormalInterpolation::Slerp => {
+                                    slerp_triangle([a.normal, b.normal, c.normal], weights)
+                                }
+                            };
+                            let normal = renormalize_or_else(interpolated, || frame.face_normal(triangle));
                             let style = &frame.objects[triangle.object as usize];
-                            let general =
-                                frame.light(triangle.material, style, position, normal, back_facing);
+                            let general = match look.view {
+                                Some(DebugView::Depth) => Vec3::splat(position.dot(frame.forward)),
+                                Some(DebugView::Normals) => {
+                                    style.side_normal(normal, back_facing) * 0.5 + 0.5
+                                }
+                                _ => frame.light(triangle.material, style, position, normal, back_facing),
+                            };
+                            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                             assert_eq!(
-                                fast.shade(weights),
-                                general,
-                                "{model:?} {back_faces:?} {lights:?}"
+                                bits(fast.shade(weights)),
+                                bits(general),
+                                "{model:?} {look:?} {back_faces:?} {lights:?}"
                             );
+                            batch.push(&fast, weights, expected.len(), &mut colors);
+                            expected.push(general);
                             points.push((position, style.side_normal(normal, back_facing)));
-                            checked += 1;
                         }
                     }
                 }
-                assert!(checked > 1000);
+                batch.flush(&mut colors);
+                for (lanes, general) in colors.iter().zip(&expected) {
+                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                    assert_eq!(
+                        bits(*lanes),
+                        bits(*general),
+                        "{model:?} {look:?} {back_faces:?} {lights:?}, in lanes"
+                    );
+                }
+                assert!(expected.len() > 1000);
                 if lights == Lights::Shadowed {
                     assert_shadows_cross(&frame, &points, 20);
                 }
                 if lights == Lights::DirectionalAndSpots {
                     assert_cones_cross(&frame, &points, 100);
                 }
+                if let LightingModel::CookTorrance(surface) = model {
+                    assert_microfacets_cross(&frame, &surface, &points, 50);
+                }
             }
         }
     }
 
-    /// Eight points lit at once against the one-point lighting, bit for bit, per model, with
-    /// both viewers, unlit lanes, reversed normals and a zero normal among them.
+    /// How many of `points` (position, side normal) lit by some light of `frame` get a
+    /// microfacet term from `surface`, and how many none (the viewer, or the half vector, below
+    /// the surface), asserting both are at least `least`: a comparison over those points then
+    /// covers both sides of `cook_torrance`'s early return.
+    fn assert_microfacets_cross(frame: &Frame, surface: &Microfacet, points: &[(Vec3, Vec3)], least: usize) {
+        let (mut reflecting, mut turned_away) = (0, 0);
+        for &(position, normal) in points {
+            for light in &frame.lights {
+                if let Some((to_light, strength)) = incidence(light, position)
+                    && normal.dot(to_light) > 0.0
+                    && strength > 0.0
+                {
+                    let to_viewer = frame.viewer.to_viewer(position);
+                    if cook_torrance(surface, normal, to_light, to_viewer)
+                        .specular
+                        .max_element()
+                        > 0.0
+                    {
+                        reflecting += 1;
+                    } else {
+                        turned_away += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            reflecting >= least && turned_away >= least,
+            "{reflecting} lit points with a microfacet term, {turned_away} without"
+        );
+    }
+
+    /// Eight points lit at once against the one-point lighting (the general path's), bit for
+    /// bit, per model, component, side and debug view, with both viewers, unlit lanes, reversed
+    /// normals and a zero normal among them.
     #[test]
     fn lighting_eight_points_at_once_equals_lighting_each_bit_for_bit() {
         // A whole shininess is raised by squaring, lane-wise; another goes through `powf`.
         let shininesses = MODELS.into_iter().flat_map(|m| [(m, 17.0), (m, 17.5)]);
+        // (the object's component, the debug view, the side, the back-face mode)
+        let sides = [
+            (LightingComponent::All, None, false, BackFaces::ReverseLit),
+            (LightingComponent::Diffuse, None, false, BackFaces::ReverseLit),
+            (LightingComponent::Specular, None, false, BackFaces::ReverseLit),
+            (LightingComponent::Ambient, None, false, BackFaces::ReverseLit),
+            (
+                LightingComponent::All,
+                Some(DebugView::Specular),
+                false,
+                BackFaces::ReverseLit,
+            ),
+            (LightingComponent::All, None, true, BackFaces::Unlit),
+        ];
         for (((model, specular), shininess), lights) in shininesses.flat_map(|s| LIGHTS.map(|l| (s, l))) {
-            let mut scene = scene(model, specular, BackFaces::ReverseLit, lights);
-            for object in &mut scene.objects {
-                object.material.as_mut().expect("a material").shininess = shininess;
-            }
-            let mut frame = frame_of(&scene, None);
-            for viewer in [
-                frame.viewer,
-                crate::render::frame::Viewer::Infinite { to_viewer: Vec3::Z },
-            ] {
-                frame.viewer = viewer;
-                let style = &frame.objects[0];
-                let lighting = FastLighting::new(&frame, 0, style, Shading::Phong, false).expect("eligible");
-                let mut compared = 0;
-                let mut points = Vec::new();
-                for (group, vertices) in frame.vertices.chunks_exact(LANES).enumerate() {
-                    let positions: [Vec3; LANES] = std::array::from_fn(|i| vertices[i].position);
-                    let normals: [Vec3; LANES] = std::array::from_fn(|i| match (group + i) % 5 {
-                        0 => -vertices[i].normal,
-                        1 if group % 7 == 0 => Vec3::ZERO,
-                        _ => vertices[i].normal,
-                    });
-                    let lit = lighting.light_lanes(&positions, &normals);
-                    for i in 0..LANES {
-                        let one =
-                            lighting.light(positions[i], normals[i], frame.viewer.to_viewer(positions[i]));
-                        assert_eq!(
-                            lit[i].to_array().map(f32::to_bits),
-                            one.to_array().map(f32::to_bits),
-                            "{model:?} {lights:?}, point {i} of group {group}"
-                        );
-                        points.push((positions[i], normals[i]));
-                        compared += 1;
-                    }
+            for (component, view, back_facing, back_faces) in sides {
+                let mut scene = scene(model, specular, back_faces, lights);
+                for object in &mut scene.objects {
+                    object.material.as_mut().expect("a material").shininess = shininess;
+                    object.component = component;
                 }
-                assert!(compared > 500);
-                if lights == Lights::DirectionalAndSpots {
-                    assert_cones_cross(&frame, &points, 20);
+                let mut frame = frame_of(&scene, view);
+                for viewer in [
+                    frame.viewer,
+                    crate::render::frame::Viewer::Infinite { to_viewer: Vec3::Z },
+                ] {
+                    frame.viewer = viewer;
+                    let style = &frame.objects[0];
+                    let lighting =
+                        FastLighting::new(&frame, 0, style, Shading::Phong, back_facing).expect("eligible");
+                    let mut compared = 0;
+                    let mut points = Vec::new();
+                    for (group, vertices) in frame.vertices.chunks_exact(LANES).enumerate() {
+                        let positions: [Vec3; LANES] = std::array::from_fn(|i| vertices[i].position);
+                        let normals: [Vec3; LANES] = std::array::from_fn(|i| match (group + i) % 5 {
+                            0 => -vertices[i].normal,
+                            1 if group % 7 == 0 => Vec3::ZERO,
+                            _ => vertices[i].normal,
+                        });
+                        let lit = lighting.light_lanes(&positions, &normals);
+                        for i in 0..LANES {
+                            let one = lighting.light(positions[i], normals[i]);
+                            assert_eq!(
+                                lit[i].to_array().map(f32::to_bits),
+                                one.to_array().map(f32::to_bits),
+                                "{model:?} {component:?} {view:?} back {back_facing} {lights:?}, \
+                                 point {i} of group {group}"
+                            );
+                            points.push((positions[i], normals[i]));
+                            compared += 1;
+                        }
+                    }
+                    assert!(compared > 500);
+                    if lights == Lights::DirectionalAndSpots {
+                        assert_cones_cross(&frame, &points, 20);
+                    }
                 }
             }
         }
     }
 
-    /// Pixels lit in batches (of mixed triangles, both objects' lightings, partial batches, and
-    /// normals that cancel out so the face normal stands in) against `FastPhong::shade`.
+    /// Pixels lit in batches (of mixed triangles, both objects' lightings and interpolations,
+    /// partial batches, and normals that cancel out so the face normal stands in) against
+    /// `FastPhong::shade`, lit and in the normals and depth views.
     #[test]
     fn phong_batches_equal_shading_each_pixel_bit_for_bit() {
-        let models = [LightingModel::Phong, LightingModel::BlinnPhong];
-        for (model, lights) in models.into_iter().flat_map(|m| LIGHTS.map(|l| (m, l))) {
-            let scene = scene(model, Vec3::splat(0.7), BackFaces::ReverseLit, lights);
-            let frame = frame_of(&scene, None);
+        let models = [
+            LightingModel::Phong,
+            LightingModel::BlinnPhong,
+            microfacet(MicrofacetDistribution::Ggx),
+        ];
+        let views = [None, Some(DebugView::Normals), Some(DebugView::Depth)];
+        let cases = models
+            .into_iter()
+            .flat_map(|m| views.map(|v| (m, v)))
+            .flat_map(|(m, v)| LIGHTS.map(|l| (m, v, l)));
+        for (model, view, lights) in cases {
+            let mut scene = scene(model, Vec3::splat(0.7), BackFaces::ReverseLit, lights);
+            // Batches of the debug views mix the two objects' interpolations.
+            scene.objects[1].normal_interpolation = NormalInterpolation::Slerp;
+            let frame = frame_of(&scene, view);
             let weights = [
                 Vec3::new(0.2, 0.3, 0.5),
                 Vec3::splat(1.0 / 3.0),
@@ -1097,11 +1763,14 @@ pub(crate) mod tests {
             let triangles = frame_triangles(&frame);
             let mut colors = vec![Vec3::splat(-1.0); 3 * triangles.len()];
             let stride = triangles.len() / 13; // visits both objects, alternating runs
+            let mut fallbacks = 0;
             for (n, triangle) in triangles.iter().step_by(stride.max(1)).enumerate() {
-                let mut fast = FastPhong::new(&frame, triangle, n % 3 == 0).expect("eligible");
-                if n % 4 == 1 {
+                let mut fast = FastPhong::new(&frame, triangle, n % 3 == 0, &mut LightingMemo::default())
+                    .expect("eligible");
+                if n % 4 == 1 && matches!(fast.normals, NormalStage::Nlerp(_)) {
                     // Opposite vertex normals: halfway between the first two, nothing is left.
-                    fast.normals = [Vec3::X, -Vec3::X, Vec3::Y];
+                    fast.normals = NormalStage::Nlerp([Vec3::X, -Vec3::X, Vec3::Y]);
+                    fallbacks += 1;
                 }
                 let count = 1 + n % 3;
                 for &w in &weights[..count] {
@@ -1110,12 +1779,68 @@ pub(crate) mod tests {
                 }
             }
             batch.flush(&mut colors);
-            assert!(expected.len() > 20);
+            assert!(expected.len() > 20 && fallbacks > 1);
             for (i, want) in expected.iter().enumerate() {
                 let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-                assert_eq!(bits(colors[i]), bits(*want), "{model:?} {lights:?}, pixel {i}");
+                assert_eq!(
+                    bits(colors[i]),
+                    bits(*want),
+                    "{model:?} {view:?} {lights:?}, pixel {i}"
+                );
             }
         }
+    }
+
+    /// Slerp in lanes against `slerp_triangle` (`NormalArc`) on awkward triangles, bit for bit:
+    /// normals parallel, nearly parallel, opposite (the half turn), zero, unnormalised, and
+    /// weights on corners and edges (a zero weight for the first two).
+    #[test]
+    fn slerp_in_lanes_equals_slerp_bit_for_bit() {
+        let tilt = |angle: f32| Vec3::new(angle.sin(), 0.0, angle.cos());
+        let normal_sets = [
+            [Vec3::X, Vec3::Y, Vec3::Z],
+            [Vec3::Z, Vec3::Z, Vec3::Z],
+            [Vec3::Z, tilt(1e-7), tilt(2e-6)],
+            [Vec3::Z, -Vec3::Z, Vec3::X],
+            [Vec3::Z, tilt(std::f32::consts::PI - 1e-7), -Vec3::Z],
+            [Vec3::ZERO, Vec3::Y, Vec3::Z],
+            [Vec3::X, Vec3::ZERO, -Vec3::X],
+            [
+                Vec3::new(0.6, 0.0, 0.8),
+                Vec3::new(0.0, 0.6, 0.8),
+                Vec3::new(-0.48, -0.6, 0.64),
+            ],
+            [tilt(0.3), tilt(-2.9), Vec3::new(1.0, 2.0, -0.5)],
+        ];
+        let weights = [
+            Vec3::new(0.2, 0.3, 0.5),
+            Vec3::X,
+            Vec3::Y,
+            Vec3::Z,
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::new(0.0, 0.25, 0.75),
+            Vec3::splat(1.0 / 3.0),
+            Vec3::new(0.7, 0.0, 0.3),
+        ];
+        let mut compared = 0;
+        for (set, normals) in normal_sets.iter().enumerate() {
+            // Each lane another triangle of the sets, each with its own weights.
+            let lanes: [([Vec3; 3], Vec3); LANES] =
+                std::array::from_fn(|lane| (normal_sets[(set + lane) % normal_sets.len()], weights[lane]));
+            let arcs = lanes.map(|(n, _)| NormalArc::new(n[0], n[1]));
+            let slerped = slerp_triangle_lanes(&arcs, &lanes.map(|(n, _)| n[2]), &lanes.map(|(_, w)| w));
+            for (lane, (normals, weights)) in lanes.iter().enumerate() {
+                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                assert_eq!(
+                    bits(slerped.to_array()[lane]),
+                    bits(slerp_triangle(*normals, *weights)),
+                    "{normals:?} at {weights}"
+                );
+                compared += 1;
+            }
+            assert!(normals.iter().all(|n| n.is_finite()));
+        }
+        assert_eq!(compared, normal_sets.len() * LANES);
     }
 
     /// Gouraud vertex colours, lit by the fast path in the geometry stage, against the general
@@ -1136,7 +1861,6 @@ pub(crate) mod tests {
                 object.shading = Shading::Gouraud;
             }
             let frame = frame_of(&scene, None);
-            assert!(FastPhong::frame_allows(&frame));
             let mut lit = 0;
             let mut points = Vec::new();
             for triangle in &frame_triangles(&frame) {
@@ -1183,33 +1907,81 @@ pub(crate) mod tests {
         }
     }
 
+    /// What takes the lanes and what the general path: a textured or tinted surface is lit
+    /// through the surface stage (`varies`) with Nlerp, and left to the general path with
+    /// Slerp, or where its lighting would be one colour (an unlit back side, the ambient term
+    /// alone); an untextured one takes the lanes with Slerp too; the normals and depth views
+    /// take every triangle, reading no texture.
     #[test]
-    fn slerp_and_debug_views_take_the_general_path_and_textures_do_not() {
+    fn which_triangles_take_the_lanes() {
         let mut scene = scene(
             LightingModel::Phong,
             Vec3::ONE,
-            BackFaces::ReverseLit,
+            BackFaces::Unlit,
             Lights::DirectionalAndPoint,
         );
         vary_surfaces(&mut scene, Surfaces::Textured);
-        scene.objects[0].normal_interpolation = NormalInterpolation::Slerp;
-        let frame = build_frame(&scene, SamplePattern::SINGLE, None, vec![None, None]);
-        assert!(FastPhong::frame_allows(&frame));
-        let triangles = frame_triangles(&frame);
-        let first = &triangles[0];
-        assert!(FastPhong::new(&frame, first, false).is_none());
-        let last = triangles.last().expect("triangles");
-        let textured = FastPhong::new(&frame, last, false).expect("textures take the fast path");
-        assert!(textured.varies());
-        let debug = build_frame(
-            &scene,
-            SamplePattern::SINGLE,
-            Some(crate::render::DebugView::Specular),
-            vec![None, None],
+        fn fast<'f>(
+            frame: &'f Frame,
+            triangle: &'f FrameTriangle,
+            back_facing: bool,
+        ) -> Option<FastPhong<'f>> {
+            FastPhong::new(frame, triangle, back_facing, &mut LightingMemo::default())
+        }
+        for view in [None, Some(DebugView::Specular), Some(DebugView::Diffuse)] {
+            let frame = frame_of(&scene, view);
+            for triangle in &frame_triangles(&frame) {
+                let front = fast(&frame, triangle, false).expect("a lit front side takes the lanes");
+                assert!(front.varies(), "{view:?}");
+                assert!(
+                    fast(&frame, triangle, true).is_none(),
+                    "an unlit back side, {view:?}"
+                );
+            }
+        }
+        let frame = frame_of(&scene, Some(DebugView::Ambient));
+        assert!(
+            frame_triangles(&frame)
+                .iter()
+                .all(|t| fast(&frame, t, false).is_none())
         );
-        assert!(!FastPhong::frame_allows(&debug));
-        // The whole image is the same either way (the renderer picks per triangle).
-        let (image, _) = render(&scene, &RenderOptions::default());
+        for view in [DebugView::Normals, DebugView::Depth] {
+            let frame = frame_of(&scene, Some(view));
+            for triangle in &frame_triangles(&frame) {
+                for back_facing in [false, true] {
+                    let shader = fast(&frame, triangle, back_facing).expect("debug views take the lanes");
+                    assert!(!shader.varies(), "{view:?}");
+                }
+            }
+        }
+        let mut slerped = scene.clone();
+        slerped.objects[1].normal_interpolation = NormalInterpolation::Slerp;
+        let frame = frame_of(&slerped, None);
+        let triangles = frame_triangles(&frame);
+        let (first, last) = (&triangles[0], triangles.last().expect("triangles"));
+        assert!(fast(&frame, first, false).is_some_and(|shader| shader.varies()));
+        assert!(
+            fast(&frame, last, false).is_none(),
+            "a varying surface with Slerp"
+        );
+        // Without textures or tints, Slerp and the unlit back side take the lanes.
+        let mut plain = self::scene(
+            LightingModel::Phong,
+            Vec3::ONE,
+            BackFaces::Unlit,
+            Lights::DirectionalAndPoint,
+        );
+        plain.objects[1].normal_interpolation = NormalInterpolation::Slerp;
+        let frame = frame_of(&plain, None);
+        for triangle in &frame_triangles(&frame) {
+            for back_facing in [false, true] {
+                let shader =
+                    fast(&frame, triangle, back_facing).expect("an untextured surface takes the lanes");
+                assert!(!shader.varies());
+            }
+        }
+        let tinted = scene;
+        let (image, _) = render(&tinted, &RenderOptions::default());
         assert!(image.covered.iter().any(|&c| c));
     }
 }
