@@ -654,6 +654,14 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
         edges.map(|e| e.along_x * i64::from(ox) + e.along_y * i64::from(oy))
     });
     let biased = offsets.map(|offset| std::array::from_fn::<i64, 3, _>(|k| offset[k] - edges[k].min_inside));
+    // Per edge, the bias of the sample nearest its inside and of the one farthest from it: a
+    // pixel whose best sample is outside an edge has no sample inside, and one whose worst
+    // sample is inside every edge has all of them inside (the per-sample test is then the
+    // same for every sample, and is skipped).
+    let [nearest, farthest]: [[i64; 3]; 2] = [
+        std::array::from_fn(|k| biased.iter().map(|b| b[k]).max().unwrap_or(0)),
+        std::array::from_fn(|k| biased.iter().map(|b| b[k]).min().unwrap_or(0)),
+    ];
     let tile_width = rect.width() as usize;
     let columns = (area.x1 - area.x0) as usize;
     for py in area.y0..area.y1 {
@@ -662,15 +670,21 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
         let ids = &mut visibility.triangle[row..row + columns * S];
         let mut centre = edges.map(|e| e.row_start);
         for (pixel_depths, pixel_ids) in depths.chunks_exact_mut(S).zip(ids.chunks_exact_mut(S)) {
-            for sample in 0..S {
-                let [b0, b1, b2] = biased[sample];
-                if ((centre[0] + b0) | (centre[1] + b1) | (centre[2] + b2)) >= 0 {
-                    let [o0, o1, o2] = offsets[sample];
-                    let [e0, e1, e2] = [centre[0] + o0, centre[1] + o1, centre[2] + o2];
-                    let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
-                    if depth > pixel_depths[sample] {
-                        pixel_depths[sample] = depth;
-                        pixel_ids[sample] = id;
+            let some_inside =
+                ((centre[0] + nearest[0]) | (centre[1] + nearest[1]) | (centre[2] + nearest[2])) >= 0;
+            if some_inside {
+                let all_inside =
+                    ((centre[0] + farthest[0]) | (centre[1] + farthest[1]) | (centre[2] + farthest[2])) >= 0;
+                for sample in 0..S {
+                    let [b0, b1, b2] = biased[sample];
+                    if all_inside || ((centre[0] + b0) | (centre[1] + b1) | (centre[2] + b2)) >= 0 {
+                        let [o0, o1, o2] = offsets[sample];
+                        let [e0, e1, e2] = [centre[0] + o0, centre[1] + o1, centre[2] + o2];
+                        let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
+                        if depth > pixel_depths[sample] {
+                            pixel_depths[sample] = depth;
+                            pixel_ids[sample] = id;
+                        }
                     }
                 }
             }
