@@ -25,6 +25,7 @@ pub mod depth;
 pub mod frame;
 pub mod geometry;
 pub mod lanes;
+pub mod normals;
 pub mod raster;
 pub mod shade;
 pub mod shade_fast;

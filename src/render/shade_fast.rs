@@ -64,7 +64,7 @@ use crate::lighting::{
 use crate::render::DebugView;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer, shown_component};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
-use crate::render::shade::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
+use crate::render::normals::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
 use crate::render::shadow::shadow_visibility_lanes;
 use crate::render::surface_lanes::{
     RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, surface_lanes, varies,
@@ -1146,8 +1146,8 @@ pub(crate) mod tests {
     use crate::lighting::{cook_torrance, incidence};
     use crate::mesh::primitives;
     use crate::render::frame::{has_color_texture, tinted};
+    use crate::render::normals::slerp_triangle;
     use crate::render::raster::SamplePattern;
-    use crate::render::shade::slerp_triangle;
     use crate::render::{RenderOptions, geometry::build_frame, render};
     use crate::scene::{
         Attenuation, Camera, ImageSettings, Light, Object, Projection, Scene, ShadowSettings, TextureBinding,

@@ -5,7 +5,7 @@
 //! sees: `k_d` times the interpolated vertex colour (`frame::tinted`, in frames with vertex
 //! attributes), then `k_d`, and `k_a` when there is no ambient texture, times the diffuse
 //! texture's texel, `k_a` times the ambient texture's, and the interpolated normal perturbed by
-//! the normal map (`shade::perturb_normal`). Here the same operations run on eight points at
+//! the normal map (`normals::perturb_normal`). Here the same operations run on eight points at
 //! once. Each point brings its source triangle's vertices and its weights and those of its
 //! neighbours one pixel to the right and one down ([`WeightLanes`], from its raster triangle's
 //! edge functions and [`RasterPlane`]), from which the texture coordinates' derivatives
@@ -288,7 +288,7 @@ pub fn texture_colors(frame: &Frame, binding: &TextureBinding, points: &SurfaceP
     Gathered::new(frame, points).sample(frame, binding)
 }
 
-/// `shade::perturb_normal` lane-wise: the tangent `tangent` (its `w`, the handedness, apart)
+/// `normals::perturb_normal` lane-wise: the tangent `tangent` (its `w`, the handedness, apart)
 /// made perpendicular to `normal`, the texel mapped from [0, 1] to [−1, 1], and the normal
 /// where the tangent is unusable, the texel not finite or the result of no length.
 #[inline(always)]
@@ -333,7 +333,7 @@ mod tests {
     use glam::Vec4;
 
     use super::*;
-    use crate::render::shade::perturb_normal;
+    use crate::render::normals::perturb_normal;
 
     /// The normal map's lanes against `perturb_normal`, bit for bit, on awkward frames:
     /// tangents along the normal, zero, non-finite texels, both handednesses.

@@ -1,6 +1,6 @@
 //! `sin`, `cos` and `atan2` as fixed sequences of `f32` operations, written once over
 //! [`Real`], so that eight lanes (`Floats`) get exactly the bits one `f32` gets: Slerp's
-//! trigonometry (`shade::NormalArc`) runs lane-wise with the scalar specification's bits.
+//! trigonometry (`normals::NormalArc`) runs lane-wise with the scalar specification's bits.
 //! libm's `sinf`/`atan2f` have no lane form (one call per lane costs more than the rest of a
 //! slerped pixel), and their results may differ between libm versions; these do not.
 //!
