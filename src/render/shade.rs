@@ -26,7 +26,9 @@ use crate::render::raster::{
     edge_values,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong, LightingMemo, PhongBatch, SurfaceBatch};
-use crate::render::surface_lanes::{RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, texture_colors};
+use crate::render::surface_lanes::{
+    EdgeQueue, QueuedPixels, RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, texture_colors,
+};
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
 
 /// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
@@ -1034,22 +1036,13 @@ struct Modulation<'f> {
 #[derive(Default)]
 struct ModulatedBatch<'f> {
     texture: Option<&'f TextureBinding>,
-    len: usize,
-    /// Where each pixel's colour goes.
-    offsets: [usize; LANES],
-    /// Each pixel's colour as (the part the texture multiplies, the rest).
+    /// Whether the current triangle's pixels wait for a texture (else nothing modulates them
+    /// and they are written at once).
+    modulating: bool,
+    /// The waiting pixels; per triangle its raster plane and vertices.
+    pixels: EdgeQueue<(RasterPlane, [u32; 3])>,
+    /// Each waiting pixel's colour as (the part the texture multiplies, the rest), by lane.
     colors: [(Vec3, Vec3); LANES],
-    /// Each pixel's raster triangle's edge functions there.
-    edges: [[i64; 3]; LANES],
-    /// Each pixel's triangle, in `triangles` and `vertices`.
-    triangle_of: [u8; LANES],
-    triangles: [RasterPlane; LANES],
-    vertices: [[u32; 3]; LANES],
-    triangle_count: usize,
-    /// The triangle of the pixels to come (its plane, its vertices, its modulation), and its
-    /// entry once one of its pixels waits.
-    current: Option<(RasterPlane, Modulation<'f>)>,
-    current_entry: Option<u8>,
 }
 
 impl<'f> ModulatedBatch<'f> {
@@ -1065,8 +1058,8 @@ impl<'f> ModulatedBatch<'f> {
         if modulation.texture.is_some() {
             self.texture = modulation.texture;
         }
-        self.current = Some((plane, modulation));
-        self.current_entry = None;
+        self.modulating = modulation.texture.is_some();
+        self.pixels.begin((plane, modulation.vertices));
     }
 
     /// The pixel of the current triangle whose colour is `colors` (textured part, rest), where
@@ -1082,31 +1075,13 @@ impl<'f> ModulatedBatch<'f> {
         offset: usize,
         color: &mut [Vec3],
     ) {
-        let Some((plane, modulation)) = self.current else {
-            return;
-        };
-        if modulation.texture.is_none() {
+        if !self.modulating {
             color[offset] = rest + textured * Vec3::ONE;
             return;
         }
-        let entry = match self.current_entry {
-            Some(entry) => entry,
-            None => {
-                self.triangles[self.triangle_count] = plane;
-                self.vertices[self.triangle_count] = modulation.vertices;
-                self.triangle_count += 1;
-                let entry = (self.triangle_count - 1) as u8;
-                self.current_entry = Some(entry);
-                entry
-            }
-        };
-        let lane = self.len;
-        self.offsets[lane] = offset;
+        let lane = self.pixels.push(edges, offset);
         self.colors[lane] = (textured, rest);
-        self.edges[lane] = edges;
-        self.triangle_of[lane] = entry;
-        self.len += 1;
-        if self.len == LANES {
+        if self.pixels.is_full() {
             self.flush(frame, color);
         }
     }
@@ -1116,29 +1091,25 @@ impl<'f> ModulatedBatch<'f> {
         let Some(texture) = self.texture else {
             return;
         };
-        if self.len == 0 {
+        if self.pixels.is_empty() {
             return;
         }
-        // The lanes past the last pixel repeat it; their results are dropped.
-        for lane in self.len..LANES {
-            self.edges[lane] = self.edges[self.len - 1];
-            self.triangle_of[lane] = self.triangle_of[self.len - 1];
-        }
-        let entries = self.triangle_of.map(usize::from);
-        let planes: [&RasterPlane; LANES] = std::array::from_fn(|lane| &self.triangles[entries[lane]]);
-        let vertices: [[u32; 3]; LANES] = std::array::from_fn(|lane| self.vertices[entries[lane]]);
+        let QueuedPixels {
+            offsets,
+            edges,
+            triangles,
+        } = self.pixels.take();
+        let planes = triangles.map(|(plane, _)| plane);
+        let vertices = triangles.map(|(_, vertices)| *vertices);
         let points = SurfacePoints {
             vertices: &vertices,
-            weights: &WeightLanes::of(&self.edges, &planes),
+            weights: &WeightLanes::of(edges, &planes),
         };
         let texels = texture_colors(frame, texture, &points).to_array();
-        for lane in 0..self.len {
+        for (lane, &offset) in offsets.iter().enumerate() {
             let (textured, rest) = self.colors[lane];
-            color[self.offsets[lane]] = rest + textured * texels[lane];
+            color[offset] = rest + textured * texels[lane];
         }
-        self.len = 0;
-        self.triangle_count = 0;
-        self.current_entry = None;
     }
 }
 

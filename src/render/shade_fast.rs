@@ -67,7 +67,7 @@ use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::normals::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
 use crate::render::shadow::shadow_visibility_lanes;
 use crate::render::surface_lanes::{
-    RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, surface_lanes, varies,
+    EdgeQueue, QueuedPixels, RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, surface_lanes, varies,
 };
 use crate::render::trig;
 use crate::scene::{
@@ -929,19 +929,7 @@ fn renormalize_lanes(
 #[derive(Default)]
 pub struct SurfaceBatch<'f> {
     lighting: Option<FastLighting<'f>>,
-    len: usize,
-    /// Where each pixel's colour goes.
-    offsets: [usize; LANES],
-    /// Each pixel's raster triangle's edge functions there.
-    edges: [[i64; 3]; LANES],
-    /// Each pixel's triangle, in `triangles`.
-    triangle_of: [u8; LANES],
-    /// The triangles of the waiting pixels.
-    triangles: [SurfaceTriangle<'f>; LANES],
-    triangle_count: usize,
-    /// The triangle of the pixels to come, and its entry in `triangles` once one waits.
-    current: SurfaceTriangle<'f>,
-    current_entry: Option<u8>,
+    pixels: EdgeQueue<SurfaceTriangle<'f>>,
 }
 
 /// `FastPhong::shade`'s interpolation, lane-wise: per lane the `corner`s of its triangle
@@ -983,14 +971,13 @@ impl<'f> SurfaceBatch<'f> {
             self.flush(color);
         }
         self.lighting = Some(lighting);
-        self.current = SurfaceTriangle {
+        self.pixels.begin(SurfaceTriangle {
             triangle: Some(phong.triangle),
             plane,
             positions: phong.positions,
             normals,
             reversed: phong.reversed,
-        };
-        self.current_entry = None;
+        });
     }
 
     /// Queues the pixel of the current triangle where its edge functions take the values
@@ -998,22 +985,8 @@ impl<'f> SurfaceBatch<'f> {
     /// triangle with other lighting begins, or on [`SurfaceBatch::flush`]).
     #[inline]
     pub fn push(&mut self, edges: [i64; 3], offset: usize, color: &mut [Vec3]) {
-        let entry = match self.current_entry {
-            Some(entry) => entry,
-            None => {
-                self.triangles[self.triangle_count] = self.current;
-                self.triangle_count += 1;
-                let entry = (self.triangle_count - 1) as u8;
-                self.current_entry = Some(entry);
-                entry
-            }
-        };
-        let lane = self.len;
-        self.offsets[lane] = offset;
-        self.edges[lane] = edges;
-        self.triangle_of[lane] = entry;
-        self.len += 1;
-        if self.len == LANES {
+        self.pixels.push(edges, offset);
+        if self.pixels.is_full() {
             self.flush(color);
         }
     }
@@ -1023,18 +996,16 @@ impl<'f> SurfaceBatch<'f> {
         let Some(lighting) = self.lighting else {
             return;
         };
-        if self.len == 0 {
+        if self.pixels.is_empty() {
             return;
         }
-        // The lanes past the last pixel repeat it; their results are dropped.
-        for lane in self.len..LANES {
-            self.edges[lane] = self.edges[self.len - 1];
-            self.triangle_of[lane] = self.triangle_of[self.len - 1];
-        }
         let frame = lighting.frame;
-        let triangles: [&SurfaceTriangle; LANES] =
-            std::array::from_fn(|lane| &self.triangles[usize::from(self.triangle_of[lane])]);
-        let weights = WeightLanes::of(&self.edges, &triangles.map(|triangle| &triangle.plane));
+        let QueuedPixels {
+            offsets,
+            edges,
+            triangles,
+        } = self.pixels.take();
+        let weights = WeightLanes::of(edges, &triangles.map(|triangle| &triangle.plane));
         let frame_triangles = triangles.map(|triangle| triangle.triangle);
         let vertices = frame_triangles.map(|triangle| triangle.expect("every lane holds a pixel").vertices);
         let positions = interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.positions[k]);
@@ -1050,12 +1021,9 @@ impl<'f> SurfaceBatch<'f> {
         let normals = reversed.select3(-normals, normals);
         let lit = lighting.light_surface_lanes(positions, normals, &surface);
         let lit = (lit.textured + lit.rest).to_array();
-        for (&offset, &lit) in self.offsets[..self.len].iter().zip(&lit) {
+        for (&offset, &lit) in offsets.iter().zip(&lit) {
             color[offset] = lit;
         }
-        self.len = 0;
-        self.triangle_count = 0;
-        self.current_entry = None;
     }
 }
 

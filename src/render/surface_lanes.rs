@@ -126,6 +126,99 @@ impl WeightLanes {
     }
 }
 
+/// Up to [`LANES`] pixels waiting for the surface stage, each known by where its colour goes
+/// and its raster triangle's edge functions there (from which the stage computes its weights
+/// and footprint), and its triangle's data `T`, stored once per triangle: the shared queue of
+/// the batches that shade varying surfaces (`shade_fast::SurfaceBatch`, and the modulated flat
+/// and Gouraud pixels in `shade`). The pixels of a triangle come after [`EdgeQueue::begin`]
+/// names it.
+#[derive(Default)]
+pub struct EdgeQueue<T> {
+    len: usize,
+    /// Where each pixel's colour goes.
+    offsets: [usize; LANES],
+    /// Each pixel's raster triangle's edge functions there.
+    edges: [[i64; 3]; LANES],
+    /// Each pixel's triangle, in `triangles`.
+    triangle_of: [u8; LANES],
+    /// The triangles of the waiting pixels.
+    triangles: [T; LANES],
+    triangle_count: usize,
+    /// The triangle of the pixels to come, and its entry in `triangles` once one waits.
+    current: T,
+    current_entry: Option<u8>,
+}
+
+impl<T: Copy + Default> EdgeQueue<T> {
+    /// Names the triangle the next pixels are of.
+    #[inline]
+    pub fn begin(&mut self, triangle: T) {
+        self.current = triangle;
+        self.current_entry = None;
+    }
+
+    /// Queues the pixel of the current triangle where its edge functions take the values
+    /// `edges`, its colour for `offset`; returns its lane. The caller empties a full queue
+    /// ([`EdgeQueue::is_full`]) before the next push.
+    #[inline]
+    pub fn push(&mut self, edges: [i64; 3], offset: usize) -> usize {
+        let entry = match self.current_entry {
+            Some(entry) => entry,
+            None => {
+                self.triangles[self.triangle_count] = self.current;
+                self.triangle_count += 1;
+                let entry = (self.triangle_count - 1) as u8;
+                self.current_entry = Some(entry);
+                entry
+            }
+        };
+        let lane = self.len;
+        self.offsets[lane] = offset;
+        self.edges[lane] = edges;
+        self.triangle_of[lane] = entry;
+        self.len += 1;
+        lane
+    }
+
+    #[inline]
+    pub fn is_full(&self) -> bool {
+        self.len == LANES
+    }
+
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The waiting pixels, with the lanes past the last one repeating it (their results are
+    /// dropped): each lane's edge functions and triangle, and where each waiting pixel's colour
+    /// goes (`len` entries). The queue is empty afterwards; the current triangle stays named.
+    #[inline]
+    pub fn take(&mut self) -> QueuedPixels<'_, T> {
+        debug_assert!(!self.is_empty());
+        let len = self.len;
+        for lane in len..LANES {
+            self.edges[lane] = self.edges[len - 1];
+            self.triangle_of[lane] = self.triangle_of[len - 1];
+        }
+        self.len = 0;
+        self.triangle_count = 0;
+        self.current_entry = None;
+        QueuedPixels {
+            offsets: &self.offsets[..len],
+            edges: &self.edges,
+            triangles: std::array::from_fn(|lane| &self.triangles[usize::from(self.triangle_of[lane])]),
+        }
+    }
+}
+
+/// What [`EdgeQueue::take`] hands the stage.
+pub struct QueuedPixels<'q, T> {
+    pub offsets: &'q [usize],
+    pub edges: &'q [[i64; 3]; LANES],
+    pub triangles: [&'q T; LANES],
+}
+
 /// Whether the surface of `material` varies over a triangle of `frame` (a texture, or vertex
 /// colours, which every frame with vertex attributes applies), so that it needs this stage.
 #[inline]
