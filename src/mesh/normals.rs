@@ -69,6 +69,11 @@ pub const FALLBACK_NORMAL: Vec3 = Vec3::Z;
 /// about 0.08° near 0°, so normals of coplanar faces, equal up to rounding, always merge.
 pub const CREASE_COSINE_TOLERANCE: f32 = 1e-6;
 
+/// Every two face normals have a dot product above this: they are unit to within a few units in
+/// the last place, so their dot product is more than −1 − 2⁻²⁰ (tested). A crease cosine at or
+/// below it (a crease angle of 180°, less the tolerance) lets every pair of faces through.
+const LEAST_DOT_OF_UNIT_NORMALS: f32 = -1.0 - 1.0 / 1_048_576.0;
+
 /// Above this many corners at one position, exact per-corner crease tests (quadratic in the
 /// corner count) give way to greedy clustering.
 const MAX_CORNERS_FOR_EXACT_CREASE: usize = 128;
@@ -590,14 +595,17 @@ fn normals_at_position(corners: &[u32], faces: CornerFaces, crease_cosine: f32, 
 /// usual case), every corner's sum is the sum of all of them in the same order: it is added up
 /// once, after testing each pair once (`a·b` and `b·a` have the same bits).
 fn sum_within_crease_exact(corners: &[u32], faces: CornerFaces, crease_cosine: f32, sums: &mut Vec<Vec3>) {
-    let smooth = corners.iter().enumerate().all(|(index, &corner)| {
-        let face = faces.face(corner);
-        face == Vec3::ZERO
-            || corners[index + 1..].iter().all(|&other| {
-                let other_face = faces.face(other);
-                other_face == Vec3::ZERO || face.dot(other_face) >= crease_cosine
-            })
-    });
+    // At a crease angle of 180° no pair can fail the test (see `LEAST_DOT_OF_UNIT_NORMALS`):
+    // the scans' usual setting skips the pairwise products.
+    let smooth = crease_cosine <= LEAST_DOT_OF_UNIT_NORMALS
+        || corners.iter().enumerate().all(|(index, &corner)| {
+            let face = faces.face(corner);
+            face == Vec3::ZERO
+                || corners[index + 1..].iter().all(|&other| {
+                    let other_face = faces.face(other);
+                    other_face == Vec3::ZERO || face.dot(other_face) >= crease_cosine
+                })
+        });
     if smooth {
         let mut sum = Vec3::ZERO;
         for &other in corners {
@@ -945,6 +953,29 @@ mod tests {
         for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
             assert!(n.dot(p.normalize()) > 0.999, "normal {n} at {p}");
         }
+    }
+
+    #[test]
+    fn face_normals_have_no_dot_product_below_the_least() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut coordinate = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f32 / (1u64 << 53) as f32 * 2.0 - 1.0
+        };
+        for _ in 0..200_000 {
+            let [a, b, c] = [(); 3].map(|_| Vec3::new(coordinate(), coordinate(), coordinate()));
+            let face = face_normal(a, b, c);
+            // The same triangle wound the other way: the most opposed normal there is.
+            let opposite = face_normal(a, c, b);
+            let other = face_normal(b, a, c + Vec3::splat(coordinate() * 1e-3));
+            for pair in [opposite, other] {
+                assert!(face.dot(pair) > LEAST_DOT_OF_UNIT_NORMALS, "{face} {pair}");
+            }
+        }
+        let crease_180 = 180f32.to_radians().cos() - CREASE_COSINE_TOLERANCE;
+        assert!(crease_180 <= LEAST_DOT_OF_UNIT_NORMALS);
     }
 
     #[test]
