@@ -458,7 +458,7 @@ fn zero_normalised_bits(x: f32) -> u32 {
 /// The interior angle of a triangle at `corner`, between the edges towards `next` and
 /// `previous`; 0 when an edge has no length. `atan2(|u×v|, u·v)` stays accurate near 0 and
 /// π, where `acos(u·v)` loses precision.
-pub(super) fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
+fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
     let u = unit_or_zero(next - corner);
     let v = unit_or_zero(previous - corner);
     angle_between_units(u, v)
@@ -475,7 +475,7 @@ fn angle_between_units(u: Vec3, v: Vec3) -> f32 {
 /// its negation. The negation can only turn a zero component's sign, which changes no non-zero
 /// sum and no square; the dot product's zero sign would matter only where the cross product is
 /// zero too, which needs a zero edge, and then the angles are measured one by one.
-fn interior_angles(a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
+pub(super) fn interior_angles(a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
     let along_ab = unit_or_zero(b - a);
     let along_bc = unit_or_zero(c - b);
     let along_ca = unit_or_zero(a - c);
