@@ -95,7 +95,8 @@ GENERATED_MESHES = ["benches/meshes/nefertiti-1m.obj", "benches/meshes/duck.obj"
 # CPU used by other processes during each llvmpipe run's timed frames (glref's `foreign_cores`).
 FOREIGN_CORES = []
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-LAMPSHADE = os.path.join(ROOT, "target", "release", "lampshade")
+# `LAMPSHADE=path` measures another binary (a copy, so that a rebuild cannot swap it mid-run).
+LAMPSHADE = os.environ.get("LAMPSHADE", os.path.join(ROOT, "target", "release", "lampshade"))
 
 
 def build_glref(anchors):

@@ -333,11 +333,14 @@ fn encode_png<W: Write>(
     image: &RgbImage,
     compression: PngCompression,
 ) -> Result<(), OutputError> {
-    let compression = match compression {
-        PngCompression::Fast => CompressionType::Fast,
-        PngCompression::Best => CompressionType::Best,
+    // The fast level filters every row by the row above (`Up`): choosing a filter per row
+    // (`Adaptive`) tries all five on every row. A 1080p frame of the koala or cow close-up bench
+    // scene: 4.9–5.4 ms adaptive, 2.7–3.5 ms `Up` (fastest of nine), files 3–16 % larger.
+    let (compression, filter) = match compression {
+        PngCompression::Fast => (CompressionType::Fast, FilterType::Up),
+        PngCompression::Best => (CompressionType::Best, FilterType::Adaptive),
     };
-    PngEncoder::new_with_quality(writer, compression, FilterType::Adaptive)
+    PngEncoder::new_with_quality(writer, compression, filter)
         .write_image(
             image.as_raw(),
             image.width(),

@@ -390,11 +390,17 @@ impl ParsedMeshFile {
         })
     }
 
-    /// The mesh with normals computed (where the file has none) with this crease angle.
+    /// The mesh with normals computed (where the file has none) with this crease angle, and
+    /// [`Mesh::closed`] tested once per mesh built (whether its back faces may be culled:
+    /// `render::geometry`).
     pub fn build(&self, crease_angle_degrees: f32) -> Result<LoadedMesh, MeshError> {
         match self {
             ParsedMeshFile::Obj(parsed) => Ok(parsed.build(crease_angle_degrees)),
-            ParsedMeshFile::Gltf(parsed) => parsed.build(crease_angle_degrees),
+            ParsedMeshFile::Gltf(parsed) => {
+                let mut loaded = parsed.build(crease_angle_degrees)?;
+                loaded.mesh.closed = closed::is_closed(&loaded.mesh.positions, &loaded.mesh.triangles);
+                Ok(loaded)
+            }
         }
     }
 }

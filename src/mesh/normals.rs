@@ -69,15 +69,20 @@ pub const FALLBACK_NORMAL: Vec3 = Vec3::Z;
 /// about 0.08° near 0°, so normals of coplanar faces, equal up to rounding, always merge.
 pub const CREASE_COSINE_TOLERANCE: f32 = 1e-6;
 
+/// Every two face normals have a dot product above this: they are unit to within a few units in
+/// the last place, so their dot product is more than −1 − 2⁻²⁰ (tested). A crease cosine at or
+/// below it (a crease angle of 180°, less the tolerance) lets every pair of faces through.
+const LEAST_DOT_OF_UNIT_NORMALS: f32 = -1.0 - 1.0 / 1_048_576.0;
+
 /// Above this many corners at one position, exact per-corner crease tests (quadratic in the
 /// corner count) give way to greedy clustering.
 const MAX_CORNERS_FOR_EXACT_CREASE: usize = 128;
 
 /// A hash map keyed by small arrays of whole numbers (bits of positions and normals,
 /// indices), hashed with [`WordHasher`].
-type WordMap<K, V> = HashMap<K, V, BuildHasherDefault<WordHasher>>;
+pub(super) type WordMap<K, V> = HashMap<K, V, BuildHasherDefault<WordHasher>>;
 
-fn word_map<K, V>(capacity: usize) -> WordMap<K, V> {
+pub(super) fn word_map<K, V>(capacity: usize) -> WordMap<K, V> {
     HashMap::with_capacity_and_hasher(capacity, BuildHasherDefault::default())
 }
 
@@ -88,7 +93,7 @@ fn word_map<K, V>(capacity: usize) -> WordMap<K, V> {
 /// normals; SipHash's defence against crafted collisions buys nothing when the worst a crafted
 /// mesh file can do is load slowly.
 #[derive(Debug, Default, Clone, Copy)]
-struct WordHasher(u64);
+pub(super) struct WordHasher(u64);
 
 impl WordHasher {
     fn add(&mut self, word: u64) {
@@ -453,10 +458,39 @@ fn zero_normalised_bits(x: f32) -> u32 {
 /// The interior angle of a triangle at `corner`, between the edges towards `next` and
 /// `previous`; 0 when an edge has no length. `atan2(|u×v|, u·v)` stays accurate near 0 and
 /// π, where `acos(u·v)` loses precision.
-pub(super) fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
+fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
     let u = unit_or_zero(next - corner);
     let v = unit_or_zero(previous - corner);
+    angle_between_units(u, v)
+}
+
+/// The angle between two unit (or zero) vectors, as [`interior_angle`] measures it.
+fn angle_between_units(u: Vec3, v: Vec3) -> f32 {
     u.cross(v).length().atan2(u.dot(v))
+}
+
+/// `[interior_angle(a, b, c), interior_angle(b, c, a), interior_angle(c, a, b)]` with the same
+/// bits, normalising each edge once instead of twice: `c − a` is exactly `−(a − c)` and
+/// [`unit_or_zero`] commutes with negation, so an edge's direction seen from its other end is
+/// its negation. The negation can only turn a zero component's sign, which changes no non-zero
+/// sum and no square; the dot product's zero sign would matter only where the cross product is
+/// zero too, which needs a zero edge, and then the angles are measured one by one.
+pub(super) fn interior_angles(a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
+    let along_ab = unit_or_zero(b - a);
+    let along_bc = unit_or_zero(c - b);
+    let along_ca = unit_or_zero(a - c);
+    if along_ab == Vec3::ZERO || along_bc == Vec3::ZERO || along_ca == Vec3::ZERO {
+        return [
+            interior_angle(a, b, c),
+            interior_angle(b, c, a),
+            interior_angle(c, a, b),
+        ];
+    }
+    [
+        angle_between_units(along_ab, -along_ca),
+        angle_between_units(along_bc, -along_ab),
+        angle_between_units(along_ca, -along_bc),
+    ]
 }
 
 /// Below this many triangles (or corners) the per-triangle and per-position passes run on the
@@ -481,11 +515,7 @@ fn corner_normals(
         let angles = if face == Vec3::ZERO {
             [0.0; 3]
         } else {
-            [
-                interior_angle(a, b, c),
-                interior_angle(b, c, a),
-                interior_angle(c, a, b),
-            ]
+            interior_angles(a, b, c)
         };
         (face, angles)
     };
@@ -536,8 +566,18 @@ fn normals_at_position(corners: &[u32], faces: CornerFaces, crease_cosine: f32, 
         sum_within_crease_clustered(corners, faces, crease_cosine, normals);
     }
     let mut smooth_normal_of_position = None;
+    // On a smooth surface every corner has the same sum: it is normalised once.
+    let mut last_normalised: Option<([u32; 3], Vec3)> = None;
     for (&corner, normal) in corners.iter().zip(normals.iter_mut()) {
-        let from_crease = unit_or_zero(*normal);
+        let sum_bits = normal.to_array().map(f32::to_bits);
+        let from_crease = match last_normalised {
+            Some((bits, unit)) if bits == sum_bits => unit,
+            _ => {
+                let unit = unit_or_zero(*normal);
+                last_normalised = Some((sum_bits, unit));
+                unit
+            }
+        };
         *normal = if from_crease != Vec3::ZERO {
             from_crease
         } else if faces.face(corner) != Vec3::ZERO {
@@ -555,14 +595,17 @@ fn normals_at_position(corners: &[u32], faces: CornerFaces, crease_cosine: f32, 
 /// usual case), every corner's sum is the sum of all of them in the same order: it is added up
 /// once, after testing each pair once (`a·b` and `b·a` have the same bits).
 fn sum_within_crease_exact(corners: &[u32], faces: CornerFaces, crease_cosine: f32, sums: &mut Vec<Vec3>) {
-    let smooth = corners.iter().enumerate().all(|(index, &corner)| {
-        let face = faces.face(corner);
-        face == Vec3::ZERO
-            || corners[index + 1..].iter().all(|&other| {
-                let other_face = faces.face(other);
-                other_face == Vec3::ZERO || face.dot(other_face) >= crease_cosine
-            })
-    });
+    // At a crease angle of 180° no pair can fail the test (see `LEAST_DOT_OF_UNIT_NORMALS`):
+    // the scans' usual setting skips the pairwise products.
+    let smooth = crease_cosine <= LEAST_DOT_OF_UNIT_NORMALS
+        || corners.iter().enumerate().all(|(index, &corner)| {
+            let face = faces.face(corner);
+            face == Vec3::ZERO
+                || corners[index + 1..].iter().all(|&other| {
+                    let other_face = faces.face(other);
+                    other_face == Vec3::ZERO || face.dot(other_face) >= crease_cosine
+                })
+        });
     if smooth {
         let mut sum = Vec3::ZERO;
         for &other in corners {
@@ -909,6 +952,57 @@ mod tests {
         assert_eq!(mesh.positions.len(), 15 * 16 + 2);
         for (p, n) in mesh.positions.iter().zip(&mesh.normals) {
             assert!(n.dot(p.normalize()) > 0.999, "normal {n} at {p}");
+        }
+    }
+
+    #[test]
+    fn face_normals_have_no_dot_product_below_the_least() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut coordinate = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f32 / (1u64 << 53) as f32 * 2.0 - 1.0
+        };
+        for _ in 0..200_000 {
+            let [a, b, c] = [(); 3].map(|_| Vec3::new(coordinate(), coordinate(), coordinate()));
+            let face = face_normal(a, b, c);
+            // The same triangle wound the other way: the most opposed normal there is.
+            let opposite = face_normal(a, c, b);
+            let other = face_normal(b, a, c + Vec3::splat(coordinate() * 1e-3));
+            for pair in [opposite, other] {
+                assert!(face.dot(pair) > LEAST_DOT_OF_UNIT_NORMALS, "{face} {pair}");
+            }
+        }
+        let crease_180 = 180f32.to_radians().cos() - CREASE_COSINE_TOLERANCE;
+        assert!(crease_180 <= LEAST_DOT_OF_UNIT_NORMALS);
+    }
+
+    #[test]
+    fn angles_of_a_triangle_have_the_bits_of_one_corner_at_a_time() {
+        // Random triangles on a coarse grid (shared coordinates give zero components, coincident
+        // corners and collinear triangles), scaled from tiny to huge, overflowing edges included.
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut coordinate = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            ((state >> 40) % 5) as f32 - 2.0
+        };
+        for scale in [1e-30, 1e-3, 1.0, 7.3, 1e30, 1.5e38] {
+            for _ in 0..20_000 {
+                let [a, b, c] = [(); 3].map(|_| scale * Vec3::new(coordinate(), coordinate(), coordinate()));
+                let one_at_a_time = [
+                    interior_angle(a, b, c),
+                    interior_angle(b, c, a),
+                    interior_angle(c, a, b),
+                ];
+                assert_eq!(
+                    interior_angles(a, b, c).map(f32::to_bits),
+                    one_at_a_time.map(f32::to_bits),
+                    "{a} {b} {c}"
+                );
+            }
         }
     }
 

@@ -70,6 +70,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use super::closed::is_closed;
 use super::normals::VertexAttributes;
 use super::obj_parse::{FileNormals, ObjGeometry, ObjText, assemble, parse_obj_text};
 use super::{FileContent, LoadedMesh, MeshError, MeshOptions, USE_GLTF_HINT, first_bytes, normals};
@@ -144,8 +145,22 @@ pub struct ParsedObj {
 }
 
 impl ParsedObj {
-    /// The mesh, with its normals as the module documentation says (step 4).
+    /// The mesh, with its normals as the module documentation says (step 4), and whether it
+    /// is closed ([`Mesh::closed`](super::Mesh::closed)).
+    ///
+    /// Building keeps the file's triangles in order and its positions by value (vertices are
+    /// only split or merged), so closedness is tested on the parsed geometry, on the second
+    /// core while the first computes normals (whose serial stretches would leave it idle).
     pub fn build(&self, crease_angle_degrees: f32) -> LoadedMesh {
+        let (mut loaded, closed) = rayon::join(
+            || self.build_surface(crease_angle_degrees),
+            || is_closed(&self.geometry.positions, &self.geometry.triangles),
+        );
+        loaded.mesh.closed = closed;
+        loaded
+    }
+
+    fn build_surface(&self, crease_angle_degrees: f32) -> LoadedMesh {
         let geometry = &self.geometry;
         let crease = crease_angle_degrees;
         let attributes = VertexAttributes {
@@ -811,6 +826,29 @@ mod tests {
         check_asset("tobj-fixtures/cornell_box.obj", 36);
         check_asset("tobj-fixtures/quad.obj", 5);
         check_asset("tobj-fixtures/triangle.obj", 1);
+    }
+
+    #[test]
+    fn closedness_of_the_parsed_geometry_is_that_of_the_built_mesh() {
+        for (relative, closed) in [
+            ("spot/spot_triangulated.obj", true),
+            ("spot/spot_quadrangulated.obj", true),
+            ("koala/koala.obj", true),
+            ("teapot/teapot.obj", false),
+            ("cornell-box/CornellBox-Original.obj", false),
+        ] {
+            let parsed = parse_obj(&asset(relative), &FileAccess::default())
+                .unwrap_or_else(|e| panic!("{relative}: {e:?}"));
+            for crease in [0.0, 60.0, 180.0] {
+                let mesh = parsed.build(crease).mesh;
+                assert_eq!(mesh.closed, closed, "{relative} at {crease}°");
+                assert_eq!(
+                    crate::mesh::closed::is_closed(&mesh.positions, &mesh.triangles),
+                    closed,
+                    "{relative} at {crease}°, tested on the built mesh"
+                );
+            }
+        }
     }
 
     #[test]

@@ -42,7 +42,7 @@
 
 use glam::{Vec2, Vec3, Vec4};
 
-use super::normals::{interior_angle, unit_or_zero};
+use super::normals::{interior_angles, unit_or_zero};
 
 /// Tangents for every vertex from its position, unit normal and texture coordinates (module
 /// documentation). `normals` and `uvs` hold one entry per position; missing entries (a shorter
@@ -74,11 +74,7 @@ pub fn compute_tangents(
         let sign = det.signum();
         let du = unit_or_zero(sign * (d2.y * e1 - d1.y * e2));
         let dv = unit_or_zero(sign * (d1.x * e2 - d2.x * e1));
-        let angles = [
-            interior_angle(p0, p1, p2),
-            interior_angle(p1, p2, p0),
-            interior_angle(p2, p0, p1),
-        ];
+        let angles = interior_angles(p0, p1, p2);
         for (vertex, angle) in [i0, i1, i2].into_iter().zip(angles) {
             along_u[vertex] += angle * du;
             along_v[vertex] += angle * dv;

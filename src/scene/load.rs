@@ -20,7 +20,7 @@ use glam::{DMat4, DQuat, DVec3, EulerRot, Vec3};
 use crate::diag::{Diagnostic, Schema, SourceId, Sources, from_ron_error};
 use crate::mesh::{
     ImportedCamera, ImportedLight, ImportedProjection, LoadedMesh, Mesh, MeshError, ParsedMeshFile,
-    closed::is_closed, primitives, tangents::compute_tangents,
+    primitives, tangents::compute_tangents,
 };
 use crate::render::raster::SamplePattern;
 use crate::ron_path;
@@ -1535,15 +1535,13 @@ impl Loader<'_> {
                 };
                 match loaded {
                     Ok(LoadedMesh {
-                        mut mesh,
+                        mesh,
                         files_read,
                         warnings,
                         lights,
                         cameras,
                         crease_angle_used,
                     }) => {
-                        // Once per mesh built: whether its back faces may be culled (render::geometry).
-                        mesh.closed = is_closed(&mesh.positions, &mesh.triangles);
                         let mut stamped: Vec<PathBuf> = files_read.clone();
                         if !stamped.iter().any(|f| f == path) {
                             stamped.push(path.to_path_buf());
