@@ -32,7 +32,9 @@ use clap::Subcommand;
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, print_load_error};
 use crate::mesh::{Mesh, primitives};
 use crate::metrics::{Compared, ErrorMetrics, compare, compare_over};
-use crate::reference::{LightingPrecision, Shape, recognize_shape, render_reference_with};
+use crate::reference::{
+    LightingPrecision, ReferenceOptions, Shape, recognize_shape, render_reference, render_reference_with,
+};
 use crate::render::{RenderOptions, render};
 use crate::scene::load::{LoadOptions, load_scene};
 use crate::scene::{LightingModel, NormalInterpolation, Scene, Shading, presets};
@@ -209,14 +211,18 @@ pub fn sweep(
                 object.material = Some(material);
             }
             let started = Instant::now();
-            let reference =
-                render_reference_with(&variant, threads, LightingPrecision::F64).map_err(|problems| {
-                    format!("the reference cannot render this scene: {}", problems[0].message)
-                })?;
+            let reference = render_reference(&variant, threads);
             let reference_time = started.elapsed();
             let started = Instant::now();
-            let with_f32 = render_reference_with(&variant, threads, LightingPrecision::F32)
-                .map_err(|problems| problems[0].message.clone())?;
+            let with_f32 = render_reference_with(
+                &variant,
+                &ReferenceOptions {
+                    threads,
+                    precision: LightingPrecision::F32,
+                    ..ReferenceOptions::default()
+                },
+            )
+            .framebuffer;
             let f32_time = started.elapsed();
             let first = points.len();
             for (method, time, image) in [
@@ -550,13 +556,7 @@ fn run_accuracy(args: &AccuracyArgs) -> i32 {
             object.material = Some(material);
             object.shading = shading;
         }
-        let reference = match render_reference_with(&scene, None, LightingPrecision::F64) {
-            Ok(reference) => reference,
-            Err(problems) => {
-                errln!("error: {}: {}", args.scene.display(), problems[0].message);
-                return EXIT_BAD_INPUT;
-            }
-        };
+        let reference = render_reference(&scene, None);
         let (image, _) = render(&scene, &RenderOptions::default());
         let e = compare_over(&reference, &image, Compared::BothCovered).expect("same size");
         outln!(
