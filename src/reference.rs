@@ -31,7 +31,10 @@
 //!   (towards it, for a directional light) against every object, both faces: the exact
 //!   visibility (0 or 1) that shadow maps, their bias and PCF approximate. The ray starts
 //!   10⁻⁹ of the scene's size off the surface, along the geometric normal on the light's side,
-//!   and ignores the hit triangle itself.
+//!   and ignores the hit triangle itself. A mesh therefore shadows itself facet by facet where
+//!   its interpolated normal faces the light and its flat triangles do not (the "shadow
+//!   terminator"): that is the limit of a shadow map as its resolution grows and its bias
+//!   shrinks, and the bias that hides it is part of what the reference measures.
 //! - **Textures.** Level 0, bilinear, in `f64` ([`surface`]); with the rasterizer's sample
 //!   pattern, each sample's texels are the mean over a [`ReferenceOptions::texture_samples`]²
 //!   grid over the pixel (16×16 by default) on the plane of the hit triangle (extended past its
