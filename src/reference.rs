@@ -70,6 +70,7 @@ use crate::render::frame::Viewer;
 use crate::render::geometry::CameraSetup;
 use crate::render::raster::SamplePattern;
 use crate::render::{FrameBuffer, RenderProgress, RenderStats};
+use crate::scene::limits::{DEFAULT_MEMORY_BUDGET, human_bytes};
 use crate::scene::load::{LoadError, LoadOptions, load_scene};
 use crate::scene::locate::{PathSegment, locate};
 use crate::scene::{BackFaces, LightingComponent, Material, Scene, TextureBinding, bounding_sphere};
@@ -709,6 +710,14 @@ fn render_in_current_pool(scene: &Scene, options: &ReferenceOptions) -> Referenc
     }
 }
 
+/// About the most memory the reference of `scene` takes beyond the loaded scene: its
+/// triangles and BVH while it builds, and the image.
+pub fn reference_bytes(scene: &Scene) -> u64 {
+    let triangles = scene.triangle_count() as u64;
+    let pixels = u64::from(scene.image.width) * u64::from(scene.image.height);
+    triangles * mesh::PEAK_BYTES_PER_TRIANGLE + pixels * (2 * std::mem::size_of::<(Vec3, bool)>() as u64)
+}
+
 /// Loads the scene file at `path` and renders its reference: `render_scene_file`'s twin for
 /// `lampshade render --reference`. The reference's notes are warnings pointing at the object's
 /// field in the scene file.
@@ -720,6 +729,24 @@ pub fn render_reference_file(
     let started = Instant::now();
     let loaded = load_scene(path, load_options)?;
     let load_time = started.elapsed();
+    let budget = load_options.max_memory.unwrap_or(DEFAULT_MEMORY_BUDGET);
+    let needed = reference_bytes(&loaded.scene);
+    if needed > budget {
+        let diagnostic = Diagnostic::error(
+            path,
+            format!(
+                "the reference of this scene needs about {} of memory, more than the budget of {}",
+                human_bytes(needed),
+                human_bytes(budget)
+            ),
+        )
+        .with_hint("raise --max-memory, or render the reference of a part of the scene");
+        return Err(LoadError {
+            diagnostics: vec![diagnostic],
+            sources: loaded.sources,
+            files_read: loaded.files_read,
+        });
+    }
     let scene_source = loaded.sources.find(path);
     let located = |diagnostic: Diagnostic, field: &str, object: usize| match scene_source {
         Some(source) => {
@@ -1060,6 +1087,20 @@ mod tests {
             ..ReferenceOptions::default()
         });
         assert!(fine < 0.05 && fine < coarse / 2.0, "{coarse} {fine}");
+    }
+
+    /// The memory check counts every triangle at the build's peak, which `render --reference`
+    /// compares with `--max-memory` before it builds anything.
+    #[test]
+    fn the_memory_estimate_counts_every_triangle_at_the_builds_peak() {
+        let scene = load("(image: (width: 10, height: 10), objects: [(mesh: Sphere(segments: 100))])");
+        let triangles = scene.triangle_count() as u64;
+        let bytes = reference_bytes(&scene);
+        const { assert!(mesh::PEAK_BYTES_PER_TRIANGLE >= 250) };
+        assert!(
+            bytes >= triangles * mesh::PEAK_BYTES_PER_TRIANGLE && bytes < triangles * 1000,
+            "{bytes}"
+        );
     }
 
     /// N×N stratified samples are the box filter: a pixel half covered by a plane's edge is

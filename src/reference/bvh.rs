@@ -96,6 +96,10 @@ struct Node {
     count: u32,
 }
 
+/// The most a build holds per primitive: its box, its build item and (at worst) a node.
+pub const BUILD_BYTES_PER_PRIMITIVE: usize =
+    std::mem::size_of::<Aabb>() + std::mem::size_of::<Item>() + std::mem::size_of::<Node>() + 4;
+
 #[derive(Debug, Clone, Default)]
 pub struct Bvh {
     nodes: Vec<Node>,

@@ -124,6 +124,11 @@ impl WorldTriangle {
     }
 }
 
+/// The most the reference holds per triangle while it builds: the triangles before and after
+/// their reordering into leaf order, and the BVH's boxes, build items and nodes.
+pub const PEAK_BYTES_PER_TRIANGLE: u64 =
+    (2 * std::mem::size_of::<WorldTriangle>() + super::bvh::BUILD_BYTES_PER_PRIMITIVE) as u64;
+
 /// Every mesh object's triangles in one BVH.
 pub struct MeshTriangles {
     pub objects: Vec<MeshObject>,
