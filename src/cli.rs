@@ -67,6 +67,8 @@ Examples:
   lampshade render scene.ron --width 3840 --height 2160 --samples 4
   lampshade render scene.ron --shading gouraud --model blinn-phong -o gouraud.png
   lampshade render scene.ron --debug normals -o normals.png
+  lampshade render scene.ron --reference -o exact.exr      the f64 ray-cast image it converges to
+  lampshade render scene.ron --reference=mesh --reference-samples 4
   lampshade render scene.ron -o - | display               PNG on standard output
   lampshade render scenes/*.ron                            each beside its scene";
 
@@ -134,10 +136,23 @@ pub struct RenderArgs {
     /// Print nothing but errors.
     #[arg(short, long)]
     pub quiet: bool,
-    /// Render the exact reference instead: analytic shapes ray-cast and lit in f64 (see
-    /// `reference`). Mesh files and textures are errors; shadows are ignored.
-    #[arg(long, conflicts_with = "debug")]
-    pub reference: bool,
+    /// Render the exact reference instead: the scene ray-cast and lit in f64, shadows by
+    /// shadow rays, textures at level 0 integrated over the pixel (see `reference`).
+    /// `--reference=mesh` ray-casts the primitives' tessellation instead of their exact shapes.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "GEOMETRY",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = "exact",
+        conflicts_with = "debug"
+    )]
+    pub reference: Option<ReferenceArg>,
+    /// With --reference: N×N stratified samples per pixel (the ideal box filter) instead of the
+    /// scene's sample pattern.
+    #[arg(long, value_name = "N", requires = "reference", value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::reference::MAX_REFERENCE_SAMPLES)))]
+    pub reference_samples: Option<u32>,
     #[command(flatten)]
     pub limits: InputLimits,
 }
@@ -204,6 +219,14 @@ impl FormatArg {
 pub enum EncodingArg {
     Linear,
     Srgb,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ReferenceArg {
+    /// Sphere, Plane and Cube as their exact shapes, every other mesh as its triangles.
+    Exact,
+    /// Every object as its triangles, primitives as their tessellation.
+    Mesh,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -397,7 +420,15 @@ fn run_render(args: &RenderArgs) -> i32 {
         render_options: &render_options,
         output_settings,
         quiet: args.quiet,
-        reference: args.reference,
+        reference: args.reference.map(|geometry| crate::reference::ReferenceOptions {
+            threads: render_options.threads,
+            geometry: match geometry {
+                ReferenceArg::Exact => crate::reference::ReferenceGeometry::Exact,
+                ReferenceArg::Mesh => crate::reference::ReferenceGeometry::Mesh,
+            },
+            samples: args.reference_samples,
+            ..crate::reference::ReferenceOptions::default()
+        }),
         progress_bar: !args.quiet && crate::progress::progress_allowed(),
     };
     for scene_path in &args.scenes {
@@ -463,7 +494,8 @@ struct RenderRun<'a> {
     render_options: &'a RenderOptions,
     output_settings: OutputSettings,
     quiet: bool,
-    reference: bool,
+    /// `Some` for `--reference`.
+    reference: Option<crate::reference::ReferenceOptions>,
     progress_bar: bool,
 }
 
@@ -522,7 +554,7 @@ fn render_one(
         render_options,
         output_settings,
         quiet,
-        reference,
+        ref reference,
         progress_bar,
     } = *run;
     // The scene itself is refused before it is read; the files it reads, once they are known.
@@ -541,8 +573,12 @@ fn render_one(
         progress_bar,
     );
     render_record().bar = Some(bar.clearer());
-    let rendered = if reference {
-        crate::reference::render_reference_file(scene_path, load_options, render_options.threads)
+    let rendered = if let Some(reference) = reference {
+        let options = crate::reference::ReferenceOptions {
+            progress: Some(cache.renderer.progress()),
+            ..reference.clone()
+        };
+        crate::reference::render_reference_file(scene_path, load_options, &options)
     } else {
         render_scene_file(scene_path, load_options, render_options, cache)
     };

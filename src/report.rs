@@ -20,6 +20,11 @@
 //! `speed-error-sSHININESS-xSAMPLES.svg`: mean absolute error against time, both logarithmic,
 //! one colour per shading mode, the Pareto front (no other point is both faster and more
 //! accurate) drawn as a line.
+//!
+//! For any other scene (`--knobs`, or a scene without spheres), [`knobs`] sweeps the knobs the
+//! scene uses one at a time instead.
+
+pub mod knobs;
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -32,7 +37,9 @@ use clap::Subcommand;
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, print_load_error};
 use crate::mesh::{Mesh, primitives};
 use crate::metrics::{Compared, ErrorMetrics, compare, compare_over};
-use crate::reference::{LightingPrecision, Shape, recognize_shape, render_reference_with};
+use crate::reference::{
+    LightingPrecision, ReferenceOptions, Shape, recognize_shape, render_reference, render_reference_with,
+};
 use crate::render::{RenderOptions, render};
 use crate::scene::load::{LoadOptions, load_scene};
 use crate::scene::{LightingModel, NormalInterpolation, Scene, Shading, presets};
@@ -84,6 +91,13 @@ pub struct SpeedErrorArgs {
     /// Worker threads for rendering (default: one per core).
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
+    /// Sweep the approximation knobs the scene uses instead, one at a time around its own
+    /// settings (shading, Nlerp/Slerp, sphere tessellation, shadow-map resolution, PCF and
+    /// bias, samples), against one reference with 4×4 samples per pixel; writes
+    /// `knobs.md` (with a recommendation per knob) and `knobs.csv`. The default for a scene
+    /// without `Sphere` objects.
+    #[arg(long)]
+    pub knobs: bool,
 }
 
 /// How a sphere is shaded.
@@ -209,14 +223,18 @@ pub fn sweep(
                 object.material = Some(material);
             }
             let started = Instant::now();
-            let reference =
-                render_reference_with(&variant, threads, LightingPrecision::F64).map_err(|problems| {
-                    format!("the reference cannot render this scene: {}", problems[0].message)
-                })?;
+            let reference = render_reference(&variant, threads);
             let reference_time = started.elapsed();
             let started = Instant::now();
-            let with_f32 = render_reference_with(&variant, threads, LightingPrecision::F32)
-                .map_err(|problems| problems[0].message.clone())?;
+            let with_f32 = render_reference_with(
+                &variant,
+                &ReferenceOptions {
+                    threads,
+                    precision: LightingPrecision::F32,
+                    ..ReferenceOptions::default()
+                },
+            )
+            .framebuffer;
             let f32_time = started.elapsed();
             let first = points.len();
             for (method, time, image) in [
@@ -550,13 +568,7 @@ fn run_accuracy(args: &AccuracyArgs) -> i32 {
             object.material = Some(material);
             object.shading = shading;
         }
-        let reference = match render_reference_with(&scene, None, LightingPrecision::F64) {
-            Ok(reference) => reference,
-            Err(problems) => {
-                errln!("error: {}: {}", args.scene.display(), problems[0].message);
-                return EXIT_BAD_INPUT;
-            }
-        };
+        let reference = render_reference(&scene, None);
         let (image, _) = render(&scene, &RenderOptions::default());
         let e = compare_over(&reference, &image, Compared::BothCovered).expect("same size");
         outln!(
@@ -571,6 +583,98 @@ fn run_accuracy(args: &AccuracyArgs) -> i32 {
     EXIT_OK
 }
 
+/// Writes the report's files into `--out` (created if missing), or returns the exit code after
+/// saying why not. Nothing is written if any file would replace the scene; each file is written
+/// whole or not at all.
+fn write_report_files(args: &SpeedErrorArgs, files: &[(String, String)]) -> Result<(), i32> {
+    if let Err(error) = std::fs::create_dir_all(&args.out) {
+        errln!("error: cannot create {}: {error}", args.out.display());
+        return Err(EXIT_OUTPUT_FAILED);
+    }
+    if let Some((name, _)) = files.iter().find(|(name, _)| {
+        crate::output::overwritten_input(&args.out.join(name), [args.scene.as_path()]).is_some()
+    }) {
+        errln!(
+            "error: `{}` would replace the scene `{}`; nothing was written\n  = help: choose another --out folder",
+            args.out.join(name).display(),
+            args.scene.display()
+        );
+        return Err(EXIT_BAD_INPUT);
+    }
+    for (name, text) in files {
+        let path = args.out.join(name);
+        let written = crate::output::write_atomically(&path, |writer| {
+            writer
+                .write_all(text.as_bytes())
+                .map_err(|source| crate::output::OutputError::Io {
+                    path: path.clone(),
+                    source,
+                })
+        });
+        if let Err(error) = written {
+            errln!("error: {error}");
+            return Err(EXIT_OUTPUT_FAILED);
+        }
+    }
+    Ok(())
+}
+
+/// `report speed-error --knobs`: the knob sweep of [`knobs`], written to `--out`.
+fn run_knob_sweep(args: &SpeedErrorArgs, mut scene: Scene) -> i32 {
+    if args.quick {
+        (scene.image.width, scene.image.height) = (160, 120);
+    }
+    let plan = knobs::KnobPlan {
+        runs: if args.quick { 1 } else { args.runs },
+        quick: args.quick,
+    };
+    let threads = args.threads.map(usize::from);
+    let started = Instant::now();
+    let (points, reference_time) = knobs::sweep_knobs(&scene, plan, threads, |p| {
+        errln!(
+            "  {:<22} {:<12} {:>8.1} ms, FLIP p99 {}",
+            p.knob,
+            p.value,
+            milliseconds(p.time),
+            p.error
+                .flip
+                .map_or("-".to_string(), |f| format!("{:.4}", f.percentile_99))
+        )
+    });
+    let header = format!(
+        "{}×{} px, {} threads, median of {} runs per point; the reference ({:.1} s) has 4×4 stratified \
+         samples per pixel, shadow rays and level-0 textures over each sample. Errors on the 0..255 scale \
+         over the pixels covered in either image; FLIP over the same pixels. **P** marks the Pareto front \
+         by FLIP p99. Reproduce with `lampshade report speed-error --knobs --scene {}`.",
+        scene.image.width,
+        scene.image.height,
+        threads.unwrap_or_else(rayon::current_num_threads),
+        plan.runs,
+        reference_time.as_secs_f64(),
+        args.scene.display()
+    );
+    let files = [
+        ("knobs.csv".to_string(), knobs::knobs_csv(&points)),
+        (
+            "knobs.md".to_string(),
+            knobs::knobs_markdown(&points, &args.scene.display().to_string(), &header),
+        ),
+    ];
+    if let Err(code) = write_report_files(args, &files) {
+        return code;
+    }
+    for line in knobs::recommendations(&points) {
+        outln!("{line}");
+    }
+    errln!(
+        "{} points in {:.1} s → {}",
+        points.len(),
+        started.elapsed().as_secs_f64(),
+        args.out.display()
+    );
+    EXIT_OK
+}
+
 fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
     let loaded = match load_scene(&args.scene, &LoadOptions::default()) {
         Ok(loaded) => loaded,
@@ -579,6 +683,14 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
             return EXIT_BAD_INPUT;
         }
     };
+    let has_sphere = loaded
+        .scene
+        .objects
+        .iter()
+        .any(|object| recognize_shape(&object.mesh) == Some(Shape::Sphere));
+    if args.knobs || !has_sphere {
+        return run_knob_sweep(args, loaded.scene);
+    }
     let plan = if args.quick {
         SweepPlan::quick()
     } else {
@@ -636,36 +748,8 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
             }
         }
     }
-    if let Err(error) = std::fs::create_dir_all(&args.out) {
-        errln!("error: cannot create {}: {error}", args.out.display());
-        return EXIT_OUTPUT_FAILED;
-    }
-    // Nothing is written if any file would replace the scene; each file is written whole or
-    // not at all.
-    if let Some((name, _)) = files.iter().find(|(name, _)| {
-        crate::output::overwritten_input(&args.out.join(name), [args.scene.as_path()]).is_some()
-    }) {
-        errln!(
-            "error: `{}` would replace the scene `{}`; nothing was written\n  = help: choose another --out folder",
-            args.out.join(name).display(),
-            args.scene.display()
-        );
-        return EXIT_BAD_INPUT;
-    }
-    for (name, text) in &files {
-        let path = args.out.join(name);
-        let written = crate::output::write_atomically(&path, |writer| {
-            writer
-                .write_all(text.as_bytes())
-                .map_err(|source| crate::output::OutputError::Io {
-                    path: path.clone(),
-                    source,
-                })
-        });
-        if let Err(error) = written {
-            errln!("error: {error}");
-            return EXIT_OUTPUT_FAILED;
-        }
+    if let Err(code) = write_report_files(args, &files) {
+        return code;
     }
     outln!(
         "speed-error: {} points in {:.1} s → {}",

@@ -434,7 +434,7 @@ fn texel_pair(t: f32, size: u32, wrap: Wrap) -> (usize, usize, f32) {
 }
 
 /// A whole texel index (any finite value) brought into `[0, size)`.
-fn wrap_index(index: f64, size: f64, wrap: Wrap) -> usize {
+pub(crate) fn wrap_index(index: f64, size: f64, wrap: Wrap) -> usize {
     let wrapped = match wrap {
         Wrap::Repeat => index.rem_euclid(size),
         Wrap::MirroredRepeat => {

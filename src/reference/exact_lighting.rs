@@ -1,9 +1,10 @@
 //! The lighting equation of [`crate::lighting`], evaluated in `f64` for the reference renderer.
 //!
-//! This is a line-by-line transcription of `lighting::illuminate_with_visibility` (without the
-//! shadow term), kept apart instead of making `lighting` generic over the scalar: the renderer's
-//! `f32` code is the hot loop the lead is rewriting for speed, and a generic layer (glam has no
-//! vector type generic over the scalar) would sit in its way. The two are kept equal by the
+//! This is a line-by-line transcription of `lighting::illuminate_with_visibility` (the shadow
+//! term a callback here too, which the reference answers with shadow rays), kept apart instead
+//! of making `lighting` generic over the scalar: the renderer's `f32` code is the hot loop the
+//! lead is rewriting for speed, and a generic layer (glam has no vector type generic over the
+//! scalar) would sit in its way. The two are kept equal by the
 //! cross-check test at the bottom of this file, which evaluates both on thousands of random
 //! points, lights and materials of every model and light type and compares them. A change to
 //! the equation in one place fails that test until the other follows.
@@ -140,6 +141,29 @@ pub fn illuminate_exact(
     normal: DVec3,
     to_viewer: DVec3,
 ) -> ExactTerms {
+    illuminate_exact_with_visibility(
+        material,
+        lights,
+        ambient_light,
+        position,
+        normal,
+        to_viewer,
+        |_, _| 1.0,
+    )
+}
+
+/// `lighting::illuminate_with_visibility` in `f64`: `visibility(i, L)` is the share of light
+/// `i` that reaches the point, asked only for lights that face the surface (the reference
+/// answers it with a shadow ray).
+pub fn illuminate_exact_with_visibility(
+    material: &Material,
+    lights: &[ExactLight],
+    ambient_light: DVec3,
+    position: DVec3,
+    normal: DVec3,
+    to_viewer: DVec3,
+    visibility: impl Fn(usize, DVec3) -> f64,
+) -> ExactTerms {
     let mut terms = ExactTerms {
         emission: wide(material.emission),
         ..ExactTerms::default()
@@ -151,12 +175,16 @@ pub fn illuminate_exact(
     terms.ambient = wide(material.ambient) * ambient_light;
     let has_specular = material.specular != Vec3::ZERO;
     let shininess = f64::from(material.shininess);
-    for light in lights {
+    for (index, light) in lights.iter().enumerate() {
         let Some((to_light, strength)) = incidence(light, position) else {
             continue;
         };
         let n_dot_l = normal.dot(to_light);
         if n_dot_l <= 0.0 || strength <= 0.0 {
+            continue;
+        }
+        let strength = strength * visibility(index, to_light);
+        if strength <= 0.0 {
             continue;
         }
         let irradiance = light.color * strength * n_dot_l;

@@ -146,16 +146,16 @@ impl RenderProgress {
         )
     }
 
-    fn start_geometry(&self) {
+    pub(crate) fn start_geometry(&self) {
         self.tiles_total.store(0, Ordering::Relaxed);
         self.tiles_done.store(0, Ordering::Relaxed);
     }
 
-    fn start_tiles(&self, total: usize) {
+    pub(crate) fn start_tiles(&self, total: usize) {
         self.tiles_total.store(total, Ordering::Relaxed);
     }
 
-    fn tile_done(&self) {
+    pub(crate) fn tile_done(&self) {
         self.tiles_done.fetch_add(1, Ordering::Relaxed);
     }
 }

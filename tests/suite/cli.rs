@@ -276,10 +276,11 @@ fn an_unwritable_output_exits_1() {
     assert!(stderr(&output).contains("out.png"));
 }
 
-/// `render --reference` writes the exact image through the same output path; a mesh file is an
-/// error at the object's `mesh` with exit 2 and no image; shadows are a warning.
+/// `render --reference` writes the exact image through the same output path, with shadows;
+/// mesh files are ray-cast as their triangles; `--reference=mesh` ray-casts the primitives'
+/// tessellation; `--reference-samples` needs `--reference` and a count in 1..=64.
 #[test]
-fn render_reference_writes_the_exact_image_or_names_what_it_cannot_render() {
+fn render_reference_writes_the_exact_image_of_any_scene() {
     let work = tempfile::tempdir().unwrap();
     std::fs::write(
         work.path().join("s.ron"),
@@ -293,47 +294,57 @@ fn render_reference_writes_the_exact_image_or_names_what_it_cannot_render() {
         work.path(),
     );
     assert!(output.status.success(), "{}", stderr(&output));
-    assert!(
-        stderr(&output).contains("does not compute shadows"),
-        "{}",
-        stderr(&output)
-    );
+    assert!(!stderr(&output).contains("warning"), "{}", stderr(&output));
     let exact = image::open(work.path().join("exact.png")).unwrap().to_rgb8();
     let output = lampshade(&["render", "s.ron", "-o", "raster.png"], work.path());
     assert!(output.status.success(), "{}", stderr(&output));
     let raster = image::open(work.path().join("raster.png")).unwrap().to_rgb8();
+    let output = lampshade(
+        &["render", "--reference=mesh", "s.ron", "-o", "mesh.png"],
+        work.path(),
+    );
+    assert!(output.status.success(), "{}", stderr(&output));
+    let mesh = image::open(work.path().join("mesh.png")).unwrap().to_rgb8();
     assert_eq!(exact.dimensions(), (40, 30));
-    // Sphere(8) is coarse: the exact silhouette is round, the raster one a polygon inside it.
+    // Sphere(8) is coarse: the exact silhouette is round, the raster one (and the ray-cast
+    // tessellation's) a polygon inside it.
     let covered = |image: &image::RgbImage| image.pixels().filter(|p| p.0 != [0, 0, 0]).count();
     assert!(
-        covered(&exact) > covered(&raster),
-        "{} {}",
+        covered(&exact) > covered(&raster) && covered(&mesh) == covered(&raster),
+        "{} {} {}",
         covered(&exact),
-        covered(&raster)
+        covered(&raster),
+        covered(&mesh)
     );
 
     std::fs::write(
         work.path().join("mesh.ron"),
-        "(objects: [\n    (name: \"box\", mesh: Obj(\"box.obj\")),\n])",
+        "(objects: [\n    (name: \"tri\", mesh: Obj(\"tri.obj\")),\n])",
     )
     .unwrap();
     std::fs::write(
-        work.path().join("box.obj"),
-        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        work.path().join("tri.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 0 1 0\nf 1 2 3\n",
     )
     .unwrap();
-    let output = lampshade(&["render", "--reference", "mesh.ron"], work.path());
-    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
-    assert!(
-        stderr(&output).contains("mesh.ron:2:25") && stderr(&output).contains("`box`"),
-        "{}",
-        stderr(&output)
+    let output = lampshade(
+        &["render", "--reference", "--reference-samples", "4", "mesh.ron"],
+        work.path(),
     );
-    assert!(!work.path().join("mesh.png").exists());
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(work.path().join("mesh.png").is_file());
+    for bad in [
+        &["render", "--reference-samples", "4", "mesh.ron"][..],
+        &["render", "--reference", "--reference-samples", "0", "mesh.ron"],
+        &["render", "--reference=triangles", "mesh.ron"],
+    ] {
+        let output = lampshade(bad, work.path());
+        assert_eq!(output.status.code(), Some(2), "{bad:?}: {}", stderr(&output));
+    }
 }
 
 /// `report speed-error --quick` writes its table, CSV and well-formed SVG plots; a scene with no
-/// sphere to sweep is bad input.
+/// sphere to sweep gets the knob sweep.
 #[test]
 fn report_speed_error_writes_its_table_and_plots() {
     let work = tempfile::tempdir().unwrap();
@@ -379,8 +390,14 @@ fn report_speed_error_writes_its_table_and_plots() {
         ],
         work.path(),
     );
-    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
-    assert!(stderr(&output).contains("no `Sphere`"), "{}", stderr(&output));
+    // No sphere to vary: the knobs the scene uses are swept instead.
+    assert!(output.status.success(), "{}", stderr(&output));
+    let table = std::fs::read_to_string(work.path().join("cube/knobs.md")).unwrap();
+    assert!(
+        table.contains("samples per pixel") && table.contains("(scene)"),
+        "{table}"
+    );
+    assert!(work.path().join("cube/knobs.csv").is_file());
 }
 
 /// `report accuracy` prints the anchor's table: four modes, Phong the most accurate.
