@@ -169,7 +169,7 @@ fn paths(folder: &Path, extensions: &[&str]) -> Vec<(String, bool)> {
 }
 
 fn materials(document: &Document) -> Vec<NamedMaterial> {
-    scene_materials(&document.path, &document.text, &LoadOptions::default())
+    scene_materials(&document.path, document.materials_text(), &LoadOptions::default())
 }
 
 fn material_item(material: &NamedMaterial) -> CompletionItem {

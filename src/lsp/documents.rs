@@ -16,6 +16,16 @@ pub struct Document {
     pub path: PathBuf,
     pub text: String,
     pub version: i32,
+    /// The last text of this document that parsed: what material names are read from while
+    /// the text being typed does not parse (`material: "b` is half a string).
+    pub parsed_text: Option<String>,
+}
+
+impl Document {
+    /// The text to read the scene's materials from: the current one, or the last that parsed.
+    pub fn materials_text(&self) -> &str {
+        self.parsed_text.as_deref().unwrap_or(&self.text)
+    }
 }
 
 impl Document {
@@ -46,7 +56,15 @@ impl Documents {
     /// Opens `uri`; `None` when it is not a `file:` URI (lampshade reads scenes from files).
     pub fn open(&mut self, uri: Url, text: String, version: i32) -> Option<&Document> {
         let path = uri.to_file_path().ok()?;
-        self.open.insert(uri.clone(), Document { path, text, version });
+        self.open.insert(
+            uri.clone(),
+            Document {
+                path,
+                text,
+                version,
+                parsed_text: None,
+            },
+        );
         self.open.get(&uri)
     }
 
@@ -138,6 +156,7 @@ mod tests {
             path: PathBuf::from("/s.ron"),
             text: "(objects: [])".into(),
             version: 1,
+            parsed_text: None,
         };
         document.apply(
             vec![TextDocumentContentChangeEvent {

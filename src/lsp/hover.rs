@@ -31,7 +31,8 @@ pub fn hover(document: &Document, offset: usize, meshes: &Mutex<MeshCache>) -> O
         (TokenKind::Str, Role::Value(field)) if field == "material" || field == "base" => {
             let (_, name) = cursor.string_content(text)?;
             let wanted = presets::normalize_name(name);
-            let materials = scene_materials(&document.path, text, &LoadOptions::default());
+            let materials =
+                scene_materials(&document.path, document.materials_text(), &LoadOptions::default());
             let material = materials
                 .iter()
                 .find(|m| presets::normalize_name(&m.name) == wanted)?;

@@ -227,8 +227,8 @@ impl Server {
     }
 
     /// The document at `uri` has new text: its syntax now, the rest on the checker.
-    fn changed(&self, uri: &Url) {
-        let Some(document) = self.documents.get(uri) else {
+    fn changed(&mut self, uri: &Url) {
+        let Some(document) = self.documents.get_mut(uri) else {
             return;
         };
         if is_library(&document.text) {
@@ -239,12 +239,15 @@ impl Server {
         self.publisher.saw(uri, document.version);
         match parse_scene_text(&document.path, &document.text) {
             Err(error) => self.publisher.publish(uri, document.version, to_lsp(&error)),
-            Ok(()) => self.checker.check(
-                uri.clone(),
-                document.path.clone(),
-                document.version,
-                document.text.clone(),
-            ),
+            Ok(()) => {
+                document.parsed_text = Some(document.text.clone());
+                self.checker.check(
+                    uri.clone(),
+                    document.path.clone(),
+                    document.version,
+                    document.text.clone(),
+                );
+            }
         }
     }
 }

@@ -27,13 +27,14 @@ pub fn definition(document: &Document, offset: usize) -> Option<Location> {
     match &cursor.role {
         Role::Value(field) if field == "material" || field == "base" => {
             let wanted = presets::normalize_name(value);
-            let materials = scene_materials(&document.path, text, &LoadOptions::default());
+            let materials =
+                scene_materials(&document.path, document.materials_text(), &LoadOptions::default());
             let material = materials
                 .iter()
                 .find(|m| presets::normalize_name(&m.name) == wanted)?;
             let (path, span) = material.defined_at.clone()?;
             let range = if path == document.path {
-                range_of(text, span)
+                range_of(document.materials_text(), span)
             } else {
                 range_of(&std::fs::read_to_string(&path).ok()?, span)
             };
