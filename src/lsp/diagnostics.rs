@@ -7,7 +7,7 @@
 //!    syntax error too) and are published at once.
 //! 2. When the text parses: the full load ([`crate::scene::load::load_scene_from_str_cached`]:
 //!    includes, materials, values, meshes, textures, the memory check) on the [`Checker`]'s
-//!    thread, after a short quiet period, with a [`MeshCache`] kept for the session, so a mesh
+//!    thread, after 50 ms without a change, with a [`MeshCache`] kept for the session, so a mesh
 //!    file is parsed once and later keystrokes only check that it has not changed. Its result is
 //!    published only if no newer version of the document has been seen meanwhile.
 //!
@@ -37,7 +37,7 @@ use crate::scene::load::{LoadError, LoadOptions, MeshCache, load_scene_from_str_
 
 /// How long the text must stay unchanged before the full load runs: long enough to skip the
 /// loads of a burst of keystrokes, short enough to feel immediate.
-const QUIET_PERIOD: Duration = Duration::from_millis(150);
+const QUIET_PERIOD: Duration = Duration::from_millis(50);
 
 /// Sends a message to the editor.
 pub type Outbox = Arc<dyn Fn(Message) + Send + Sync>;
