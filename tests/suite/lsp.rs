@@ -278,12 +278,60 @@ fn an_editor_session() {
             .contains("help: did you mean \"ruby\"?")
     );
 
+    // Mesh files: a missing one and one whose content is broken, located at the mesh like the
+    // CLI locates them, the caret's label as related information.
+    std::fs::write(
+        folder.join("meshes/bad.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+    )
+    .unwrap();
+    let meshes = SCENE
+        .replace(
+            "(mesh: Cube, material: \"rubyy\")",
+            "(mesh: Obj(\"meshes/missing.obj\"))",
+        )
+        .replace("meshes/tri.obj", "meshes/bad.obj");
+    client.notify(
+        "textDocument/didChange",
+        json!({ "textDocument": { "uri": scene, "version": 4 }, "contentChanges": [{ "text": meshes }] }),
+    );
+    let diagnostics = client.diagnostics(&scene, |list| {
+        list.iter()
+            .any(|d| d["message"].as_str().unwrap().contains("missing.obj"))
+    });
+    let missing = diagnostics
+        .iter()
+        .find(|d| d["message"].as_str().unwrap().contains("missing.obj"))
+        .unwrap();
+    assert_eq!(missing["range"], range((4, 19), (4, 39)), "{missing:#}");
+    assert!(
+        missing["message"]
+            .as_str()
+            .unwrap()
+            .contains("\nhelp: paths are relative"),
+        "{missing:#}"
+    );
+    let broken = diagnostics
+        .iter()
+        .find(|d| {
+            d["message"]
+                .as_str()
+                .unwrap()
+                .contains("bad.obj:4:7: face refers to vertex 9")
+        })
+        .unwrap_or_else(|| panic!("{diagnostics:#?}"));
+    assert_eq!(broken["range"], range((5, 19), (5, 35)), "{broken:#}");
+    assert_eq!(
+        broken["relatedInformation"][0]["message"],
+        "this mesh could not be loaded"
+    );
+
     // Fix the library on disk and touch the scene: everything clears, the library too.
     std::fs::write(folder.join("lib.ron"), LIBRARY.replace("shinyness", "shininess")).unwrap();
     let good = SCENE.replace("rubyy", "ruby");
     client.notify(
         "textDocument/didChange",
-        json!({ "textDocument": { "uri": scene, "version": 4 }, "contentChanges": [{ "text": good }] }),
+        json!({ "textDocument": { "uri": scene, "version": 5 }, "contentChanges": [{ "text": good }] }),
     );
     client.diagnostics(&scene, |list| list.is_empty());
     client.diagnostics(&library, |list| list.is_empty());
@@ -292,7 +340,7 @@ fn an_editor_session() {
     let text = good.replace("(mesh: Cube, material: \"ruby\")", "(mesh: Cube, )");
     client.notify(
         "textDocument/didChange",
-        json!({ "textDocument": { "uri": scene, "version": 5 }, "contentChanges": [{ "text": text }] }),
+        json!({ "textDocument": { "uri": scene, "version": 6 }, "contentChanges": [{ "text": text }] }),
     );
     let line = 4;
     let completion = client.request("textDocument/completion", at(&scene, line, 21));
@@ -315,7 +363,7 @@ fn an_editor_session() {
     let text = good.replace("(mesh: Cube, material: \"ruby\")", "(mesh: Cube, shading: Go)");
     client.notify(
         "textDocument/didChange",
-        json!({ "textDocument": { "uri": scene, "version": 6 }, "contentChanges": [{ "text": text }] }),
+        json!({ "textDocument": { "uri": scene, "version": 7 }, "contentChanges": [{ "text": text }] }),
     );
     let completion = client.request("textDocument/completion", at(&scene, line, 32));
     assert_eq!(labels(&completion), ["Constant", "Flat", "Gouraud", "Phong"]);
@@ -327,7 +375,7 @@ fn an_editor_session() {
     let text = good.replace("material: \"ruby\"", "material: \"b");
     client.notify(
         "textDocument/didChange",
-        json!({ "textDocument": { "uri": scene, "version": 7 }, "contentChanges": [{ "text": text }] }),
+        json!({ "textDocument": { "uri": scene, "version": 8 }, "contentChanges": [{ "text": text }] }),
     );
     let items = labels(&client.request("textDocument/completion", at(&scene, line, 33)));
     assert_eq!(items[0], "brushed", "{items:?}");
@@ -336,14 +384,14 @@ fn an_editor_session() {
     // Back to the good scene for hover, definition and the outline.
     client.notify(
         "textDocument/didChange",
-        json!({ "textDocument": { "uri": scene, "version": 8 }, "contentChanges": [{ "text": good }] }),
+        json!({ "textDocument": { "uri": scene, "version": 9 }, "contentChanges": [{ "text": good }] }),
     );
     client.diagnostics(&scene, |list| list.is_empty());
     // Paths relative to the scene: folders, then the OBJ files in them.
     let completion = client.request("textDocument/completion", at(&scene, 5, 20));
     assert_eq!(labels(&completion), ["meshes/"], "{completion}");
     let completion = client.request("textDocument/completion", at(&scene, 5, 27));
-    assert_eq!(labels(&completion), ["tri.obj"]);
+    assert_eq!(labels(&completion), ["bad.obj", "tri.obj"]);
     assert_eq!(
         completion["result"][0]["textEdit"]["range"],
         range((5, 27), (5, 27))
