@@ -14,6 +14,7 @@ use crate::lsp::documents::{Document, range_of};
 use crate::scene::field_docs;
 use crate::scene::format::SCENE_SCHEMA;
 use crate::scene::load::{LoadOptions, NamedMaterial, scene_materials};
+use crate::scene::locate::fields_in_group;
 
 /// At most this many files are offered from one folder.
 const MAX_PATHS: usize = 500;
@@ -41,8 +42,14 @@ pub fn complete(document: &Document, offset: usize) -> Vec<CompletionItem> {
             let Some(fields) = (SCENE_SCHEMA.fields)(cursor.holder.as_deref(), cursor.name.as_deref()) else {
                 return Vec::new();
             };
+            // Fields already written are not offered again (a field may be given once).
+            let written = cursor
+                .group_open
+                .and_then(|open| fields_in_group(text, open))
+                .unwrap_or_default();
             fields
                 .iter()
+                .filter(|field| !written.iter().any(|w| w == *field))
                 .map(|field| {
                     let doc = field_docs::field_doc(cursor.holder.as_deref(), cursor.name.as_deref(), field);
                     CompletionItem {

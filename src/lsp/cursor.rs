@@ -28,6 +28,8 @@ pub struct Cursor {
     pub holder: Option<String>,
     /// The name written before the innermost `(`: `Spot`, `Sphere`, `Scene`...
     pub name: Option<String>,
+    /// Where the innermost open bracket is.
+    pub group_open: Option<usize>,
     /// The token under the cursor, if any: an identifier or a string (possibly not closed yet).
     pub token: Option<Range<usize>>,
     pub token_kind: TokenKind,
@@ -113,6 +115,7 @@ fn cursor(text: &str, token: Option<Range<usize>>, offset: usize) -> Cursor {
     let holder = group.as_ref().and_then(|g| g.holder.clone());
     let name = group.as_ref().and_then(|g| g.name.clone());
     let bracket = group.as_ref().map(|g| g.bracket);
+    let group_open = group.as_ref().map(|g| g.open);
     let role = match (bracket, context.value_of) {
         (Some('('), None)
             if holder.as_deref() == Some("mesh") && matches!(name.as_deref(), Some("Obj" | "Gltf")) =>
@@ -127,6 +130,7 @@ fn cursor(text: &str, token: Option<Range<usize>>, offset: usize) -> Cursor {
         role,
         holder,
         name,
+        group_open,
         token,
         token_kind,
     }
@@ -177,6 +181,15 @@ mod tests {
             (c.holder.as_deref(), c.role),
             (Some("materials"), Role::FieldName)
         );
+    }
+
+    #[test]
+    fn the_fields_written_in_the_cursor_s_group_are_found() {
+        let (text, c) = typing("(objects: [(mesh: Cube, r#shading: Flat, sha|)])");
+        let written = crate::scene::locate::fields_in_group(&text, c.group_open.unwrap());
+        assert_eq!(written, Some(vec!["mesh".to_owned(), "shading".to_owned()]));
+        assert_eq!(crate::scene::locate::fields_in_group("(mesh: \"a", 0), None);
+        assert_eq!(crate::scene::locate::fields_in_group("[1]", 0), None);
     }
 
     #[test]

@@ -348,6 +348,10 @@ fn an_editor_session() {
     for field in ["shading", "material", "translate", "back_faces"] {
         assert!(items.contains(&field.to_owned()), "{field} in {items:?}");
     }
+    assert!(
+        !items.contains(&"mesh".to_owned()),
+        "`mesh` is written already: {items:?}"
+    );
     let shading = completion["result"]
         .as_array()
         .unwrap()
