@@ -58,7 +58,15 @@ pub enum Command {
     /// Measurements of the renderer: `report speed-error` (time against error), `report accuracy`.
     #[command(after_help = REPORT_EXAMPLES)]
     Report(crate::report::ReportArgs),
+    /// A language server for scene files (diagnostics as you type, completion, hover, go to
+    /// definition, outline) over standard input and output, for any editor's LSP client.
+    #[command(after_help = LSP_EXAMPLES)]
+    Lsp(crate::lsp::LspArgs),
 }
+
+const LSP_EXAMPLES: &str = "\
+Editors start it themselves; see README.md (VS Code, Neovim, Helix):
+  lampshade lsp                                            JSON-RPC on standard input and output";
 
 const RENDER_EXAMPLES: &str = "\
 Examples:
@@ -318,6 +326,7 @@ pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
         Command::Watch(args) => crate::watch::run(&args),
         Command::Bench(args) => crate::bench::run(&args),
         Command::Report(args) => crate::report::run(&args),
+        Command::Lsp(args) => crate::lsp::run(&args),
     }
 }
 

@@ -25,6 +25,7 @@ pub mod check;
 pub mod cli;
 pub mod diag;
 pub mod lighting;
+pub mod lsp;
 pub mod mesh;
 pub mod metrics;
 pub mod output;

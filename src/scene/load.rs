@@ -127,6 +127,16 @@ pub struct MeshCache {
 }
 
 impl MeshCache {
+    /// The mesh this cache holds for the file at `path` (whatever crease angle it was built
+    /// with), if a load put one there: what an editor's hover describes.
+    pub fn mesh_of_file(&self, path: &Path) -> Option<Arc<Mesh>> {
+        let key = canonical(path);
+        self.entries
+            .iter()
+            .find(|(entry_key, _)| entry_key.path == key)
+            .map(|(_, entry)| Arc::clone(&entry.mesh))
+    }
+
     /// How many times a mesh file was parsed through this cache (a hit parses nothing): what
     /// tests count to show that a file is parsed once.
     pub fn files_parsed(&self) -> usize {
@@ -278,6 +288,100 @@ pub fn load_scene_from_str(path: &Path, text: &str, options: &LoadOptions) -> Re
     load_scene_with(path, Some(text), options, &mut MeshCache::default())
 }
 
+/// Loads a scene whose text is `text`, as if it were the file at `path`, reusing unchanged
+/// meshes from `cache`: what an editor's unsaved buffer is checked with (`lampshade lsp`).
+pub fn load_scene_from_str_cached(
+    path: &Path,
+    text: &str,
+    options: &LoadOptions,
+    cache: &mut MeshCache,
+) -> Result<LoadedScene, LoadError> {
+    load_scene_with(path, Some(text), options, cache)
+}
+
+/// Only the first stage of loading `text` as the scene at `path`: ron's syntax and type
+/// checks (unknown fields and variants included), with the loader's diagnostics. It reads no
+/// other file, so an editor gets it within a keystroke whatever the scene names.
+pub fn parse_scene_text(path: &Path, text: &str) -> Result<(), LoadError> {
+    let mut cache = MeshCache::default();
+    let mut loader = Loader::new(path, Some(text), &LoadOptions::default(), &mut cache);
+    let parsed = loader
+        .read_source(path, None)
+        .and_then(|source| loader.parse::<SceneFile>(source, &format::SCENE_SCHEMA));
+    match parsed {
+        Some(_) => Ok(()),
+        None => Err(LoadError {
+            diagnostics: loader.diagnostics,
+            sources: loader.sources,
+            files_read: loader.files_read,
+        }),
+    }
+}
+
+/// A material a scene can name, resolved, and where it is defined.
+#[derive(Debug, Clone)]
+pub struct NamedMaterial {
+    /// The name as its table writes it (a preset's own name for presets).
+    pub name: String,
+    pub material: crate::scene::Material,
+    /// The file whose `materials` table defines it and the byte range of its key there;
+    /// `None` for a built-in material.
+    pub defined_at: Option<(PathBuf, std::ops::Range<usize>)>,
+}
+
+/// Every material the scene `text` (as the file at `path`) can name: its own table, its
+/// includes (read from disk) and the presets, each resolved through its `base` chain by the
+/// loader's own code. Names a table shadows come once, with the table's definition. Empty
+/// when the text does not parse.
+pub fn scene_materials(path: &Path, text: &str, options: &LoadOptions) -> Vec<NamedMaterial> {
+    let mut cache = MeshCache::default();
+    let mut loader = Loader::new(path, Some(text), options, &mut cache);
+    let Some(source) = loader.read_source(path, None) else {
+        return Vec::new();
+    };
+    let Some(file) = loader.parse::<SceneFile>(source, &format::SCENE_SCHEMA) else {
+        return Vec::new();
+    };
+    let mut table: HashMap<String, MaterialDefinition> = HashMap::new();
+    let mut include_stack = vec![canonical(path)];
+    loader.read_includes(&file.include, source, &[], &mut include_stack, &mut table);
+    loader.add_materials(&file.materials, source, &[], &mut table);
+    let resolved = loader.resolve_table(&table);
+    let mut materials: Vec<NamedMaterial> = table
+        .iter()
+        .filter_map(|(key, definition)| {
+            let recipe = resolved.get(key)?;
+            let Some(PathSegment::Key(name)) = definition.path.last() else {
+                return None;
+            };
+            let text = loader.sources.text(definition.source);
+            let map_path = &definition.path[..definition.path.len() - 1];
+            let defined_at = locate_keys(text, map_path, name)
+                .last()
+                .cloned()
+                .map(|span| (loader.sources.path(definition.source).to_path_buf(), span));
+            Some(NamedMaterial {
+                name: name.clone(),
+                material: recipe.resolve(),
+                defined_at,
+            })
+        })
+        .collect();
+    materials.sort_by(|a, b| a.name.cmp(&b.name));
+    for name in presets::preset_names() {
+        if !table.contains_key(name)
+            && let Some(recipe) = presets::preset(name)
+        {
+            materials.push(NamedMaterial {
+                name: name.to_owned(),
+                material: recipe.resolve(),
+                defined_at: None,
+            });
+        }
+    }
+    materials
+}
+
 /// Loads the scene at `path`, reusing unchanged meshes from `cache`.
 pub fn load_scene_cached(
     path: &Path,
@@ -293,20 +397,7 @@ fn load_scene_with(
     options: &LoadOptions,
     cache: &mut MeshCache,
 ) -> Result<LoadedScene, LoadError> {
-    let mut loader = Loader {
-        access: options.access.clone(),
-        memory_budget: options.max_memory.unwrap_or(limits::DEFAULT_MEMORY_BUDGET),
-        scene_text: text.map(str::to_owned),
-        scene_path: path.to_path_buf(),
-        sources: Sources::new(),
-        diagnostics: Vec::new(),
-        files_read: Vec::new(),
-        cache,
-        parsed_files: HashMap::new(),
-        meshes_reported: HashSet::new(),
-        textures: Vec::new(),
-        texture_paths: HashMap::new(),
-    };
+    let mut loader = Loader::new(path, text, options, cache);
     let mut scene = loader.load(options);
     if let (Some(scene), Some(model)) = (&mut scene, options.model) {
         scene.override_lighting_model(model);
@@ -379,6 +470,25 @@ struct At<'p> {
 impl<'p> At<'p> {
     fn new(source: SourceId, path: &'p [PathSegment]) -> Self {
         At { source, path }
+    }
+}
+
+impl<'c> Loader<'c> {
+    fn new(path: &Path, text: Option<&str>, options: &LoadOptions, cache: &'c mut MeshCache) -> Self {
+        Loader {
+            access: options.access.clone(),
+            memory_budget: options.max_memory.unwrap_or(limits::DEFAULT_MEMORY_BUDGET),
+            scene_text: text.map(str::to_owned),
+            scene_path: path.to_path_buf(),
+            sources: Sources::new(),
+            diagnostics: Vec::new(),
+            files_read: Vec::new(),
+            cache,
+            parsed_files: HashMap::new(),
+            meshes_reported: HashSet::new(),
+            textures: Vec::new(),
+            texture_paths: HashMap::new(),
+        }
     }
 }
 

@@ -233,6 +233,24 @@ pub fn surroundings(source: &str, offset: usize) -> Surroundings {
     }
 }
 
+/// The field names written in the `( )` group whose `(` is at byte `open`, in order (what an
+/// editor leaves out of the fields it offers); `None` when the group cannot be read to its end.
+pub fn fields_in_group(source: &str, open: usize) -> Option<Vec<String>> {
+    let mut walker = Walker::new(source);
+    walker.pos = open;
+    if walker.next()?.kind != Kind::Open(b'(') {
+        return None;
+    }
+    let entries = walker.group_entries(b')')?;
+    let names = entries
+        .iter()
+        .filter_map(|entry| entry.key.clone())
+        .filter_map(|key| source.get(key))
+        .map(|name| strip_raw(name).to_owned())
+        .collect();
+    Some(names)
+}
+
 /// The byte range of the value that starts at `offset` (`(0, 0.1, 0)`, `"a"`, `Sphere(...)`),
 /// and the ranges of its positional elements when it is a bracketed group without field names.
 pub fn value_and_elements(source: &str, offset: usize) -> Option<(Range<usize>, Vec<Range<usize>>)> {

@@ -6,6 +6,7 @@
 //! materials resolved, meshes loaded), so rendering a `Scene` cannot fail.
 
 pub mod access;
+pub mod field_docs;
 pub mod format;
 pub mod limits;
 pub mod load;

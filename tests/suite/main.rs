@@ -11,6 +11,7 @@
 //!   library behind `lampshade check`;
 //! - `watch`: `lampshade watch` as a process on a temporary folder (save styles, includes, meshes,
 //!   errors and recovery, Ctrl-C, the preview server);
+//! - `lsp`: `lampshade lsp` driven over standard input and output as an editor drives it;
 //! - `watch_browser`: the preview page in headless Chromium (skipped without Chromium).
 
 mod check;
@@ -18,6 +19,7 @@ mod cli;
 mod golden;
 mod hard_cases;
 mod loading;
+mod lsp;
 mod outputs;
 mod render;
 mod robustness;
