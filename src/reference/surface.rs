@@ -1,7 +1,7 @@
 //! What the reference reads from a surface besides its geometry, in `f64`: textures at level 0,
 //! normal maps and Slerp, each the transcription of the rasterizer's definition
-//! (`texture::Texture::sample`'s bilinear step and wrap modes, `render::shade::perturb_normal`,
-//! `render::shade::slerp`) without its `f32` rounding or its mipmaps.
+//! (`texture::Texture::sample`'s bilinear step and wrap modes, `render::normals::perturb_normal`,
+//! `render::normals::slerp`) without its `f32` rounding or its mipmaps.
 
 use glam::{DVec2, DVec3, DVec4};
 
@@ -32,7 +32,7 @@ pub fn bilinear_level0(texture: &Texture, uv: DVec2, sampler: &Sampler) -> DVec4
     top.lerp(bottom, fy)
 }
 
-/// `render::shade::perturb_normal` in `f64`: the tangent-space texel (`rgb` in [0, 1]) applied
+/// `render::normals::perturb_normal` in `f64`: the tangent-space texel (`rgb` in [0, 1]) applied
 /// to the frame of `normal` and `tangent` (`w` the bitangent's handedness), `scale` glTF's.
 pub fn perturb_normal(normal: DVec3, tangent: DVec4, texel: DVec3, scale: f64) -> DVec3 {
     let t = (tangent.truncate() - normal * normal.dot(tangent.truncate())).normalize_or_zero();
@@ -46,7 +46,7 @@ pub fn perturb_normal(normal: DVec3, tangent: DVec4, texel: DVec3, scale: f64) -
     perturbed.try_normalize().unwrap_or(normal)
 }
 
-/// `render::shade::slerp_triangle` in `f64`: the first two normals slerped by their weights,
+/// `render::normals::slerp_triangle` in `f64`: the first two normals slerped by their weights,
 /// then the result towards the third.
 pub fn slerp_triangle(normals: [DVec3; 3], weights: DVec3) -> DVec3 {
     let first_two = weights.x + weights.y;
@@ -58,7 +58,7 @@ pub fn slerp_triangle(normals: [DVec3; 3], weights: DVec3) -> DVec3 {
     slerp(edge, normals[2], weights.z)
 }
 
-/// `render::shade::slerp` in `f64` (the same form, stable near 0 and π).
+/// `render::normals::slerp` in `f64` (the same form, stable near 0 and π).
 fn slerp(n0: DVec3, n1: DVec3, t: f64) -> DVec3 {
     const SMALL_SINE: f64 = 1e-12;
     let cos = n0.dot(n1);
@@ -110,12 +110,12 @@ mod tests {
         ];
         let weights = Vec3::new(0.2, 0.3, 0.5);
         let exact = slerp_triangle(normals.map(|n| n.as_dvec3()), weights.as_dvec3());
-        let raster = crate::render::shade::slerp_triangle(normals, weights);
+        let raster = crate::render::normals::slerp_triangle(normals, weights);
         assert!((exact - raster.as_dvec3()).length() < 1e-6);
         let tangent = Vec4::new(1.0, 0.0, 0.0, -1.0);
         let texel = Vec3::new(0.7, 0.3, 0.9);
         let exact = perturb_normal(DVec3::Z, tangent.as_dvec4(), texel.as_dvec3(), 0.8);
-        let raster = crate::render::shade::perturb_normal(Vec3::Z, tangent, texel, 0.8);
+        let raster = crate::render::normals::perturb_normal(Vec3::Z, tangent, texel, 0.8);
         assert!((exact - raster.as_dvec3()).length() < 1e-6);
     }
 }
