@@ -12,8 +12,10 @@
 //! - `watch`: `lampshade watch` as a process on a temporary folder (save styles, includes, meshes,
 //!   errors and recovery, Ctrl-C, the preview server);
 //! - `lsp`: `lampshade lsp` driven over standard input and output as an editor drives it;
-//! - `watch_browser`: the preview page in headless Chromium (skipped without Chromium).
+//! - `watch_browser`: the preview page in headless Chromium (skipped without Chromium);
+//!   `browser` drives Chromium for it.
 
+mod browser;
 mod check;
 mod cli;
 mod golden;
