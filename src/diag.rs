@@ -439,8 +439,8 @@ fn reword_common_mistake(
     // "`width`" when the field is known, else "this value".
     let subject = |field: Option<&str>| field.map_or("this value".to_owned(), |f| format!("`{f}`"));
 
-    // Nothing but whitespace and comments.
-    if around.previous.is_none() && around.token.is_none() {
+    // Nothing but whitespace and comments (a stray `/` that starts no comment is something).
+    if around.previous.is_none() && around.token.is_none() && stray.is_none() {
         let content_end = text.trim_end().len();
         return reworded(
             if text.trim().is_empty() {
@@ -455,6 +455,16 @@ fn reword_common_mistake(
                 schema.example
             )],
             content_end..content_end,
+        );
+    }
+
+    // A `/` that starts neither `//` nor `/*`: ron stumbles on the character after it.
+    if stray == Some('/') && !text[start..].starts_with("//") && !text[start..].starts_with("/*") {
+        return reworded(
+            "`/` starts no comment here".to_owned(),
+            "not a comment",
+            vec!["a comment is `// …` to the end of the line, or `/* … */`".to_owned()],
+            start..start + 1,
         );
     }
 
@@ -1431,6 +1441,12 @@ mod tests {
                 "the file holds only comments",
                 "A test scene is one value",
                 "",
+            ),
+            (
+                "/, / not a comment\n(camera: 1)",
+                "`/` starts no comment here",
+                "a comment is `// …`",
+                "/",
             ),
             (
                 "{\"camera\": 1}",
