@@ -8,7 +8,9 @@
 //!   text ([`documents`]); everything it does per keystroke reads no file except the includes
 //!   for material names.
 //! - Diagnostics ([`diagnostics`]) come in two stages: the parse on the request thread, the full
-//!   load (meshes, textures, with a mesh cache) on a checker thread, newest version only.
+//!   load (meshes, textures, with a mesh cache) on a checker thread, newest version only. A
+//!   material library (`Materials(...)`) open on its own is checked whole on the request thread
+//!   ([`crate::scene::load::check_library_text`]: it reads only its includes).
 //! - Completion, hover and navigation read what is at the cursor with the loader's own tolerant
 //!   reader ([`cursor`]) and answer from the format's schema, the reference's field tables
 //!   ([`crate::scene::field_docs`]) and the loader's material resolution.
@@ -23,6 +25,7 @@ pub mod documents;
 pub mod hover;
 pub mod navigation;
 
+use std::collections::HashMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Arc;
 
@@ -44,7 +47,7 @@ use serde::de::DeserializeOwned;
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK};
 use crate::lsp::diagnostics::{Checker, Publisher, to_lsp};
 use crate::lsp::documents::{Documents, offset_of};
-use crate::scene::load::{LoadOptions, parse_scene_text};
+use crate::scene::load::{LoadOptions, check_library_text, parse_scene_text};
 
 /// `lampshade lsp`'s arguments.
 #[derive(Debug, clap::Args)]
@@ -231,12 +234,17 @@ impl Server {
         let Some(document) = self.documents.get_mut(uri) else {
             return;
         };
+        self.publisher.saw(uri, document.version);
         if is_library(&document.text) {
-            // A library's problems are found, and published for it, by the scenes that
-            // include it (as saved on disk), which know how it is used.
+            // A library on its own: everything but how scenes use it, on the unsaved text. Its
+            // includes are small files, so this runs on the request thread.
+            let diagnostics = match check_library_text(&document.path, &document.text) {
+                Ok(()) => HashMap::new(),
+                Err(error) => to_lsp(&error),
+            };
+            self.publisher.publish(uri, document.version, diagnostics);
             return;
         }
-        self.publisher.saw(uri, document.version);
         match parse_scene_text(&document.path, &document.text) {
             Err(error) => self.publisher.publish(uri, document.version, to_lsp(&error)),
             Ok(()) => {

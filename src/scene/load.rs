@@ -318,6 +318,31 @@ pub fn parse_scene_text(path: &Path, text: &str) -> Result<(), LoadError> {
     }
 }
 
+/// Checks `text` as the material library at `path`, on its own: its syntax and fields, its
+/// includes (read from disk), duplicate names, `base` chains and every value, with the
+/// diagnostics a scene including it would give. What an editor shows for an open library.
+pub fn check_library_text(path: &Path, text: &str) -> Result<(), LoadError> {
+    let mut cache = MeshCache::default();
+    let mut loader = Loader::new(path, Some(text), &LoadOptions::default(), &mut cache);
+    if let Some(source) = loader.read_source(path, None)
+        && let Some(library) = loader.parse::<MaterialLibraryFile>(source, &format::LIBRARY_SCHEMA)
+    {
+        let mut table: HashMap<String, MaterialDefinition> = HashMap::new();
+        let mut include_stack = vec![canonical(path)];
+        loader.read_includes(&library.include, source, &[], &mut include_stack, &mut table);
+        loader.add_materials(&library.materials, source, &[], &mut table);
+        loader.resolve_table(&table);
+    }
+    if loader.diagnostics.is_empty() {
+        return Ok(());
+    }
+    Err(LoadError {
+        diagnostics: loader.diagnostics,
+        sources: loader.sources,
+        files_read: loader.files_read,
+    })
+}
+
 /// A material a scene can name, resolved, and where it is defined.
 #[derive(Debug, Clone)]
 pub struct NamedMaterial {

@@ -464,3 +464,53 @@ fn an_editor_session() {
 
     client.shut_down();
 }
+
+/// A material library opened by itself is checked on its unsaved text (syntax, fields, `base`
+/// chains), and the edit that fixes it clears the diagnostics.
+#[test]
+fn a_library_opened_on_its_own_is_checked() {
+    let folder = tempfile::tempdir().unwrap();
+    let folder = folder.path().canonicalize().unwrap();
+    let library_path = folder.join("lib.ron");
+    std::fs::write(&library_path, LIBRARY).unwrap();
+    let library = uri(&library_path);
+    let mut client = Client::start();
+
+    client.notify(
+        "textDocument/didOpen",
+        json!({ "textDocument": { "uri": library, "languageId": "ron", "version": 1, "text": LIBRARY } }),
+    );
+    let diagnostics = client.diagnostics(&library, |list| !list.is_empty());
+    assert_eq!(diagnostics.len(), 1, "{diagnostics:#?}");
+    assert_eq!(diagnostics[0]["range"], range((2, 35), (2, 44)));
+    let message = diagnostics[0]["message"].as_str().unwrap();
+    assert!(message.starts_with("unknown field `shinyness`"), "{message}");
+
+    // Past the syntax: a `base` that loops is found without any scene.
+    let looping = LIBRARY
+        .replace("shinyness", "shininess")
+        .replace("base: \"chrome\"", "base: \"brushed\"");
+    client.notify(
+        "textDocument/didChange",
+        json!({ "textDocument": { "uri": library, "version": 2 }, "contentChanges": [{ "text": looping }] }),
+    );
+    let diagnostics = client.diagnostics(&library, |list| !list.is_empty());
+    let message = diagnostics[0]["message"].as_str().unwrap();
+    assert!(
+        message.contains("material `brushed` is its own base"),
+        "{diagnostics:#?}"
+    );
+
+    let fixed = LIBRARY.replace("shinyness", "shininess");
+    client.notify(
+        "textDocument/didChange",
+        json!({ "textDocument": { "uri": library, "version": 3 }, "contentChanges": [{ "text": fixed }] }),
+    );
+    client.diagnostics(&library, |list| list.is_empty());
+    assert_eq!(
+        std::fs::read_to_string(&library_path).unwrap(),
+        LIBRARY,
+        "the file on disk is untouched"
+    );
+    client.shut_down();
+}
