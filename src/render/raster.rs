@@ -34,6 +34,7 @@
 
 use crate::render::TILE_SIZE;
 use crate::render::bin::{RasterChunk, raster_id};
+use crate::render::lanes::{Floats, Ints, LANES};
 use glam::Vec3;
 
 /// Fractional bits of the fixed-point screen coordinates.
@@ -662,6 +663,14 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
         std::array::from_fn(|k| biased.iter().map(|b| b[k]).max().unwrap_or(0)),
         std::array::from_fn(|k| biased.iter().map(|b| b[k]).min().unwrap_or(0)),
     ];
+    if S >= LANES / 2 && S % (LANES / 2) == 0 {
+        let lane_edges = LaneEdges::new(&edges, &offsets, area);
+        if let Some(lane_edges) = lane_edges {
+            let depths = [d0, d1, d2];
+            rasterize_sample_lanes::<S>(&lane_edges, depths, inv_area, area, id, visibility);
+            return;
+        }
+    }
     let tile_width = rect.width() as usize;
     let columns = (area.x1 - area.x0) as usize;
     for py in area.y0..area.y1 {
@@ -693,6 +702,162 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
         for edge in &mut edges {
             edge.row_start += edge.step_y;
         }
+    }
+}
+
+/// A triangle's edge functions over one tile area in `i32`, laid out for
+/// [`rasterize_sample_lanes`]: a block of pixels (two at four samples, one at eight or more)
+/// whose samples fill whole groups of [`LANES`] slots of the visibility buffer.
+struct LaneEdges {
+    /// Each edge's value at the centre of the area's first pixel.
+    row_start: [i32; 3],
+    step_x: [i32; 3],
+    step_y: [i32; 3],
+    /// Per group of a block and edge, each lane's offset from the block's first pixel centre:
+    /// its sample's offset plus its pixel's steps.
+    offsets: [[Ints; 3]; 2],
+    /// The same minus the fill rule's bias (`min_inside`): the lane's sample is inside where
+    /// all three are ≥ 0 once the centre is added.
+    biased: [[Ints; 3]; 2],
+    /// Per pixel of a block and edge, the bias of the sample nearest the edge's inside (from
+    /// the block's first pixel centre): no sample of the pixel is inside if one is negative.
+    nearest: [[i32; 3]; LANES / 4],
+}
+
+impl LaneEdges {
+    /// The layout for `S` samples per pixel with edge-function offsets `sample_offsets`, or
+    /// `None` where some value the lane loop forms over `area` might not fit in `i32` (large
+    /// triangles): the `i64` loop takes those. Converting an `i32` to `f32` rounds exactly as
+    /// converting the same value held in an `i64`, so the depths keep their bits.
+    fn new<const S: usize>(edges: &[Edge; 3], sample_offsets: &[[i64; 3]; S], area: PixelRect) -> Option<Self> {
+        let block_pixels = (LANES / S).max(1);
+        let groups = (S * block_pixels) / LANES;
+        let (columns, rows) = (i64::from(area.x1 - area.x0), i64::from(area.y1 - area.y0));
+        // Every value formed is a centre (the row's start plus whole steps, one block past the
+        // last column and one row past the last) plus a lane's offset (its sample's offset plus
+        // at most a block's steps) and the bias (0 or 1).
+        let fits = edges.iter().enumerate().all(|(k, edge)| {
+            let reach = sample_offsets.iter().map(|offset| offset[k].abs()).max().unwrap_or(0);
+            let bound = edge.row_start.abs()
+                + (columns + 2 * block_pixels as i64) * edge.step_x.abs()
+                + (rows + 1) * edge.step_y.abs()
+                + reach
+                + 1;
+            bound <= i64::from(i32::MAX)
+        });
+        if !fits {
+            return None;
+        }
+        let narrow = |value: i64| value as i32;
+        let mut offsets = [[Ints::splat(0); 3]; 2];
+        let mut biased = [[Ints::splat(0); 3]; 2];
+        for group in 0..groups {
+            for k in 0..3 {
+                let lane_offset = |lane: usize| {
+                    let slot = group * LANES + lane;
+                    sample_offsets[slot % S][k] + (slot / S) as i64 * edges[k].step_x
+                };
+                offsets[group][k] = Ints(std::array::from_fn(|lane| narrow(lane_offset(lane))));
+                biased[group][k] =
+                    Ints(std::array::from_fn(|lane| narrow(lane_offset(lane) - edges[k].min_inside)));
+            }
+        }
+        let nearest = std::array::from_fn(|pixel| {
+            std::array::from_fn(|k| {
+                let best = sample_offsets.iter().map(|offset| offset[k]).max().unwrap_or(0);
+                narrow(best - edges[k].min_inside + pixel as i64 * edges[k].step_x)
+            })
+        });
+        Some(LaneEdges {
+            row_start: edges.map(|edge| narrow(edge.row_start)),
+            step_x: edges.map(|edge| narrow(edge.step_x)),
+            step_y: edges.map(|edge| narrow(edge.step_y)),
+            offsets,
+            biased,
+            nearest,
+        })
+    }
+}
+
+/// [`rasterize_samples`]'s loop in lanes for `S` = 4, 8 or 16 samples per pixel, over a
+/// triangle whose edge values fit in `i32` ([`LaneEdges::new`]): a block's samples (two
+/// pixels at four samples, else one pixel) are tested and their depths interpolated eight at
+/// a time, in the same operations as the scalar loop, and the nearer ones written with a
+/// select. At four samples a row with an odd number of pixels ends with a pixel of its own,
+/// tested sample by sample as the scalar loop does.
+fn rasterize_sample_lanes<const S: usize>(
+    edges: &LaneEdges,
+    [d0, d1, d2]: [f32; 3],
+    inv_area: f32,
+    area: PixelRect,
+    id: u32,
+    visibility: &mut Visibility,
+) {
+    let rect = visibility.rect;
+    let block_pixels = (LANES / S).max(1);
+    let block_slots = block_pixels * S;
+    let groups = block_slots / LANES;
+    let tile_width = rect.width() as usize;
+    let columns = (area.x1 - area.x0) as usize;
+    let [weight0, weight1, weight2, inv_area_lanes] = [d0, d1, d2, inv_area].map(Floats::splat);
+    let not_negative = Ints::splat(-1);
+    let id_lanes = Ints::splat(id as i32);
+    let mut row_start = edges.row_start;
+    for py in area.y0..area.y1 {
+        let row = ((py - rect.y0) as usize * tile_width + (area.x0 - rect.x0) as usize) * S;
+        let depths = &mut visibility.depth[row..row + columns * S];
+        let ids = &mut visibility.triangle[row..row + columns * S];
+        let mut centre = row_start;
+        let mut depth_blocks = depths.chunks_exact_mut(block_slots);
+        let mut id_blocks = ids.chunks_exact_mut(block_slots);
+        for (block_depths, block_ids) in (&mut depth_blocks).zip(&mut id_blocks) {
+            let some_inside = edges.nearest[..block_pixels].iter().any(|nearest| {
+                ((centre[0] + nearest[0]) | (centre[1] + nearest[1]) | (centre[2] + nearest[2])) >= 0
+            });
+            if some_inside {
+                for group in 0..groups {
+                    let at = |k: usize| Ints::splat(centre[k]);
+                    let [o0, o1, o2] = edges.offsets[group];
+                    let [b0, b1, b2] = edges.biased[group];
+                    let inside = (at(0) + b0)
+                        .gt(not_negative)
+                        .and((at(1) + b1).gt(not_negative))
+                        .and((at(2) + b2).gt(not_negative));
+                    let depth = ((at(0) + o0).to_floats() * weight0
+                        + (at(1) + o1).to_floats() * weight1
+                        + (at(2) + o2).to_floats() * weight2)
+                        * inv_area_lanes;
+                    let slots = group * LANES..(group + 1) * LANES;
+                    let group_depths: &mut [f32; LANES] =
+                        (&mut block_depths[slots.clone()]).try_into().expect("a group of lanes");
+                    let group_ids: &mut [u32; LANES] =
+                        (&mut block_ids[slots]).try_into().expect("a group of lanes");
+                    let old = Floats(*group_depths);
+                    let nearer = inside.and(depth.gt(old));
+                    if nearer.any() {
+                        *group_depths = nearer.select(depth, old).0;
+                        let old_ids = Ints(bytemuck::cast(*group_ids));
+                        *group_ids = bytemuck::cast(nearer.select_ints(id_lanes, old_ids).0);
+                    }
+                }
+            }
+            centre = std::array::from_fn(|k| centre[k] + block_pixels as i32 * edges.step_x[k]);
+        }
+        // A last pixel of its own (four samples, an odd number of columns).
+        let tail = depth_blocks.into_remainder().iter_mut().zip(id_blocks.into_remainder());
+        for (sample, (depth_slot, id_slot)) in tail.enumerate() {
+            let offset = |k: usize| edges.offsets[0][k].0[sample];
+            let bias = |k: usize| edges.biased[0][k].0[sample];
+            if ((centre[0] + bias(0)) | (centre[1] + bias(1)) | (centre[2] + bias(2))) >= 0 {
+                let [e0, e1, e2] = std::array::from_fn(|k| centre[k] + offset(k));
+                let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
+                if depth > *depth_slot {
+                    *depth_slot = depth;
+                    *id_slot = id;
+                }
+            }
+        }
+        row_start = std::array::from_fn(|k| row_start[k] + edges.step_y[k]);
     }
 }
 
