@@ -280,7 +280,10 @@ fn render_frame(
                 let raster_started = Instant::now();
                 // A tile no triangle reaches is background: its visibility buffers (128 KiB at
                 // four samples) are neither cleared nor read.
-                let empty = frame.raster.iter().all(|chunk| chunk.tile_triangles(index).is_empty());
+                let empty = frame
+                    .raster
+                    .iter()
+                    .all(|chunk| chunk.tile_triangles(index).is_empty());
                 if !empty {
                     visibility.rasterize(rect, pattern, &frame.raster, index);
                 }
