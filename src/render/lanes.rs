@@ -125,6 +125,12 @@ impl Ints {
     pub fn gt(self, other: Self) -> Mask {
         backend::gt_ints(self, other)
     }
+
+    /// Each lane `as f32` (rounded to nearest, ties to even, as Rust's conversion is).
+    #[inline(always)]
+    pub fn to_floats(self) -> Floats {
+        backend::to_floats(self)
+    }
 }
 
 impl Mask {
@@ -343,6 +349,11 @@ mod portable {
     pub fn gt_ints(a: Ints, b: Ints) -> Mask {
         Mask(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
     }
+
+    #[inline(always)]
+    pub fn to_floats(a: Ints) -> Floats {
+        Floats(a.0.map(|i| i as f32))
+    }
 }
 
 /// The lane operations as SSE instructions on the two four-lane halves of the arrays. SSE and
@@ -404,6 +415,15 @@ mod sse {
     #[inline(always)]
     pub fn gt_ints(a: Ints, b: Ints) -> Mask {
         Mask(int_halves!(_mm_cmpgt_epi32(a, b)))
+    }
+
+    /// `cvtdq2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's `as f32`.
+    #[inline(always)]
+    pub fn to_floats(a: Ints) -> Floats {
+        let halves: [__m128i; 2] = bytemuck::cast(a.0);
+        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+        let converted = |half: __m128i| unsafe { _mm_cvtepi32_ps(half) };
+        Floats(bytemuck::cast(halves.map(converted)))
     }
 
     #[inline(always)]
@@ -1026,6 +1046,7 @@ mod tests {
             assert_eq!(i - j, portable::sub_ints(i, j), "sub_ints");
             assert_eq!(i.and(j), portable::and_ints(i, j), "and_ints");
             assert_eq!(i.gt(j), portable::gt_ints(i, j), "gt_ints");
+            assert_eq!(bits(i.to_floats()), bits(portable::to_floats(i)), "to_floats");
         }
     }
 

@@ -276,16 +276,29 @@ fn render_frame(
             let mut times = BandTimes::default();
             for column in 0..tiles.columns as usize {
                 let index = tile_row * tiles.columns as usize + column;
+                let rect = tiles.rect(index);
                 let raster_started = Instant::now();
-                visibility.rasterize(tiles.rect(index), pattern, &frame.raster, index);
+                // A tile no triangle reaches is background: its visibility buffers (128 KiB at
+                // four samples) are neither cleared nor read.
+                let empty = frame
+                    .raster
+                    .iter()
+                    .all(|chunk| chunk.tile_triangles(index).is_empty());
+                if !empty {
+                    visibility.rasterize(rect, pattern, &frame.raster, index);
+                }
                 let shade_started = Instant::now();
-                times.shaded += shade::shade_tile(
-                    &frame,
-                    &visibility,
-                    scene.image.background,
-                    &mut target,
-                    &mut scratch,
-                );
+                if empty {
+                    shade::fill_background(rect, scene.image.background, &mut target);
+                } else {
+                    times.shaded += shade::shade_tile(
+                        &frame,
+                        &visibility,
+                        scene.image.background,
+                        &mut target,
+                        &mut scratch,
+                    );
+                }
                 times.raster += shade_started - raster_started;
                 times.shade += shade_started.elapsed();
                 progress.tile_done();

@@ -345,6 +345,17 @@ pub fn shade_tile<'f>(
     }
 }
 
+/// Writes the pixels `rect` of `target` as a tile no triangle reaches: the background,
+/// uncovered (what [`shade_tile`] writes for such a tile, without its buffers).
+pub fn fill_background(rect: PixelRect, background: Vec3, target: &mut TileTarget) {
+    let tile_width = rect.width() as usize;
+    for row in 0..rect.height() as usize {
+        let row_start = row * target.stride + rect.x0 as usize;
+        target.color[row_start..row_start + tile_width].fill(background);
+        target.covered[row_start..row_start + tile_width].fill(false);
+    }
+}
+
 /// [`shade_tile`] with several samples per pixel, in three passes. The first finds each pixel's
 /// distinct triangles and where each is shaded: the mean of the offsets of the samples it
 /// covers, rounded down to 1/256 pixel. The second shades those points triangle by triangle
@@ -638,12 +649,7 @@ fn shade_single_sample<'f>(
     let stride = target.stride;
     let count = visibility.raster_ids.len();
     if count == 0 {
-        // No triangle reaches the tile: all background.
-        for row in 0..rect.height() as usize {
-            let row_start = row * stride + rect.x0 as usize;
-            target.color[row_start..row_start + tile_width].fill(background);
-            target.covered[row_start..row_start + tile_width].fill(false);
-        }
+        fill_background(rect, background, target);
         return 0;
     }
     let TileScratch {
