@@ -277,7 +277,13 @@ fn count_range(range: &str) -> RangeCounts {
     };
     if range.is_ascii() {
         for line in AsciiLines::new(range) {
-            count(AsciiWords::new(line).next());
+            // A scan's lines, told by their first two bytes.
+            let keyword = match line.as_bytes() {
+                [b'v', blank, ..] if is_blank(*blank) => Some("v"),
+                [b'f', blank, ..] if is_blank(*blank) => Some("f"),
+                _ => AsciiWords::new(line).next(),
+            };
+            count(keyword);
         }
     } else {
         for line in range.lines() {
