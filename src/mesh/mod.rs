@@ -21,6 +21,7 @@
 //!   `textures`, and reads a UV set the mesh has (uv_set 0 only when `uvs` is non-empty, 1
 //!   only when `uvs1` is); a material with a normal map comes with `tangents`.
 
+mod atan;
 pub mod closed;
 pub mod gltf;
 pub mod normals;

@@ -54,7 +54,7 @@ use std::ops::Range;
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
-use super::Mesh;
+use super::{Mesh, atan};
 
 /// The crease angle used when a scene does not set one: between the 90° of a box's edges
 /// (kept hard) and the few degrees between neighbouring faces of a tessellated curve
@@ -457,7 +457,7 @@ fn zero_normalised_bits(x: f32) -> u32 {
 
 /// The interior angle of a triangle at `corner`, between the edges towards `next` and
 /// `previous`; 0 when an edge has no length. `atan2(|u×v|, u·v)` stays accurate near 0 and
-/// π, where `acos(u·v)` loses precision.
+/// π, where `acos(u·v)` loses precision; it is [`atan::atan2`], libm's bits inlined.
 fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
     let u = unit_or_zero(next - corner);
     let v = unit_or_zero(previous - corner);
@@ -466,7 +466,7 @@ fn interior_angle(corner: Vec3, next: Vec3, previous: Vec3) -> f32 {
 
 /// The angle between two unit (or zero) vectors, as [`interior_angle`] measures it.
 fn angle_between_units(u: Vec3, v: Vec3) -> f32 {
-    u.cross(v).length().atan2(u.dot(v))
+    atan::atan2(u.cross(v).length(), u.dot(v))
 }
 
 /// `[interior_angle(a, b, c), interior_angle(b, c, a), interior_angle(c, a, b)]` with the same

@@ -277,7 +277,13 @@ fn count_range(range: &str) -> RangeCounts {
     };
     if range.is_ascii() {
         for line in AsciiLines::new(range) {
-            count(AsciiWords::new(line).next());
+            // A scan's lines, told by their first two bytes.
+            let keyword = match line.as_bytes() {
+                [b'v', blank, ..] if is_blank(*blank) => Some("v"),
+                [b'f', blank, ..] if is_blank(*blank) => Some("f"),
+                _ => AsciiWords::new(line).next(),
+            };
+            count(keyword);
         }
     } else {
         for line in range.lines() {
@@ -335,9 +341,10 @@ impl<'a> AsciiWords<'a> {
     }
 }
 
-/// The ASCII characters `char::is_whitespace` accepts (vertical tab included).
+/// The ASCII characters `char::is_whitespace` accepts (vertical tab included). Most bytes of a
+/// mesh are digits, signs and points, above the space: one comparison tells them apart.
 fn is_blank(byte: u8) -> bool {
-    matches!(byte, b' ' | b'\t' | b'\n' | b'\x0B' | b'\x0C' | b'\r')
+    byte <= b' ' && matches!(byte, b' ' | b'\t' | b'\n' | b'\x0B' | b'\x0C' | b'\r')
 }
 
 impl<'a> Iterator for AsciiWords<'a> {
@@ -400,6 +407,9 @@ fn parse_range(
     };
     if range.is_ascii() {
         for (index, line) in AsciiLines::new(range).enumerate() {
+            if parser.plain_statement(line.as_bytes()) {
+                continue;
+            }
             let mut words = AsciiWords::new(line);
             if let Some(keyword) = words.next() {
                 parser.statement(keyword, &mut words, first_line + index, || line)?;
@@ -426,6 +436,57 @@ struct RangeParser {
 }
 
 impl RangeParser {
+    /// The lines a scan is made of, `v x y z` and `f i j k…` with plain numbers and position
+    /// indices, read in one pass over their bytes (each number parsed as it is found instead
+    /// of cut out as a word first). `false`, with nothing read, for any other line and for one
+    /// these do not read exactly as [`RangeParser::statement`] would (an index out of range, a
+    /// number [`fast_f32`] leaves to `str::parse`, a `w`, fewer than three corners): it then
+    /// takes the general path, which also makes its errors.
+    fn plain_statement(&mut self, line: &[u8]) -> bool {
+        match line {
+            [b'v', blank, rest @ ..] if is_blank(*blank) => match plain_numbers(rest) {
+                Some(position) => {
+                    self.parsed.positions.push(Vec3::from_array(position));
+                    true
+                }
+                None => false,
+            },
+            [b'f', blank, rest @ ..] if is_blank(*blank) => {
+                let defined = self.defined[0] + self.parsed.positions.len();
+                self.corners.clear();
+                let mut at = 0;
+                loop {
+                    while at < rest.len() && is_blank(rest[at]) {
+                        at += 1;
+                    }
+                    if at == rest.len() {
+                        break;
+                    }
+                    let start = at;
+                    let mut index = 0usize;
+                    while at < rest.len() && rest[at].is_ascii_digit() && at - start < 18 {
+                        index = 10 * index + usize::from(rest[at] - b'0');
+                        at += 1;
+                    }
+                    let ends_word = at == rest.len() || is_blank(rest[at]);
+                    if at == start || !ends_word || !(1..=defined).contains(&index) {
+                        return false;
+                    }
+                    self.corners.push([(index - 1) as u32, ABSENT, ABSENT]);
+                }
+                if self.corners.len() < 3 {
+                    return false;
+                }
+                let first = self.corners[0];
+                for pair in self.corners[1..].windows(2) {
+                    self.parsed.triangles.push([first, pair[0], pair[1]]);
+                }
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// One statement: its `keyword`, the `words` after it, its line's number, and its line's
     /// text (only read for names and errors).
     fn statement<'a>(
@@ -554,6 +615,25 @@ fn parse_numbers<'a, const N: usize>(
     }
 }
 
+/// Exactly three numbers separated by blanks (and blanks around them), as [`fast_f32`] reads
+/// them; `None` for anything else.
+fn plain_numbers(text: &[u8]) -> Option<[f32; 3]> {
+    let mut numbers = [0.0f32; 3];
+    let mut at = 0;
+    for number in &mut numbers {
+        while at < text.len() && is_blank(text[at]) {
+            at += 1;
+        }
+        let (value, length) = fast_f32_prefix(&text[at..])?;
+        at += length;
+        if at < text.len() && !is_blank(text[at]) {
+            return None;
+        }
+        *number = value;
+    }
+    text[at..].iter().all(|&byte| is_blank(byte)).then_some(numbers)
+}
+
 /// One `v`, `v/vt`, `v//vn` or `v/vt/vn` word of a face, resolved against the element counts
 /// defined so far (positions, texture coordinates, normals).
 fn parse_corner(word: &str, defined: [usize; 3]) -> Result<Corner, String> {
@@ -565,11 +645,15 @@ fn parse_corner(word: &str, defined: [usize; 3]) -> Result<Corner, String> {
     let bytes = word.as_bytes();
     // The usual corner of a scan, a position index alone (`5123`), read directly; anything
     // else (and an index out of range, for its message) takes the general path below.
-    if bytes.len() <= 18 && bytes.iter().all(u8::is_ascii_digit) {
-        let index = bytes
-            .iter()
-            .fold(0usize, |index, &digit| 10 * index + usize::from(digit - b'0'));
-        if (1..=defined[0]).contains(&index) {
+    if bytes.len() <= 18 {
+        // Checked and read in one pass (the value is only used when every byte is a digit).
+        let mut index = 0usize;
+        let all_digits = bytes.iter().all(|&byte| {
+            let digit = byte.wrapping_sub(b'0');
+            index = index.wrapping_mul(10).wrapping_add(usize::from(digit));
+            digit < 10
+        });
+        if all_digits && (1..=defined[0]).contains(&index) {
             return Ok([(index - 1) as u32, ABSENT, ABSENT]);
         }
     }
@@ -674,6 +758,15 @@ pub(super) fn parse_f32(text: &str) -> Option<f32> {
 
 /// The shortcut of [`parse_f32`]; `None` when the text is not one it reads exactly.
 fn fast_f32(bytes: &[u8]) -> Option<f32> {
+    match fast_f32_prefix(bytes) {
+        Some((value, length)) if length == bytes.len() => Some(value),
+        _ => None,
+    }
+}
+
+/// [`fast_f32`] on the number `bytes` start with: its value and how many bytes it took (the
+/// caller checks what follows). `None` when those bytes are not a number the shortcut reads.
+fn fast_f32_prefix(bytes: &[u8]) -> Option<(f32, usize)> {
     const POWERS_OF_TEN: [f64; 23] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
         1e18, 1e19, 1e20, 1e21, 1e22,
@@ -729,7 +822,7 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
         }
         exponent += if exponent_negative { -written } else { written };
     }
-    if i != bytes.len() || mantissa >= 1 << 53 || exponent.unsigned_abs() > 22 {
+    if mantissa >= 1 << 53 || exponent.unsigned_abs() > 22 {
         return None;
     }
     let scale = POWERS_OF_TEN[exponent.unsigned_abs() as usize];
@@ -745,7 +838,7 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
         return None;
     }
     let value = value as f32;
-    Some(if negative { -value } else { value })
+    Some((if negative { -value } else { value }, i))
 }
 
 /// Which vertices of the assembled geometry came with a normal.
@@ -1255,6 +1348,79 @@ mod tests {
     fn check_f32(text: &str) {
         let expected = text.parse::<f32>().ok().map(f32::to_bits);
         assert_eq!(parse_f32(text).map(f32::to_bits), expected, "{text:?}");
+    }
+
+    #[test]
+    fn plain_lines_read_in_one_pass_as_the_general_path_reads_them() {
+        let parser = || RangeParser {
+            parsed: ParsedRange::default(),
+            defined: [4, 2, 0],
+            corners: Vec::new(),
+        };
+        let mut taken = 0;
+        for line in [
+            "v 1 2 3",
+            "v\t-0.777853  74.009689 1e-3\r",
+            "v 1 2 3 ",
+            "v .5 -2. +3e2",
+            "v 1 2 3 0.5",
+            "v 1 2 3 1 0 0",
+            "v 1 2",
+            "v 1 2 3x",
+            "v 1e39 0 0",
+            "v 0.1000000000000000055511151231257827 0 0",
+            "v 1 2 # comment",
+            "v nan 0 0",
+            " v 1 2 3",
+            "vt 1 2",
+            "f 1 2 3",
+            "f 1 2 3 4 4 3\r",
+            "f\t4 1   2 ",
+            "f 1 2",
+            "f 1 2 5",
+            "f 0 1 2",
+            "f 1 2 -1",
+            "f 1/1 2/2 3/1",
+            "f 1 2 3a",
+            "f 1 2 0000000000000000003",
+            "f 1 2 000000000000000003",
+            "g f 1 2 3",
+            "",
+        ] {
+            let mut general = parser();
+            let mut words = AsciiWords::new(line);
+            let general_result = match words.next() {
+                Some(keyword) => general.statement(keyword, &mut words, 1, || line),
+                None => Ok(()),
+            };
+            let mut plain = parser();
+            if plain.plain_statement(line.as_bytes()) {
+                taken += 1;
+                assert!(general_result.is_ok(), "{line:?}");
+                let bits = |positions: &[Vec3]| {
+                    positions
+                        .iter()
+                        .map(|p| p.to_array().map(f32::to_bits))
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(
+                    bits(&plain.parsed.positions),
+                    bits(&general.parsed.positions),
+                    "{line:?}"
+                );
+                assert_eq!(
+                    plain.parsed.triangles.positions, general.parsed.triangles.positions,
+                    "{line:?}"
+                );
+                assert!(general.parsed.triangles.extras.is_empty(), "{line:?}");
+            } else {
+                assert!(
+                    plain.parsed.positions.is_empty() && plain.parsed.triangles.len() == 0,
+                    "{line:?}"
+                );
+            }
+        }
+        assert_eq!(taken, 8);
     }
 
     #[test]
