@@ -83,6 +83,8 @@ pub struct ImageSettings {
     pub background: Vec3,
     /// Samples per pixel (anti-aliasing): 1, 2, 4, 8 or 16.
     pub samples: u32,
+    /// Added to every texture lookup's mip level of detail: positive blurs, negative sharpens.
+    pub mip_bias: f32,
 }
 
 /// A camera in world space. Positions are `f64` so that scenes far from the origin keep
