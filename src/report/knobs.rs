@@ -220,7 +220,8 @@ fn variants(scene: &Scene, plan: KnobPlan) -> Vec<(String, String, bool, Scene)>
             ));
         }
     }
-    if !scene.textures.is_empty() {
+    let textured = !scene.textures.is_empty() || scene.objects.iter().any(|o| !o.mesh.textures.is_empty());
+    if textured {
         let biases: &[f32] = if plan.quick {
             &[0.0, 1.0]
         } else {
