@@ -93,10 +93,11 @@ pub struct SpeedErrorArgs {
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
     /// Sweep the approximation knobs the scene uses instead, one at a time around its own
-    /// settings (shading, Nlerp/Slerp, sphere tessellation, shadow-map resolution, PCF and
-    /// bias, samples), against one reference with 4×4 samples per pixel; writes
-    /// `knobs.md` (with a recommendation per knob), `knobs.csv` and `knobs-*.svg` plots. The
-    /// default for a scene without `Sphere` objects.
+    /// settings (shading of all objects and of each, Nlerp/Slerp, sphere tessellation,
+    /// shadow-map resolution, PCF and bias, mip bias, samples), against one reference with
+    /// 4×4 samples per pixel, over the image and on shadow edges, highlight peaks and texture
+    /// detail; writes `knobs.md` (with a recommendation per knob), `knobs.csv` and
+    /// `knobs-*.svg` plots. The default for a scene without `Sphere` objects.
     #[arg(long)]
     pub knobs: bool,
     /// With the knob sweep: write a heat map of each point's error (FLIP, with its colour

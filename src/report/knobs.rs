@@ -686,7 +686,8 @@ mod tests {
             std::path::Path::new("knobs.ron"),
             "(image: (width: 64, height: 48), \
              camera: Perspective(eye: (0, 4, 5), target: (0, 0, 0), fov: 40), \
-             lights: [Spot(position: (1, 5, 1), direction: (-0.2, -1, -0.2), cutoff: 40, shadows: true)], \
+             lights: [Spot(position: (1, 5, 1), direction: (-0.2, -1, -0.2), cutoff: 40, shadows: true, \
+                           shadow_map: (resolution: 16))], \
              objects: [(mesh: Sphere(segments: 32), translate: (0, 1, 0), shading: Gouraud), \
                        (mesh: Plane, scale: 3)])",
             &crate::scene::LoadOptions::default(),
@@ -747,8 +748,8 @@ mod tests {
         );
         assert!(error_of("shading of object 0", "Flat") > error_of("shading of object 0", "Phong"));
         assert!(points.iter().any(|p| p.current && p.value == "Sphere(32)"));
-        // The spot light's shadow of the sphere on the plane has edge pixels, and a coarser
-        // shadow map errs more there than the scene's own.
+        // The spot light's shadow of the sphere on the plane has edge pixels, and the scene's
+        // blocky 16-texel map errs more there than a finer one.
         let edge = |value: &str| {
             let point = points
                 .iter()
@@ -756,12 +757,17 @@ mod tests {
                 .unwrap();
             point.regions.shadow_boundary
         };
-        assert!(edge("2048").pixels > 20, "{:?}", edge("2048"));
         assert!(
-            edge("256").mean_abs > edge("2048").mean_abs,
+            points
+                .iter()
+                .any(|p| p.current && p.knob == "shadow-map resolution" && p.value == "16")
+        );
+        assert!(edge("16").pixels > 20, "{:?}", edge("16"));
+        assert!(
+            edge("16").mean_abs > edge("1024").mean_abs,
             "{:?} {:?}",
-            edge("256"),
-            edge("2048")
+            edge("16"),
+            edge("1024")
         );
         // A heat map per point, the image's size and the legend.
         for point in &points {
@@ -778,7 +784,7 @@ mod tests {
         let markdown = knobs_markdown(&points, "knobs.ron", "test", Some("maps"));
         assert!(markdown.contains("(scene)") && markdown.contains("## Recommendations"));
         assert!(
-            markdown.contains("[map](maps/shadow-map-resolution-256.png)"),
+            markdown.contains("[map](maps/shadow-map-resolution-1024.png)"),
             "{markdown}"
         );
         let csv = knobs_csv(&points);
