@@ -19,6 +19,8 @@
 //! error nobody sees in a PNG) and over the whole image (a small object on a large background
 //! would look accurate whatever it looked like).
 
+pub mod regions;
+
 use crate::output::quantize_channel;
 use crate::render::FrameBuffer;
 
@@ -149,10 +151,12 @@ pub fn compare_over(reference: &FrameBuffer, test: &FrameBuffer, compared: Compa
     })
 }
 
+/// FLIP's per-pixel error of `test` against `reference` (0 to 1, row-major, the 8-bit images
+/// as written), when the `flip` feature is built and the sizes agree.
 #[cfg(feature = "flip")]
-fn flip(reference: &FrameBuffer, test: &FrameBuffer, mask: &[bool]) -> Option<FlipError> {
+pub fn flip_map(reference: &FrameBuffer, test: &FrameBuffer) -> Option<Vec<f32>> {
     let (width, height) = (reference.width, reference.height);
-    if !mask.contains(&true) {
+    if (width, height) != (test.width, test.height) || width == 0 || height == 0 {
         return None;
     }
     let expected = crate::output::to_rgb8(reference);
@@ -162,8 +166,19 @@ fn flip(reference: &FrameBuffer, test: &FrameBuffer, mask: &[bool]) -> Option<Fl
         nv_flip::FlipImageRgb8::with_data(width, height, actual.as_raw()),
         nv_flip::DEFAULT_PIXELS_PER_DEGREE,
     );
-    let mut values: Vec<f32> = error
-        .to_vec()
+    Some(error.to_vec())
+}
+
+#[cfg(not(feature = "flip"))]
+pub fn flip_map(_reference: &FrameBuffer, _test: &FrameBuffer) -> Option<Vec<f32>> {
+    None
+}
+
+fn flip(reference: &FrameBuffer, test: &FrameBuffer, mask: &[bool]) -> Option<FlipError> {
+    if !mask.contains(&true) {
+        return None;
+    }
+    let mut values: Vec<f32> = flip_map(reference, test)?
         .into_iter()
         .zip(mask)
         .filter(|(_, compared)| **compared)
@@ -175,11 +190,6 @@ fn flip(reference: &FrameBuffer, test: &FrameBuffer, mask: &[bool]) -> Option<Fl
         mean,
         percentile_99: f64::from(percentile(&values, 0.99)),
     })
-}
-
-#[cfg(not(feature = "flip"))]
-fn flip(_reference: &FrameBuffer, _test: &FrameBuffer, _mask: &[bool]) -> Option<FlipError> {
-    None
 }
 
 /// The value below which a share `p` of the sorted `values` lie (nearest rank).

@@ -48,6 +48,12 @@
 //!   pixels get finer (per-sample lighting of the interpolated normal, Nlerp or Slerp as the
 //!   object asks).
 //!
+//! - **What the samples saw.** With [`ReferenceOptions::features`], each pixel also keeps
+//!   [`PixelFeatures`]: per shadow-casting light whether some sample's shadow ray was blocked
+//!   and whether some reached the light, the mean specular luminance, and whether a texture
+//!   colours it; `metrics::regions` finds shadow edges, highlight peaks and texture detail
+//!   from them.
+//!
 //! The image is the same for any thread count: every pixel is computed on its own.
 
 pub mod analytic;
@@ -56,7 +62,7 @@ pub mod exact_lighting;
 pub mod mesh;
 pub mod surface;
 
-use std::cell::{OnceCell, RefCell};
+use std::cell::{Cell, OnceCell, RefCell};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -120,6 +126,8 @@ pub struct ReferenceOptions {
     pub texture_samples: u32,
     /// Counts 64×64 tiles as they finish, for a progress bar.
     pub progress: Option<Arc<RenderProgress>>,
+    /// Keep what each pixel's samples saw ([`Reference::features`]).
+    pub features: bool,
 }
 
 impl Default for ReferenceOptions {
@@ -131,6 +139,7 @@ impl Default for ReferenceOptions {
             samples: None,
             texture_samples: DEFAULT_TEXTURE_SAMPLES,
             progress: None,
+            features: false,
         }
     }
 }
@@ -154,6 +163,47 @@ pub struct Reference {
     pub build_time: Duration,
     /// Casting and shading every pixel's rays (wall time).
     pub cast_time: Duration,
+    /// Per pixel, row-major, what its samples saw: with [`ReferenceOptions::features`] only,
+    /// empty otherwise.
+    pub features: Vec<PixelFeatures>,
+}
+
+/// What the samples of one pixel saw, beyond its colour: what the error "where it matters"
+/// (`metrics::regions`) is measured over.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PixelFeatures {
+    /// Bit `i mod 64` set when a sample facing shadow-casting light `i`, within its reach, had
+    /// its shadow ray blocked.
+    pub shadowed: u64,
+    /// The same where the shadow ray reached the light.
+    pub lit: u64,
+    /// The specular term's luminance (Rec. 709 weights, linear), the mean over the pixel's
+    /// samples with the background as 0.
+    pub specular: f32,
+    /// Some sample hit a surface whose colour a texture multiplies.
+    pub textured: bool,
+}
+
+/// The luminance of a linear RGB colour (Rec. 709 weights).
+pub fn luminance(color: DVec3) -> f64 {
+    color.dot(DVec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// What one sample saw, summed into its pixel's [`PixelFeatures`].
+#[derive(Default)]
+struct SampleRecord {
+    shadowed: Cell<u64>,
+    lit: Cell<u64>,
+    specular: Cell<f64>,
+    textured: Cell<bool>,
+}
+
+impl SampleRecord {
+    fn visibility(&self, light: usize, visible: f64) {
+        let bit = 1u64 << (light % 64);
+        let seen = if visible > 0.0 { &self.lit } else { &self.shadowed };
+        seen.set(seen.get() | bit);
+    }
 }
 
 /// The side of a 64×64 tile, the unit of work and of progress.
@@ -447,11 +497,28 @@ impl ReferenceScene<'_> {
         }
     }
 
-    /// The colour of the sample at the screen point (`x`, `y`), or `None` for the background.
-    fn shade_sample(&self, x: f64, y: f64, footprint: Option<&PixelFootprint>) -> Option<DVec3> {
+    /// The colour of the sample at the screen point (`x`, `y`), or `None` for the background;
+    /// what it saw goes into `record`.
+    fn shade_sample(
+        &self,
+        x: f64,
+        y: f64,
+        footprint: Option<&PixelFootprint>,
+        record: &SampleRecord,
+    ) -> Option<DVec3> {
         let (origin, direction) = self.ray(x, y);
         let nearest = self.trace(origin, direction)?;
         let point = self.surface_point(&nearest, origin, direction, footprint);
+        if point.material.textures.diffuse.is_some() || point.material.textures.ambient.is_some() {
+            record.textured.set(true);
+        }
+        let visibility = |light: usize| {
+            let visible = self.visibility(light, &point);
+            if self.casts_shadow[light] {
+                record.visibility(light, visible);
+            }
+            visible
+        };
         let back_facing = point.back_facing;
         let normal = if back_facing && matches!(point.back_faces, BackFaces::ReverseLit | BackFaces::Cull) {
             -point.normal
@@ -471,8 +538,11 @@ impl ReferenceScene<'_> {
                 position.as_vec3(),
                 normal.as_vec3(),
                 to_viewer.as_vec3(),
-                |light, _| self.visibility(light, &point) as f32,
+                |light, _| visibility(light) as f32,
             );
+            record
+                .specular
+                .set(record.specular.get() + luminance(terms.specular.as_dvec3()));
             let (textured, rest) =
                 crate::render::frame::select_component_split(None, point.component, &terms);
             return Some((textured + rest).as_dvec3());
@@ -484,13 +554,18 @@ impl ReferenceScene<'_> {
             position,
             normal,
             to_viewer,
-            |light, _| self.visibility(light, &point),
+            |light, _| visibility(light),
         );
+        record
+            .specular
+            .set(record.specular.get() + luminance(terms.specular));
         Some(select_exact(point.component, &terms))
     }
 
-    /// One pixel: the mean of its samples, background included; whether any sample hit.
-    fn shade_pixel(&self, px: u32, py: u32) -> (Vec3, bool) {
+    /// One pixel: the mean of its samples, background included; whether any sample hit; what
+    /// its samples saw.
+    fn shade_pixel(&self, px: u32, py: u32) -> (Vec3, bool, PixelFeatures) {
+        let record = SampleRecord::default();
         let background = self.scene.image.background.as_dvec3();
         let mut sum = DVec3::ZERO;
         let mut covered = false;
@@ -511,7 +586,7 @@ impl ReferenceScene<'_> {
             Some(offsets) => {
                 for offset in offsets {
                     let at = corner + *offset;
-                    add(self.shade_sample(at.x, at.y, Some(&footprint)));
+                    add(self.shade_sample(at.x, at.y, Some(&footprint), &record));
                 }
                 offsets.len()
             }
@@ -521,12 +596,18 @@ impl ReferenceScene<'_> {
                     let jitter = stratum_jitter(px, py, cell);
                     let at = corner
                         + (DVec2::new(f64::from(cell % n), f64::from(cell / n)) + jitter) / f64::from(n);
-                    add(self.shade_sample(at.x, at.y, None));
+                    add(self.shade_sample(at.x, at.y, None, &record));
                 }
                 (n * n) as usize
             }
         };
-        ((sum / count as f64).as_vec3(), covered)
+        let features = PixelFeatures {
+            shadowed: record.shadowed.get(),
+            lit: record.lit.get(),
+            specular: (record.specular.get() / count as f64) as f32,
+            textured: record.textured.get(),
+        };
+        ((sum / count as f64).as_vec3(), covered, features)
     }
 }
 
@@ -670,7 +751,7 @@ fn render_in_current_pool(scene: &Scene, options: &ReferenceOptions) -> Referenc
     if let Some(progress) = &options.progress {
         progress.start_tiles((tiles_x * tiles_y) as usize);
     }
-    let tiles: Vec<Vec<(Vec3, bool)>> = (0..tiles_x * tiles_y)
+    let tiles: Vec<Vec<(Vec3, bool, PixelFeatures)>> = (0..tiles_x * tiles_y)
         .into_par_iter()
         .map(|tile| {
             let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
@@ -691,15 +772,23 @@ fn render_in_current_pool(scene: &Scene, options: &ReferenceOptions) -> Referenc
         color: vec![Vec3::ZERO; (width * height) as usize],
         covered: vec![false; (width * height) as usize],
     };
+    let mut features = if options.features {
+        vec![PixelFeatures::default(); (width * height) as usize]
+    } else {
+        Vec::new()
+    };
     for (tile, pixels) in tiles.into_iter().enumerate() {
         let tile = tile as u32;
         let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
         let tile_width = (x0 + TILE).min(width) - x0;
-        for (offset, (color, covered)) in pixels.into_iter().enumerate() {
+        for (offset, (color, covered, seen)) in pixels.into_iter().enumerate() {
             let (x, y) = (x0 + offset as u32 % tile_width, y0 + offset as u32 / tile_width);
             let index = (y * width + x) as usize;
             framebuffer.color[index] = color;
             framebuffer.covered[index] = covered;
+            if let Some(slot) = features.get_mut(index) {
+                *slot = seen;
+            }
         }
     }
     Reference {
@@ -707,6 +796,7 @@ fn render_in_current_pool(scene: &Scene, options: &ReferenceOptions) -> Referenc
         notes,
         build_time,
         cast_time: started.elapsed(),
+        features,
     }
 }
 

@@ -25,6 +25,7 @@
 //! scene uses one at a time instead.
 
 pub mod knobs;
+pub mod maps;
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -92,12 +93,17 @@ pub struct SpeedErrorArgs {
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
     /// Sweep the approximation knobs the scene uses instead, one at a time around its own
-    /// settings (shading, Nlerp/Slerp, sphere tessellation, shadow-map resolution, PCF and
-    /// bias, samples), against one reference with 4×4 samples per pixel; writes
-    /// `knobs.md` (with a recommendation per knob) and `knobs.csv`. The default for a scene
-    /// without `Sphere` objects.
+    /// settings (shading of all objects and of each, Nlerp/Slerp, sphere tessellation,
+    /// shadow-map resolution, PCF and bias, mip bias, samples), against one reference with
+    /// 4×4 samples per pixel, over the image and on shadow edges, highlight peaks and texture
+    /// detail; writes `knobs.md` (with a recommendation per knob), `knobs.csv` and
+    /// `knobs-*.svg` plots. The default for a scene without `Sphere` objects.
     #[arg(long)]
     pub knobs: bool,
+    /// With the knob sweep: write a heat map of each point's error (FLIP, with its colour
+    /// scale) into DIR as `KNOB-VALUE.png`, linked from `knobs.md`.
+    #[arg(long, value_name = "DIR")]
+    pub maps: Option<PathBuf>,
 }
 
 /// How a sphere is shaded.
@@ -586,26 +592,30 @@ fn run_accuracy(args: &AccuracyArgs) -> i32 {
 /// Writes the report's files into `--out` (created if missing), or returns the exit code after
 /// saying why not. Nothing is written if any file would replace the scene; each file is written
 /// whole or not at all.
-fn write_report_files(args: &SpeedErrorArgs, files: &[(String, String)]) -> Result<(), i32> {
-    if let Err(error) = std::fs::create_dir_all(&args.out) {
-        errln!("error: cannot create {}: {error}", args.out.display());
-        return Err(EXIT_OUTPUT_FAILED);
+fn write_report_files(args: &SpeedErrorArgs, files: &[(PathBuf, Vec<u8>)]) -> Result<(), i32> {
+    let mut folders: Vec<&Path> = files.iter().filter_map(|(path, _)| path.parent()).collect();
+    folders.dedup();
+    for folder in folders {
+        if let Err(error) = std::fs::create_dir_all(folder) {
+            errln!("error: cannot create {}: {error}", folder.display());
+            return Err(EXIT_OUTPUT_FAILED);
+        }
     }
-    if let Some((name, _)) = files.iter().find(|(name, _)| {
-        crate::output::overwritten_input(&args.out.join(name), [args.scene.as_path()]).is_some()
-    }) {
+    if let Some((path, _)) = files
+        .iter()
+        .find(|(path, _)| crate::output::overwritten_input(path, [args.scene.as_path()]).is_some())
+    {
         errln!(
             "error: `{}` would replace the scene `{}`; nothing was written\n  = help: choose another --out folder",
-            args.out.join(name).display(),
+            path.display(),
             args.scene.display()
         );
         return Err(EXIT_BAD_INPUT);
     }
-    for (name, text) in files {
-        let path = args.out.join(name);
-        let written = crate::output::write_atomically(&path, |writer| {
+    for (path, bytes) in files {
+        let written = crate::output::write_atomically(path, |writer| {
             writer
-                .write_all(text.as_bytes())
+                .write_all(bytes)
                 .map_err(|source| crate::output::OutputError::Io {
                     path: path.clone(),
                     source,
@@ -627,6 +637,7 @@ fn run_knob_sweep(args: &SpeedErrorArgs, mut scene: Scene) -> i32 {
     let plan = knobs::KnobPlan {
         runs: if args.quick { 1 } else { args.runs },
         quick: args.quick,
+        maps: args.maps.is_some(),
     };
     let threads = args.threads.map(usize::from);
     let started = Instant::now();
@@ -653,13 +664,43 @@ fn run_knob_sweep(args: &SpeedErrorArgs, mut scene: Scene) -> i32 {
         reference_time.as_secs_f64(),
         args.scene.display()
     );
-    let files = [
-        ("knobs.csv".to_string(), knobs::knobs_csv(&points)),
+    // The maps' folder as the Markdown file links it: relative when it is inside `--out`.
+    let maps_link = args.maps.as_ref().map(|maps| {
+        maps.strip_prefix(&args.out)
+            .unwrap_or(maps)
+            .display()
+            .to_string()
+            .replace('\\', "/")
+    });
+    let mut files = vec![
+        (args.out.join("knobs.csv"), knobs::knobs_csv(&points).into_bytes()),
         (
-            "knobs.md".to_string(),
-            knobs::knobs_markdown(&points, &args.scene.display().to_string(), &header),
+            args.out.join("knobs.md"),
+            knobs::knobs_markdown(
+                &points,
+                &args.scene.display().to_string(),
+                &header,
+                maps_link.as_deref(),
+            )
+            .into_bytes(),
         ),
     ];
+    let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy();
+    for axis in knobs::PlotError::ALL {
+        let title = format!("{stem}: {}×{}", scene.image.width, scene.image.height);
+        match knobs::knobs_plot_svg(&points, axis, &title) {
+            Some(Ok(svg)) => files.push((args.out.join(axis.file_name()), svg.into_bytes())),
+            Some(Err(message)) => errln!("warning: {message}"),
+            None => {}
+        }
+    }
+    if let Some(maps) = &args.maps {
+        for point in &points {
+            if let Some(map) = &point.heat_map {
+                files.push((maps.join(point.map_file_name()), maps::png_bytes(map)));
+            }
+        }
+    }
     if let Err(code) = write_report_files(args, &files) {
         return code;
     }
@@ -725,10 +766,10 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
         .unwrap_or((loaded.scene.image.width, loaded.scene.image.height));
     let thread_count = threads.unwrap_or_else(rayon::current_num_threads);
     let mut files = vec![
-        ("speed-error.csv".to_string(), csv(&points)),
+        (args.out.join("speed-error.csv"), csv(&points).into_bytes()),
         (
-            "speed-error.md".to_string(),
-            markdown(&points, &args.scene, &plan, thread_count, width, height),
+            args.out.join("speed-error.md"),
+            markdown(&points, &args.scene, &plan, thread_count, width, height).into_bytes(),
         ),
     ];
     for &shininess in &plan.shininess {
@@ -743,7 +784,10 @@ fn run_speed_error(args: &SpeedErrorArgs) -> i32 {
                 args.scene.file_stem().unwrap_or_default().to_string_lossy()
             );
             match plot_svg(&group, &title) {
-                Ok(svg) => files.push((format!("speed-error-s{shininess}-x{samples}.svg"), svg)),
+                Ok(svg) => files.push((
+                    args.out.join(format!("speed-error-s{shininess}-x{samples}.svg")),
+                    svg.into_bytes(),
+                )),
                 Err(message) => errln!("warning: {message}"),
             }
         }

@@ -269,6 +269,20 @@ impl Texture {
     /// magnified, wrapped per `sampler` (module documentation). Never NaN for a texture built
     /// here; zero for a texture without levels.
     pub fn sample(&self, uv: Vec2, uv_dx: Vec2, uv_dy: Vec2, sampler: &Sampler) -> Vec4 {
+        self.sample_biased(uv, uv_dx, uv_dy, sampler, 0.0)
+    }
+
+    /// [`Texture::sample`] with `mip_bias` added to the level of detail `λ = log₂ ρ` before
+    /// it is clamped: positive picks blurrier levels (less aliasing, less detail), negative
+    /// sharper ones. A bias of 0 gives `sample`'s bits (`λ + 0 = λ` for every `λ`).
+    pub fn sample_biased(
+        &self,
+        uv: Vec2,
+        uv_dx: Vec2,
+        uv_dy: Vec2,
+        sampler: &Sampler,
+        mip_bias: f32,
+    ) -> Vec4 {
         let Some(base) = self.levels.first() else {
             return Vec4::ZERO;
         };
@@ -278,7 +292,7 @@ impl Texture {
         let footprint = (finite_or_zero(uv_dx) * size)
             .length()
             .max((finite_or_zero(uv_dy) * size).length());
-        let lod = footprint.log2();
+        let lod = footprint.log2() + mip_bias;
         let last_level = self.levels.len() - 1;
         if lod.is_nan() || lod <= 0.0 || last_level == 0 {
             return bilinear(base, uv, sampler);

@@ -42,6 +42,8 @@ pub struct Frame {
     pub constant_colors: Vec<Vec3>,
     /// Every texture of the frame; the materials' bindings index this.
     pub textures: Vec<Arc<Texture>>,
+    /// Added to every texture lookup's level of detail (`ImageSettings::mip_bias`).
+    pub mip_bias: f32,
     /// One per scene object; `FrameTriangle::object` indexes this.
     pub objects: Vec<ObjectStyle>,
     pub lights: Vec<ShadingLight>,

@@ -139,6 +139,7 @@ fn build(
         materials: Vec::new(),
         constant_colors: Vec::new(),
         textures: scene.textures.clone(),
+        mip_bias: scene.image.mip_bias,
         objects: scene.objects.iter().map(ObjectStyle::of).collect(),
         lights: scene.lights.iter().map(|l| shading_light(l, eye)).collect(),
         ambient_light: scene.ambient_light,

@@ -1219,11 +1219,12 @@ fn shade_sample(
         let uv_of = |v: &VertexAttributes| if binding.uv_set == 1 { v.uv1 } else { v.uv };
         let uv_at = |w: Vec3| uv_of(&a) * w.x + uv_of(&b) * w.y + uv_of(&c) * w.z;
         let uv = uv_at(weights);
-        frame.textures[binding.texture as usize].sample(
+        frame.textures[binding.texture as usize].sample_biased(
             uv,
             uv_at(weights_dx) - uv,
             uv_at(weights_dy) - uv,
             &binding.sampler,
+            frame.mip_bias,
         )
     };
     let modulation = || color_texture.map_or(Vec3::ONE, |binding| sample(&binding).truncate());

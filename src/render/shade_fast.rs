@@ -1350,6 +1350,7 @@ pub(crate) mod tests {
                 height: 64,
                 background: Vec3::ZERO,
                 samples: 1,
+                mip_bias: 0.0,
             },
             camera: Camera {
                 eye: DVec3::new(0.5, -5.0, 1.5),

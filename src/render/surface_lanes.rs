@@ -330,6 +330,7 @@ impl<'a> Gathered<'a> {
             uv.right,
             uv.down,
             &binding.sampler,
+            frame.mip_bias,
         );
         Vec3s::from_array(&texels.map(|texel| texel.truncate()))
     }

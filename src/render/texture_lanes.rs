@@ -7,8 +7,9 @@
 //! - The footprint `ρ` and the choice between magnification and minification are lane-wise.
 //!   `λ = log₂ ρ` is at most 0 exactly where `ρ ≤ 1` (`log2f` is exact at 1, and its error,
 //!   below one unit in the last place, cannot change the sign of a logarithm whose magnitude
-//!   is at least 2⁻²⁴/ln 2), so only minified lanes call `log2f`, which has no lane-wise form
-//!   with its bits.
+//!   is at least 2⁻²⁴/ln 2), so only lanes with `ρ > 1` call `log2f`, which has no lane-wise
+//!   form with its bits. With a positive mip bias every lane with `ρ > 0` calls it; either
+//!   way the lane's `λ + bias` is the scalar's sum.
 //! - Texel coordinates are the specification's `f64` ones, `x = u·w − ½` (exact: 24 by 32
 //!   significant bits), but its `floor` and the wrap's `rem_euclid`, library calls that were
 //!   two thirds of the scalar sampler's instructions, are integer operations here. For a whole
@@ -39,6 +40,7 @@ pub fn sample_lanes(
     uv_dx: Vec2s,
     uv_dy: Vec2s,
     sampler: &Sampler,
+    mip_bias: f32,
 ) -> [Vec4; LANES] {
     let Some(base) = texture.levels.first() else {
         return [Vec4::ZERO; LANES];
@@ -57,10 +59,13 @@ pub fn sample_lanes(
     };
     let footprint = scaled(uv_dx).length().max(scaled(uv_dy).length());
     let last_level = texture.levels.len() - 1;
+    // With a bias of at most 0, `λ + bias > 0` needs `ρ > 1`; a positive bias can make any
+    // footprint above 0 minified.
+    let may_be_minified = Floats::splat(if mip_bias > 0.0 { 0.0 } else { 1.0 });
     let minified = if last_level == 0 {
         !Mask::ALL
     } else {
-        footprint.gt(Floats::splat(1.0))
+        footprint.gt(may_be_minified)
     };
     // Per lane, `Texture::sample`'s choice of levels: bilinear in `lower`, and where `blend`
     // is above 0 in `lower + 1` too, blended by it. `log2f` is called for minified lanes only;
@@ -70,7 +75,7 @@ pub fn sample_lanes(
     let mut lod = zero;
     for lane in 0..LANES {
         if minified.lane(lane) {
-            lod.0[lane] = footprint.0[lane].log2();
+            lod.0[lane] = footprint.0[lane].log2() + mip_bias;
         }
     }
     let minified = lod.gt(zero);
@@ -104,7 +109,7 @@ pub fn sample_lanes(
     for (lane, value) in near.iter_mut().enumerate() {
         if !integral.lane(lane) {
             let pick = |v: Vec2s| Vec2::new(v.x.0[lane], v.y.0[lane]);
-            *value = texture.sample(pick(uv), pick(uv_dx), pick(uv_dy), sampler);
+            *value = texture.sample_biased(pick(uv), pick(uv_dx), pick(uv_dy), sampler, mip_bias);
         }
     }
     near
@@ -375,19 +380,26 @@ mod tests {
 
     /// The lanes against `Texture::sample`, lane by lane, for `points` (uv, uv_dx, uv_dy),
     /// eight at a time (the last group padded with the first points).
-    fn check(texture: &Texture, sampler: &Sampler, points: &[(Vec2, Vec2, Vec2)], what: &str) {
+    fn check(texture: &Texture, sampler: &Sampler, mip_bias: f32, points: &[(Vec2, Vec2, Vec2)], what: &str) {
         for group in points.chunks(LANES) {
             let point = |lane: usize| group.get(lane).copied().unwrap_or(points[lane % points.len()]);
             let lanes = |pick: fn((Vec2, Vec2, Vec2)) -> Vec2| {
                 Vec2s::from_array(&std::array::from_fn(|lane| pick(point(lane))))
             };
-            let sampled = sample_lanes(texture, lanes(|p| p.0), lanes(|p| p.1), lanes(|p| p.2), sampler);
+            let sampled = sample_lanes(
+                texture,
+                lanes(|p| p.0),
+                lanes(|p| p.1),
+                lanes(|p| p.2),
+                sampler,
+                mip_bias,
+            );
             for (lane, &value) in sampled.iter().enumerate() {
                 let (uv, dx, dy) = point(lane);
-                let expected = texture.sample(uv, dx, dy, sampler);
+                let expected = texture.sample_biased(uv, dx, dy, sampler, mip_bias);
                 assert!(
                     same_bits(value, expected),
-                    "{what} {sampler:?}: uv {uv} dx {dx} dy {dy}: {value} against {expected}"
+                    "{what} {sampler:?} bias {mip_bias}: uv {uv} dx {dx} dy {dy}: {value} against {expected}"
                 );
             }
         }
@@ -469,7 +481,7 @@ mod tests {
                             points.push((Vec2::new(v, u), Vec2::new(d, e), Vec2::new(-e, d * 0.5)));
                         }
                     }
-                    check(&texture, &sampler, &points, &format!("{width}×{height}"));
+                    check(&texture, &sampler, 0.0, &points, &format!("{width}×{height}"));
                 }
             }
         }
@@ -491,11 +503,14 @@ mod tests {
                 (uv, Vec2::new(footprint, 0.0), Vec2::new(0.0, footprint * 0.5))
             })
             .collect();
-        check(&texture, &sampler, &points, "levels");
+        // Biases that move magnified lanes into the chain and minified ones back to level 0.
+        for mip_bias in [0.0, -0.75, -3.0, 0.5, 1.25, 8.0] {
+            check(&texture, &sampler, mip_bias, &points, "levels");
+        }
         let empty = Texture { levels: Vec::new() };
         let zero = Vec2s::from_array(&[Vec2::ZERO; LANES]);
         assert_eq!(
-            sample_lanes(&empty, zero, zero, zero, &sampler),
+            sample_lanes(&empty, zero, zero, zero, &sampler, 0.0),
             [Vec4::ZERO; LANES]
         );
     }

@@ -61,6 +61,8 @@ pub struct ImageFile {
     pub background: Option<RgbFile>,
     /// Samples per pixel: 1 (no anti-aliasing), 2, 4, 8 or 16.
     pub samples: Option<u32>,
+    /// Added to every texture lookup's mip level of detail.
+    pub mip_bias: Option<f32>,
 }
 
 #[derive(Debug, Clone, Deserialize)]

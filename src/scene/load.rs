@@ -53,6 +53,9 @@ pub const DEFAULT_FOV_DEGREES: f64 = 45.0;
 pub const DEFAULT_SPOT_CUTOFF_DEGREES: f32 = 30.0;
 /// Included material libraries may include others, this deep at most.
 pub const MAX_INCLUDE_DEPTH: usize = 16;
+/// The largest `mip_bias` either way: 16 levels span every texture's chain (at most 4096 a
+/// side, 13 levels).
+pub const MAX_MIP_BIAS: f64 = 16.0;
 
 /// `value` as a scene would write it: whole numbers in full, others with the shortest digits
 /// that read back to the same `f32` when they are one (fields are `f32`, and `8.6e29` widened to
@@ -1308,11 +1311,24 @@ impl Loader<'_> {
             }
             (None, samples) => Some(samples.unwrap_or(1)),
         };
+        let mip_bias = match file.image.mip_bias {
+            Some(bias) => self
+                .ranged(
+                    f64::from(bias),
+                    -MAX_MIP_BIAS,
+                    MAX_MIP_BIAS,
+                    At::new(source, &ron_path!["image", "mip_bias"]),
+                    "`mip_bias`",
+                )
+                .map(|bias| bias as f32),
+            None => Some(0.0),
+        };
         Some(ImageSettings {
             width: width?,
             height: height?,
             background: background?,
             samples: samples?,
+            mip_bias: mip_bias?,
         })
     }
 

@@ -387,6 +387,8 @@ fn report_speed_error_writes_its_table_and_plots() {
             "cube.ron",
             "--out",
             "cube",
+            "--maps",
+            "cube/maps",
         ],
         work.path(),
     );
@@ -397,7 +399,27 @@ fn report_speed_error_writes_its_table_and_plots() {
         table.contains("samples per pixel") && table.contains("(scene)"),
         "{table}"
     );
-    assert!(work.path().join("cube/knobs.csv").is_file());
+    let csv = std::fs::read_to_string(work.path().join("cube/knobs.csv")).unwrap();
+    // A heat map per point, the quick sweep's 160×120 image over its 30-pixel legend, linked
+    // from the table.
+    let maps: Vec<_> = std::fs::read_dir(work.path().join("cube/maps"))
+        .unwrap()
+        .map(|entry| entry.unwrap().path())
+        .collect();
+    assert_eq!(maps.len(), csv.lines().count() - 1, "{maps:?}");
+    for map in &maps {
+        let name = map.file_name().unwrap().to_str().unwrap();
+        assert!(
+            table.contains(&format!("(maps/{name})")),
+            "{name} not listed:\n{table}"
+        );
+        assert_eq!(image::image_dimensions(map).unwrap(), (160, 150), "{name}");
+    }
+    assert!(table.contains("[map](maps/samples-per-pixel-1.png)"), "{table}");
+    // The plot of time against FLIP p99, with its Pareto front.
+    let svg = std::fs::read_to_string(work.path().join("cube/knobs-flip-p99.svg")).unwrap();
+    roxmltree::Document::parse(&svg).unwrap();
+    assert!(svg.contains("Pareto front"));
 }
 
 /// `report accuracy` prints the anchor's table: four modes, Phong the most accurate.

@@ -49,6 +49,7 @@ fn pixel_aligned_scene(width: u32, height: u32, objects: Vec<Object>) -> Scene {
             height,
             background: Vec3::ZERO,
             samples: 1,
+            mip_bias: 0.0,
         },
         camera: Camera {
             eye: center + DVec3::Z * 10.0,
@@ -277,6 +278,7 @@ fn a_floor_passing_behind_the_camera_renders_only_its_visible_part() {
             height,
             background: Vec3::ZERO,
             samples: 1,
+            mip_bias: 0.0,
         },
         camera: camera_at_origin(0.1),
         ambient_light: Vec3::ZERO,
@@ -325,6 +327,7 @@ fn attributes_are_interpolated_perspective_correctly() {
             height,
             background: Vec3::ZERO,
             samples: 1,
+            mip_bias: 0.0,
         },
         camera: camera_at_origin(0.1),
         ambient_light: Vec3::ZERO,
@@ -397,6 +400,7 @@ fn busy_scene() -> Scene {
             height: 197,
             background: Vec3::new(0.1, 0.1, 0.1),
             samples: 1,
+            mip_bias: 0.0,
         },
         camera: Camera {
             eye: DVec3::new(0.5, 1.0, 5.0),
@@ -521,6 +525,7 @@ fn square_seen_from_behind(style: impl Fn(&mut Object)) -> FrameBuffer {
             height: 8,
             background: Vec3::new(0.0, 1.0, 0.0),
             samples: 1,
+            mip_bias: 0.0,
         },
         camera: Camera {
             eye: DVec3::new(0.0, 0.0, -5.0),
@@ -599,6 +604,7 @@ fn constant_shading_gives_one_colour_per_object_and_components_select_terms() {
                 height: 40,
                 background: Vec3::ZERO,
                 samples: 1,
+                mip_bias: 0.0,
             },
             camera: Camera {
                 eye: DVec3::new(0.0, 0.0, 4.0),
@@ -678,6 +684,7 @@ fn shadow_scene(shadow: Option<lampshade::scene::ShadowSettings>) -> Scene {
             height: 64,
             background: Vec3::ZERO,
             samples: 1,
+            mip_bias: 0.0,
         },
         camera: Camera {
             eye: DVec3::new(0.0, 10.0, 0.0),
