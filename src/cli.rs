@@ -530,6 +530,13 @@ fn run_pick(
             return EXIT_BAD_INPUT;
         }
     };
+    // The render for -o is quiet (its summary line would go into the JSON): warnings are said here.
+    if !loaded.warnings.is_empty() && !args.quiet {
+        errout!(
+            "{}",
+            render_diagnostics(&loaded.warnings, &loaded.sources, use_color())
+        );
+    }
     let origin = crate::inspect::ImageOrigin {
         scene: std::sync::Arc::new(loaded.scene),
         sources: std::sync::Arc::new(loaded.sources),

@@ -110,7 +110,8 @@ pub struct SurfaceReport {
 #[derive(Debug, Clone, Serialize)]
 pub struct ObjectReport {
     pub index: usize,
-    pub name: Option<String>,
+    /// Its `name`, or the loader's `object N` for an object without one.
+    pub name: String,
     pub defined_at: Option<SourceLocation>,
 }
 
@@ -304,7 +305,7 @@ fn surface_report(scene: &Scene, texts: &SceneTexts, surface: &SurfaceInspection
     SurfaceReport {
         object: ObjectReport {
             index,
-            name: (!object.name.is_empty()).then(|| object.name.clone()),
+            name: object.name.clone(),
             defined_at: object_at,
         },
         mesh: MeshReport {
@@ -531,5 +532,139 @@ fn model_name(model: LightingModel) -> String {
             },
             surface.roughness
         ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::load::load_scene;
+
+    const LIBRARY: &str = "// Materials for the pick test.
+Materials(
+    materials: {
+        \"brass\": (diffuse: (0.7, 0.5, 0.2), specular: (0.3, 0.3, 0.3), shininess: 20),
+    },
+)
+";
+
+    const SCENE: &str = r#"Scene(
+    include: ["lib.ron"],
+    image: (width: 40, height: 30),
+    camera: Perspective(eye: (0, 0, 8), target: (0, 0, 0), up: (0, 1, 0), fov: 30),
+    materials: {
+        "chalk": (diffuse: (0.9, 0.9, 0.9)),
+    },
+    lights: [
+        Directional(direction: (0, 0, -1)),
+        Point(position: (0, 2, 3)),
+    ],
+    objects: [
+        (name: "left", mesh: Sphere(segments: 32), translate: (-1.2, 0, 0), material: "brass"),
+        (name: "right", mesh: Sphere(segments: 32), translate: (1.2, 0, 0), material: "chalk"),
+        (mesh: Cube, translate: (0, 0, -3), scale: (5, 5, 0.1), material: "pearl"),
+        (mesh: Cube, translate: (0, 1.6, 0), scale: 0.3, material: (diffuse: (0, 0, 1))),
+    ],
+)
+"#;
+
+    /// 1-based line and column (in chars) of the first occurrence of `needle` in `text`,
+    /// counted here rather than by `diag`.
+    fn position_of(text: &str, needle: &str) -> (usize, usize) {
+        let offset = text.find(needle).unwrap_or_else(|| panic!("{needle} is in the text"));
+        let before = &text[..offset];
+        let line = before.lines().count() + usize::from(before.ends_with('\n') || before.is_empty());
+        let column = before.rsplit('\n').next().unwrap().chars().count() + 1;
+        (line.max(1), column)
+    }
+
+    fn origin(folder: &Path) -> ImageOrigin {
+        std::fs::write(folder.join("lib.ron"), LIBRARY).unwrap();
+        std::fs::write(folder.join("scene.ron"), SCENE).unwrap();
+        let loaded = load_scene(&folder.join("scene.ron"), &LoadOptions::default()).unwrap();
+        ImageOrigin {
+            scene: Arc::new(loaded.scene),
+            sources: Arc::new(loaded.sources),
+            load_options: LoadOptions::default(),
+            render_options: RenderOptions::default(),
+            encoding: Encoding::Linear,
+        }
+    }
+
+    fn at(location: &Option<SourceLocation>) -> (PathBuf, usize, usize) {
+        let location = location.as_ref().expect("a location");
+        (location.path.clone(), location.line, location.column)
+    }
+
+    #[test]
+    fn objects_materials_meshes_and_lights_point_at_their_definitions() {
+        let folder = tempfile::tempdir().unwrap();
+        let origin = origin(folder.path());
+        let scene_file = std::path::absolute(folder.path().join("scene.ron")).unwrap();
+        let library_file = std::path::absolute(folder.path().join("lib.ron")).unwrap();
+
+        // The left sphere (its centre is 1.2 units left of the image's centre: about 8 pixels).
+        let left = origin.pick(12, 15).unwrap();
+        let surface = &left.surfaces[0];
+        assert_eq!(surface.object.index, 0);
+        assert_eq!(surface.object.name, "left");
+        let (line, column) = position_of(SCENE, "(name: \"left\"");
+        assert_eq!(at(&surface.object.defined_at), (scene_file.clone(), line, column));
+        let (line, column) = position_of(SCENE, "Sphere(segments: 32), translate: (-1.2");
+        assert_eq!(at(&surface.mesh.defined_at), (scene_file.clone(), line, column));
+        assert_eq!(surface.mesh.source.as_deref(), Some("Sphere(segments: 32)"));
+        assert_eq!(surface.material.name.as_deref(), Some("brass"));
+        assert_eq!(surface.material.origin, "include");
+        let (line, column) = position_of(LIBRARY, "\"brass\"");
+        assert_eq!(at(&surface.material.defined_at), (library_file, line, column));
+        assert_eq!(surface.material.diffuse, [0.7, 0.5, 0.2]);
+        let point = &surface.lighting.points[0];
+        assert_eq!(point.lights.len(), 2);
+        let (line, column) = position_of(SCENE, "Point(position");
+        assert_eq!(at(&point.lights[1].defined_at), (scene_file.clone(), line, column));
+        assert_eq!((point.lights[0].kind, point.lights[1].kind), ("directional", "point"));
+        assert!(surface.mesh.triangle < 32 * 32 * 2);
+
+        let right = origin.pick(28, 15).unwrap();
+        let surface = &right.surfaces[0];
+        assert_eq!(surface.object.name, "right");
+        assert_eq!(surface.material.origin, "scene");
+        let (line, column) = position_of(SCENE, "\"chalk\": (");
+        assert_eq!(at(&surface.material.defined_at), (scene_file.clone(), line, column));
+
+        let wall = origin.pick(1, 1).unwrap();
+        let surface = &wall.surfaces[0];
+        assert_eq!((surface.object.index, surface.object.name.as_str()), (2, "object 2"));
+        assert_eq!(surface.material.name.as_deref(), Some("pearl"));
+        assert_eq!((surface.material.origin, &surface.material.defined_at), ("preset", &None));
+
+        let top = origin.pick(20, 4).unwrap();
+        let surface = &top.surfaces[0];
+        assert_eq!(surface.object.index, 3);
+        assert_eq!(surface.material.origin, "inline");
+        let (line, column) = position_of(SCENE, "(diffuse: (0, 0, 1))");
+        assert_eq!(at(&surface.material.defined_at), (scene_file, line, column));
+    }
+
+    #[test]
+    fn the_json_has_every_documented_field() {
+        let folder = tempfile::tempdir().unwrap();
+        let json: serde_json::Value =
+            serde_json::from_str(&origin(folder.path()).pick(12, 15).unwrap().to_json()).unwrap();
+        for field in ["x", "y", "width", "height", "samples", "scene", "background", "color", "surfaces"] {
+            assert!(!json[field].is_null(), "{field}: {json}");
+        }
+        let surface = &json["surfaces"][0];
+        for field in [
+            "object", "mesh", "samples", "shading_point", "depth", "view_distance", "position", "normal",
+            "geometric_normal", "back_facing", "shading", "component", "lighting_model", "material", "texels",
+            "lighting", "color",
+        ] {
+            assert!(!surface[field].is_null(), "{field}: {surface}");
+        }
+        let light = &surface["lighting"]["points"][0]["lights"][0];
+        for field in ["index", "kind", "reaches", "to_light", "n_dot_l", "attenuation", "spot", "shadow", "diffuse", "specular"] {
+            assert!(!light[field].is_null(), "{field}: {light}");
+        }
     }
 }

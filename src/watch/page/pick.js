@@ -15,9 +15,11 @@
     #pick-mask[hidden], #pick-marker[hidden], #pick-panel[hidden] { display: none; }
     #pick-marker { position: absolute; width: 9px; height: 9px; margin: -5px 0 0 -5px; pointer-events: none;
       border: 1px solid #fff; outline: 1px solid #000; }
-    #pick-panel { position: fixed; top: 40px; right: 12px; width: 480px; max-height: calc(100vh - 56px);
-      overflow: auto; box-sizing: border-box; padding: 10px 12px; background: #252526; color: #ddd;
-      border: 1px solid #444; border-radius: 4px; font: 12px/1.4 system-ui, sans-serif; z-index: 10; }
+    /* Beside the image when the window is wide enough, below it otherwise: never over it. */
+    #pick-panel { display: inline-block; vertical-align: top; margin: 12px 12px 12px 0;
+      width: min(500px, calc(100vw - 24px)); box-sizing: border-box; padding: 10px 12px;
+      background: #252526; color: #ddd; border: 1px solid #444; border-radius: 4px;
+      font: 12px/1.4 system-ui, sans-serif; }
     #pick-panel h2 { margin: 0 0 6px; font-size: 14px; }
     #pick-panel h3 { margin: 10px 0 4px; font-size: 12px; color: #9cdcfe; }
     #pick-panel table { border-collapse: collapse; width: 100%; font-variant-numeric: tabular-nums; }
@@ -141,7 +143,7 @@
     }
     answer.surfaces.forEach((surface, index) => {
       const object = surface.object;
-      const title = object.name ? `“${escape(object.name)}”` : `object ${object.index}`;
+      const title = `“${escape(object.name)}” (object ${object.index})`;
       parts.push(`<h3 class="object">${title} ${sourceLink(object.defined_at)}${answer.surfaces.length > 1 ? ` · ${surface.samples} samples` : ""}</h3>`);
       const material = surface.material;
       const materialName = material.name ? `“${escape(material.name)}” ` : "";
@@ -171,6 +173,8 @@
       }
     });
     panel.innerHTML = parts.join("");
+    // Below the image in a narrow window: bring it into view.
+    panel.scrollIntoView({ block: "nearest" });
     document.body.dataset.pick = "shown";
   }
 
