@@ -496,7 +496,10 @@ fn run_pick(
     output_settings: OutputSettings,
 ) -> i32 {
     let [scene_path] = args.scenes.as_slice() else {
-        errln!("error: --pick inspects one scene, but {} were given", args.scenes.len());
+        errln!(
+            "error: --pick inspects one scene, but {} were given",
+            args.scenes.len()
+        );
         return EXIT_BAD_INPUT;
     };
     if let Some(output) = &args.output {

@@ -16,14 +16,17 @@ use crate::diag::{Sources, line_column};
 use crate::lighting::LightContribution;
 use crate::output::{Encoding, linear_to_srgb, quantize_channel};
 use crate::render::inspect::{
-    LightingBreakdown, MaterialOrigin, PickError, PixelInspection, SurfaceInspection, SurfaceLighting, inspect_pixel,
+    LightingBreakdown, MaterialOrigin, PickError, PixelInspection, SurfaceInspection, SurfaceLighting,
+    inspect_pixel,
 };
 use crate::render::shade::TexelRead;
 use crate::render::{DebugView, RenderOptions};
 use crate::ron_path;
 use crate::scene::load::{LoadOptions, scene_materials};
 use crate::scene::locate::{PathSegment, locate};
-use crate::scene::{Light, LightingComponent, LightingModel, Material, MicrofacetDistribution, Scene, Shading};
+use crate::scene::{
+    Light, LightingComponent, LightingModel, Material, MicrofacetDistribution, Scene, Shading,
+};
 
 /// What made an image, kept beside it so that its pixels can be inspected later: the scene as
 /// loaded (overrides applied), the texts the loader read, and the settings of the render. The
@@ -384,7 +387,12 @@ fn material_report(texts: &SceneTexts, object: usize, surface: &SurfaceInspectio
     }
 }
 
-fn texel_report(scene: &Scene, object: &crate::scene::Object, material: &Material, texel: &TexelRead) -> TexelReport {
+fn texel_report(
+    scene: &Scene,
+    object: &crate::scene::Object,
+    material: &Material,
+    texel: &TexelRead,
+) -> TexelReport {
     let role = if Some(texel.binding) == material.textures.diffuse {
         "diffuse"
     } else if Some(texel.binding) == material.textures.ambient {
@@ -571,7 +579,9 @@ Materials(
     /// 1-based line and column (in chars) of the first occurrence of `needle` in `text`,
     /// counted here rather than by `diag`.
     fn position_of(text: &str, needle: &str) -> (usize, usize) {
-        let offset = text.find(needle).unwrap_or_else(|| panic!("{needle} is in the text"));
+        let offset = text
+            .find(needle)
+            .unwrap_or_else(|| panic!("{needle} is in the text"));
         let before = &text[..offset];
         let line = before.lines().count() + usize::from(before.ends_with('\n') || before.is_empty());
         let column = before.rsplit('\n').next().unwrap().chars().count() + 1;
@@ -621,8 +631,14 @@ Materials(
         let point = &surface.lighting.points[0];
         assert_eq!(point.lights.len(), 2);
         let (line, column) = position_of(SCENE, "Point(position");
-        assert_eq!(at(&point.lights[1].defined_at), (scene_file.clone(), line, column));
-        assert_eq!((point.lights[0].kind, point.lights[1].kind), ("directional", "point"));
+        assert_eq!(
+            at(&point.lights[1].defined_at),
+            (scene_file.clone(), line, column)
+        );
+        assert_eq!(
+            (point.lights[0].kind, point.lights[1].kind),
+            ("directional", "point")
+        );
         assert!(surface.mesh.triangle < 32 * 32 * 2);
 
         let right = origin.pick(28, 15).unwrap();
@@ -630,13 +646,22 @@ Materials(
         assert_eq!(surface.object.name, "right");
         assert_eq!(surface.material.origin, "scene");
         let (line, column) = position_of(SCENE, "\"chalk\": (");
-        assert_eq!(at(&surface.material.defined_at), (scene_file.clone(), line, column));
+        assert_eq!(
+            at(&surface.material.defined_at),
+            (scene_file.clone(), line, column)
+        );
 
         let wall = origin.pick(1, 1).unwrap();
         let surface = &wall.surfaces[0];
-        assert_eq!((surface.object.index, surface.object.name.as_str()), (2, "object 2"));
+        assert_eq!(
+            (surface.object.index, surface.object.name.as_str()),
+            (2, "object 2")
+        );
         assert_eq!(surface.material.name.as_deref(), Some("pearl"));
-        assert_eq!((surface.material.origin, &surface.material.defined_at), ("preset", &None));
+        assert_eq!(
+            (surface.material.origin, &surface.material.defined_at),
+            ("preset", &None)
+        );
 
         let top = origin.pick(20, 4).unwrap();
         let surface = &top.surfaces[0];
@@ -651,19 +676,54 @@ Materials(
         let folder = tempfile::tempdir().unwrap();
         let json: serde_json::Value =
             serde_json::from_str(&origin(folder.path()).pick(12, 15).unwrap().to_json()).unwrap();
-        for field in ["x", "y", "width", "height", "samples", "scene", "background", "color", "surfaces"] {
+        for field in [
+            "x",
+            "y",
+            "width",
+            "height",
+            "samples",
+            "scene",
+            "background",
+            "color",
+            "surfaces",
+        ] {
             assert!(!json[field].is_null(), "{field}: {json}");
         }
         let surface = &json["surfaces"][0];
         for field in [
-            "object", "mesh", "samples", "shading_point", "depth", "view_distance", "position", "normal",
-            "geometric_normal", "back_facing", "shading", "component", "lighting_model", "material", "texels",
-            "lighting", "color",
+            "object",
+            "mesh",
+            "samples",
+            "shading_point",
+            "depth",
+            "view_distance",
+            "position",
+            "normal",
+            "geometric_normal",
+            "back_facing",
+            "shading",
+            "component",
+            "lighting_model",
+            "material",
+            "texels",
+            "lighting",
+            "color",
         ] {
             assert!(!surface[field].is_null(), "{field}: {surface}");
         }
         let light = &surface["lighting"]["points"][0]["lights"][0];
-        for field in ["index", "kind", "reaches", "to_light", "n_dot_l", "attenuation", "spot", "shadow", "diffuse", "specular"] {
+        for field in [
+            "index",
+            "kind",
+            "reaches",
+            "to_light",
+            "n_dot_l",
+            "attenuation",
+            "spot",
+            "shadow",
+            "diffuse",
+            "specular",
+        ] {
             assert!(!light[field].is_null(), "{field}: {light}");
         }
     }

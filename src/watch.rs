@@ -284,7 +284,8 @@ struct WatchSession {
 
 /// What one build did.
 enum BuildOutcome {
-    Written(WrittenImage),
+    /// Boxed: the other outcomes are small.
+    Written(Box<WrittenImage>),
     BadInput {
         error: LoadError,
         /// Reading and checking, until the problems were found.
@@ -568,11 +569,11 @@ fn build_once(
         };
     }
     let written_at = Instant::now();
-    BuildOutcome::Written(WrittenImage {
+    BuildOutcome::Written(Box::new(WrittenImage {
         rendered,
         encode_time: written_at - encode_started,
         written_at,
-    })
+    }))
 }
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {

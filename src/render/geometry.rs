@@ -773,7 +773,10 @@ fn constant_point(mesh: &crate::mesh::Mesh, transforms: &ObjectTransforms, viewe
 
 /// [`constant_point`] of a scene's object, for the pixel inspector.
 pub(crate) fn constant_lighting_point(object: &Object, scene: &Scene, viewer: &Viewer) -> (Vec3, Vec3) {
-    let camera = CameraSetup::new(&scene.camera, scene.image.width as f64 / scene.image.height as f64);
+    let camera = CameraSetup::new(
+        &scene.camera,
+        scene.image.width as f64 / scene.image.height as f64,
+    );
     constant_point(&object.mesh, &ObjectTransforms::new(object, &camera), viewer)
 }
 

@@ -116,7 +116,7 @@ pub enum SurfaceLighting {
     /// Lit once for the object, at its centre with the normal facing the viewer (constant).
     Object(LightingBreakdown),
     /// Lit at the three vertices (Gouraud), in `mesh_vertices` order, and interpolated.
-    Vertices([LightingBreakdown; 3]),
+    Vertices(Box<[LightingBreakdown; 3]>),
     /// A debug view of the normal or the depth: no lighting.
     DebugView,
 }
@@ -148,7 +148,12 @@ pub enum PickError {
 }
 
 /// Inspects pixel `(x, y)` of `scene` rendered with `options` (see the module documentation).
-pub fn inspect_pixel(scene: &Scene, options: &RenderOptions, x: u32, y: u32) -> Result<PixelInspection, PickError> {
+pub fn inspect_pixel(
+    scene: &Scene,
+    options: &RenderOptions,
+    x: u32,
+    y: u32,
+) -> Result<PixelInspection, PickError> {
     let (width, height) = (scene.image.width, scene.image.height);
     if x >= width || y >= height {
         return Err(PickError::OutOfRange { x, y, width, height });
@@ -188,7 +193,14 @@ pub fn inspect_pixel(scene: &Scene, options: &RenderOptions, x: u32, y: u32) -> 
         .iter()
         .map(|&(local, count, at)| {
             let first = first_samples.iter().position(|&id| id == local).unwrap_or(0);
-            inspect_surface(scene, &frame, visibility.raster_id(local), count, at, depths[first])
+            inspect_surface(
+                scene,
+                &frame,
+                visibility.raster_id(local),
+                count,
+                at,
+                depths[first],
+            )
         })
         .collect::<Vec<_>>();
     let covered_samples: u32 = surfaces.iter().map(|s| s.sample_count).sum();
@@ -242,7 +254,11 @@ fn inspect_surface(
             values[k]
         })
     };
-    let weight_list = in_mesh_order([Vec3::splat(weights.x), Vec3::splat(weights.y), Vec3::splat(weights.z)]);
+    let weight_list = in_mesh_order([
+        Vec3::splat(weights.x),
+        Vec3::splat(weights.y),
+        Vec3::splat(weights.z),
+    ]);
     let barycentrics = Vec3::new(weight_list[0].x, weight_list[1].x, weight_list[2].x);
 
     let [a, b, c] = triangle.vertices.map(|v| &frame.vertices[v as usize]);
@@ -288,14 +304,26 @@ fn inspect_surface(
     let texture_at_pixel: Vec<TexelRead> = surface.texels[0].into_iter().collect();
     let (material, normal, texels, lighting, color) = if debug_view {
         let frame_color = surface_color_of_frame(frame, raster, &corners, at, &surface);
-        (frame_material, surface.normal, Vec::new(), SurfaceLighting::DebugView, frame_color)
+        (
+            frame_material,
+            surface.normal,
+            Vec::new(),
+            SurfaceLighting::DebugView,
+            frame_color,
+        )
     } else {
         match style.shading {
             Shading::Phong => {
                 let breakdown = explain(&surface.material, position, surface.normal, back);
                 let color = breakdown.color;
                 let texels = surface.texels.iter().flatten().copied().collect();
-                (surface.material, surface.normal, texels, SurfaceLighting::Pixel(breakdown), color)
+                (
+                    surface.material,
+                    surface.normal,
+                    texels,
+                    SurfaceLighting::Pixel(breakdown),
+                    color,
+                )
             }
             Shading::Flat => {
                 let [p0, p1, p2] = triangle.vertices.map(|v| frame.vertices[v as usize].position);
@@ -307,8 +335,18 @@ fn inspect_surface(
                 };
                 let breakdown = explain(&material, centroid, geometric_normal, back);
                 let color = modulated(&material, breakdown.shown, &surface);
-                let texels = if has_color_texture(&material) { texture_at_pixel } else { Vec::new() };
-                (material, geometric_normal, texels, SurfaceLighting::Triangle(breakdown), color)
+                let texels = if has_color_texture(&material) {
+                    texture_at_pixel
+                } else {
+                    Vec::new()
+                };
+                (
+                    material,
+                    geometric_normal,
+                    texels,
+                    SurfaceLighting::Triangle(breakdown),
+                    color,
+                )
             }
             Shading::Gouraud => {
                 let per_vertex = triangle.vertices.map(|v| {
@@ -338,17 +376,32 @@ fn inspect_surface(
                     _ => v2.clone(),
                 };
                 let vertices = reorder.map(pick);
-                let texels = if has_color_texture(&frame_material) { texture_at_pixel } else { Vec::new() };
+                let texels = if has_color_texture(&frame_material) {
+                    texture_at_pixel
+                } else {
+                    Vec::new()
+                };
                 let normal = surface.normal;
-                (frame_material, normal, texels, SurfaceLighting::Vertices(vertices), color)
+                (
+                    frame_material,
+                    normal,
+                    texels,
+                    SurfaceLighting::Vertices(Box::new(vertices)),
+                    color,
+                )
             }
             Shading::Constant => {
                 // Lit once for the object, from its front (`geometry`).
-                let (centre, normal) =
-                    geometry::constant_lighting_point(object, scene, &frame.viewer);
+                let (centre, normal) = geometry::constant_lighting_point(object, scene, &frame.viewer);
                 let breakdown = explain(&frame_material, centre, normal, false);
                 let color = frame.constant_colors[triangle.material as usize];
-                (frame_material, geometric_normal, Vec::new(), SurfaceLighting::Object(breakdown), color)
+                (
+                    frame_material,
+                    geometric_normal,
+                    Vec::new(),
+                    SurfaceLighting::Object(breakdown),
+                    color,
+                )
             }
         }
     };
@@ -359,7 +412,10 @@ fn inspect_surface(
         mesh_vertices,
         barycentrics,
         sample_count,
-        shading_point: (at.0 as f64 / SUBPIXEL_ONE as f64, at.1 as f64 / SUBPIXEL_ONE as f64),
+        shading_point: (
+            at.0 as f64 / SUBPIXEL_ONE as f64,
+            at.1 as f64 / SUBPIXEL_ONE as f64,
+        ),
         depth,
         view_distance: position.dot(frame.forward),
         position: eye + position.as_dvec3(),
@@ -513,8 +569,7 @@ mod tests {
         let to_point = DVec3::new(0.0, 3.0, 3.0) - p;
         let d = to_point.length();
         let attenuation = 1.0 / (1.0 + 0.1 * d + 0.05 * d * d);
-        let (diffuse_1, specular_1, n_dot_l_1) =
-            phong(to_point / d, DVec3::new(1.0, 0.8, 0.6), attenuation);
+        let (diffuse_1, specular_1, n_dot_l_1) = phong(to_point / d, DVec3::new(1.0, 0.8, 0.6), attenuation);
 
         let SurfaceLighting::Pixel(lighting) = &surface.lighting else {
             panic!("a Phong pixel is lit at the pixel: {:?}", surface.lighting);
@@ -531,7 +586,10 @@ mod tests {
         assert!(directional.reaches && point.reaches);
         assert!((f64::from(directional.n_dot_l) - n_dot_l_0).abs() < 1e-6);
         assert!((f64::from(point.n_dot_l) - n_dot_l_1).abs() < 1e-6);
-        assert_eq!((directional.attenuation, directional.spot, directional.visibility), (1.0, 1.0, 1.0));
+        assert_eq!(
+            (directional.attenuation, directional.spot, directional.visibility),
+            (1.0, 1.0, 1.0)
+        );
         assert!((f64::from(point.attenuation) - attenuation).abs() < 1e-6);
         assert_eq!((point.spot, point.visibility), (1.0, 1.0));
         close(lighting.terms.ambient, ka * 0.2, "ambient");
@@ -609,7 +667,10 @@ mod tests {
     /// their colours resolve to the frame's pixel as the frame resolves them.
     #[test]
     fn multisampled_pixels_resolve_from_their_surfaces() {
-        let scene = scene(&SPHERE.replace("background: (0.1, 0.2, 0.3)", "background: (0.1, 0.2, 0.3), samples: 4"));
+        let scene = scene(&SPHERE.replace(
+            "background: (0.1, 0.2, 0.3)",
+            "background: (0.1, 0.2, 0.3), samples: 4",
+        ));
         let (frame, _) = render(&scene, &RenderOptions::default());
         let mut edges = 0;
         for y in 0..48 {
@@ -638,7 +699,10 @@ mod tests {
         let scene = scene(SPHERE);
         let corner = inspect_pixel(&scene, &RenderOptions::default(), 0, 0).unwrap();
         assert!(corner.surfaces.is_empty());
-        assert_eq!((corner.color, corner.background_samples), (Vec3::new(0.1, 0.2, 0.3), 1));
+        assert_eq!(
+            (corner.color, corner.background_samples),
+            (Vec3::new(0.1, 0.2, 0.3), 1)
+        );
         assert_eq!(
             inspect_pixel(&scene, &RenderOptions::default(), 48, 3),
             Err(PickError::OutOfRange {

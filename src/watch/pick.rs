@@ -37,7 +37,10 @@ pub fn answer(url: &str, origin: Option<&ImageOrigin>) -> (u16, &'static str, Ve
     match path {
         "/api/pick" => {
             let (Some(x), Some(y)) = (parameter(query, "x"), parameter(query, "y")) else {
-                return error(400, "expected /api/pick?x=X&y=Y with whole pixel coordinates from 0");
+                return error(
+                    400,
+                    "expected /api/pick?x=X&y=Y with whole pixel coordinates from 0",
+                );
             };
             match origin.pick(x, y) {
                 Ok(report) => (200, JSON, report.to_json().into_bytes()),
@@ -54,8 +57,14 @@ pub fn answer(url: &str, origin: Option<&ImageOrigin>) -> (u16, &'static str, Ve
                         None => error(500, "the mask could not be encoded"),
                     }
                 }
-                Some(object) => error(422, &format!("object {object} does not exist (the scene has {objects})")),
-                None => error(400, "expected /api/object-mask?object=N with an object index from 0"),
+                Some(object) => error(
+                    422,
+                    &format!("object {object} does not exist (the scene has {objects})"),
+                ),
+                None => error(
+                    400,
+                    "expected /api/object-mask?object=N with an object index from 0",
+                ),
             }
         }
         _ => error(404, "not found"),

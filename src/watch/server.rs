@@ -293,7 +293,10 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
             let response = Response::from_data(body).with_status_code(status);
             respond(
                 request,
-                with_headers(response, &[("Content-Type", content_type), ("Cache-Control", "no-store")]),
+                with_headers(
+                    response,
+                    &[("Content-Type", content_type), ("Cache-Control", "no-store")],
+                ),
             );
         }
         path if path.starts_with("/page/") => match super::pick::page_file(path) {

@@ -31,16 +31,27 @@ fn json(output: &Output) -> Value {
 fn render_pick_prints_the_pixels_json_and_writes_no_image() {
     let work = tempfile::tempdir().unwrap();
     let scene = repo().join("scenes/matlab-shiny.ron");
-    let output = lampshade(&["render", "--pick", "380,200", scene.to_str().unwrap()], work.path());
+    let output = lampshade(
+        &["render", "--pick", "380,200", scene.to_str().unwrap()],
+        work.path(),
+    );
     let pick = json(&output);
     assert_eq!((pick["x"].as_u64(), pick["y"].as_u64()), (Some(380), Some(200)));
-    assert_eq!((pick["width"].as_u64(), pick["height"].as_u64()), (Some(640), Some(480)));
+    assert_eq!(
+        (pick["width"].as_u64(), pick["height"].as_u64()),
+        (Some(640), Some(480))
+    );
     assert_eq!(pick["background"], false);
     let surface = &pick["surfaces"][0];
     assert_eq!(surface["shading"], "Phong");
     assert_eq!(surface["lighting"]["at"], "pixel");
     let defined_at = &surface["object"]["defined_at"];
-    assert!(defined_at["path"].as_str().unwrap().ends_with("scenes/matlab-shiny.ron"));
+    assert!(
+        defined_at["path"]
+            .as_str()
+            .unwrap()
+            .ends_with("scenes/matlab-shiny.ron")
+    );
     assert!(defined_at["line"].as_u64().unwrap() >= 17, "{defined_at}");
     assert_eq!(surface["material"]["origin"], "inline");
     let lights = surface["lighting"]["points"][0]["lights"].as_array().unwrap();
@@ -103,15 +114,24 @@ fn render_pick_honours_the_overrides_and_writes_the_image_with_o() {
 fn render_pick_of_the_background_and_outside_the_image() {
     let work = tempfile::tempdir().unwrap();
     let scene = repo().join("scenes/matlab-shiny.ron");
-    let pick = json(&lampshade(&["render", "--pick", "0,0", scene.to_str().unwrap()], work.path()));
+    let pick = json(&lampshade(
+        &["render", "--pick", "0,0", scene.to_str().unwrap()],
+        work.path(),
+    ));
     assert_eq!(pick["background"], true);
     assert_eq!(pick["surfaces"], serde_json::json!([]));
     assert_eq!(pick["background_samples"], 1);
 
-    let outside = lampshade(&["render", "--pick", "640,10", scene.to_str().unwrap()], work.path());
+    let outside = lampshade(
+        &["render", "--pick", "640,10", scene.to_str().unwrap()],
+        work.path(),
+    );
     assert_eq!(outside.status.code(), Some(2));
     let message = String::from_utf8_lossy(&outside.stderr);
-    assert!(message.contains("(640, 10) is outside the 640×480 image"), "{message}");
+    assert!(
+        message.contains("(640, 10) is outside the 640×480 image"),
+        "{message}"
+    );
     assert!(outside.stdout.is_empty());
 
     let malformed = lampshade(&["render", "--pick", "12", scene.to_str().unwrap()], work.path());
@@ -122,7 +142,10 @@ fn render_pick_of_the_background_and_outside_the_image() {
 #[test]
 fn the_preview_server_answers_picks_about_the_image_shown() {
     let folder = SceneFolder::new();
-    let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "out.png", "--serve", "--port", "0"]);
+    let watch = WatchProcess::start(
+        &folder.path,
+        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
+    );
     let port = preview_port(&watch);
     wait_for("the first image", || watch.output(), || folder.image());
     let host = format!("127.0.0.1:{port}");
@@ -137,14 +160,23 @@ fn the_preview_server_answers_picks_about_the_image_shown() {
     );
     assert_eq!(status, 200);
     let served: Value = serde_json::from_slice(&body).unwrap();
-    let cli = json(&lampshade(&["render", "--pick", "8,12", "scene.ron"], &folder.path));
+    let cli = json(&lampshade(
+        &["render", "--pick", "8,12", "scene.ron"],
+        &folder.path,
+    ));
     assert_eq!(served, cli, "the server and `render --pick` agree");
     assert_eq!(served["surfaces"][0]["object"]["index"], 0);
 
     let (status, body) = http_get(port, "/api/pick?x=32&y=0", &host);
     assert_eq!(status, 422);
     let error: Value = serde_json::from_slice(&body).unwrap();
-    assert!(error["error"].as_str().unwrap().contains("outside the 32×24 image"), "{error}");
+    assert!(
+        error["error"]
+            .as_str()
+            .unwrap()
+            .contains("outside the 32×24 image"),
+        "{error}"
+    );
     let (status, _) = http_get(port, "/api/pick?x=one&y=2", &host);
     assert_eq!(status, 400);
 

@@ -60,7 +60,10 @@ fn clicking_a_pixel_shows_its_object_with_a_link_to_its_line_and_highlights_it()
     };
     let folder = SceneFolder::new();
     folder.write("scene.ron", SCENE);
-    let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "out.png", "--serve", "--port", "0"]);
+    let watch = WatchProcess::start(
+        &folder.path,
+        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
+    );
     let port = preview_port(&watch);
     wait_for("the first image", || watch.output(), || folder.image());
     let mut browser = Browser::open(&chromium, &format!("http://127.0.0.1:{port}/"));
@@ -81,9 +84,17 @@ fn clicking_a_pixel_shows_its_object_with_a_link_to_its_line_and_highlights_it()
     let line = SCENE.lines().position(|l| l.contains("(name: \"ball\"")).unwrap() + 1;
     let column = SCENE.lines().nth(line - 1).unwrap().find('(').unwrap() + 1;
     let expected = format!("vscode://file{}:{line}:{column}", scene_path.display());
-    let links: Vec<&str> = shown["links"].as_array().unwrap().iter().filter_map(Value::as_str).collect();
+    let links: Vec<&str> = shown["links"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(Value::as_str)
+        .collect();
     assert_eq!(links.first(), Some(&expected.as_str()), "{shown}");
-    assert!(shown["lightRows"].as_u64().unwrap() >= 6, "header, emission, ambient, two lights, sum: {shown}");
+    assert!(
+        shown["lightRows"].as_u64().unwrap() >= 6,
+        "header, emission, ambient, two lights, sum: {shown}"
+    );
 
     // The box, then the background, then Escape.
     click(&mut browser, &shown, (230, 120));
@@ -100,5 +111,7 @@ fn clicking_a_pixel_shows_its_object_with_a_link_to_its_line_and_highlights_it()
         "Input.dispatchKeyEvent",
         json!({ "type": "keyDown", "key": "Escape", "code": "Escape", "windowsVirtualKeyCode": 27 }),
     );
-    browser.wait_for_page(PROBE, "the panel to close", &watch, |state| state["panelShown"] == false);
+    browser.wait_for_page(PROBE, "the panel to close", &watch, |state| {
+        state["panelShown"] == false
+    });
 }
