@@ -75,8 +75,6 @@ fn clicking_a_pixel_shows_its_object_with_a_link_to_its_line_and_highlights_it()
         state["pick"] == "shown" && state["maskShown"] == true
     });
     browser.save_screenshot("pick-panel.png");
-    browser.evaluate("document.querySelector('table.lighting').scrollIntoView()");
-    browser.save_screenshot("pick-panel-table.png");
     assert_eq!(shown["object"], "0", "{shown}");
     assert_eq!(shown["highlight"], "0", "{shown}");
     assert!(shown["title"].as_str().unwrap().contains("ball"), "{shown}");

@@ -173,8 +173,6 @@
       }
     });
     panel.innerHTML = parts.join("");
-    // Below the image in a narrow window: bring it into view.
-    panel.scrollIntoView({ block: "nearest" });
     document.body.dataset.pick = "shown";
   }
 
