@@ -161,8 +161,21 @@ pub struct RenderArgs {
     /// scene's sample pattern.
     #[arg(long, value_name = "N", requires = "reference", value_parser = clap::value_parser!(u32).range(1..=i64::from(crate::reference::MAX_REFERENCE_SAMPLES)))]
     pub reference_samples: Option<u32>,
+    /// Print what the frame drew at image pixel X,Y (from the top-left corner) as JSON on
+    /// standard output, with the lighting per light and term and where each thing is defined
+    /// (docs/pick.md). No image is written unless -o is given too.
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel, conflicts_with = "reference")]
+    pub pick: Option<(u32, u32)>,
     #[command(flatten)]
     pub limits: InputLimits,
+}
+
+/// `--pick X,Y`: two pixel coordinates.
+fn parse_pixel(text: &str) -> Result<(u32, u32), String> {
+    let parsed = text
+        .split_once(',')
+        .and_then(|(x, y)| Some((x.trim().parse().ok()?, y.trim().parse().ok()?)));
+    parsed.ok_or_else(|| format!("expected two pixel coordinates X,Y (whole numbers from 0), not `{text}`"))
 }
 
 /// What scenes may read and how much memory they may take: `--sandbox` and `--max-memory`,
@@ -419,6 +432,9 @@ fn run_render(args: &RenderArgs) -> i32 {
             EncodingArg::Srgb => Encoding::Srgb,
         },
     };
+    if let Some(pixel) = args.pick {
+        return run_pick(args, pixel, &load_options, &render_options, output_settings);
+    }
     let mut bad_inputs = Vec::new();
     let mut failed_outputs = 0;
     // Scenes rendered in turn share meshes (a mesh several scenes use is read once) and the
@@ -467,6 +483,79 @@ fn run_render(args: &RenderArgs) -> i32 {
         EXIT_OUTPUT_FAILED
     } else {
         EXIT_OK
+    }
+}
+
+/// `render --pick X,Y SCENE`: the pick JSON on standard output, and the image too when `-o`
+/// names one (its summary line is not printed: standard output carries the JSON).
+fn run_pick(
+    args: &RenderArgs,
+    (x, y): (u32, u32),
+    load_options: &LoadOptions,
+    render_options: &RenderOptions,
+    output_settings: OutputSettings,
+) -> i32 {
+    let [scene_path] = args.scenes.as_slice() else {
+        errln!(
+            "error: --pick inspects one scene, but {} were given",
+            args.scenes.len()
+        );
+        return EXIT_BAD_INPUT;
+    };
+    if let Some(output) = &args.output {
+        let target = if output.as_os_str() == "-" {
+            Target::Stdout
+        } else {
+            Target::File(output.clone())
+        };
+        if matches!(target, Target::Stdout) {
+            errln!("error: --pick prints JSON on standard output, so the image cannot go there too (`-o -`)");
+            return EXIT_BAD_INPUT;
+        }
+        let run = RenderRun {
+            load_options,
+            render_options,
+            output_settings,
+            quiet: true,
+            reference: None,
+            progress_bar: false,
+        };
+        match render_one(scene_path, &target, &run, &mut BuildCache::default()) {
+            Ok(()) => {}
+            Err(RenderFailure::BadInput) => return EXIT_BAD_INPUT,
+            Err(RenderFailure::Output) => return EXIT_OUTPUT_FAILED,
+        }
+    }
+    let loaded = match crate::scene::load_scene(scene_path, load_options) {
+        Ok(loaded) => loaded,
+        Err(error) => {
+            print_load_error(&error);
+            return EXIT_BAD_INPUT;
+        }
+    };
+    // The render for -o is quiet (its summary line would go into the JSON): warnings are said here.
+    if !loaded.warnings.is_empty() && !args.quiet {
+        errout!(
+            "{}",
+            render_diagnostics(&loaded.warnings, &loaded.sources, use_color())
+        );
+    }
+    let origin = crate::inspect::ImageOrigin {
+        scene: std::sync::Arc::new(loaded.scene),
+        sources: std::sync::Arc::new(loaded.sources),
+        load_options: load_options.clone(),
+        render_options: *render_options,
+        encoding: output_settings.encoding,
+    };
+    match origin.pick(x, y) {
+        Ok(report) => {
+            outln!("{}", report.to_json_pretty());
+            EXIT_OK
+        }
+        Err(error) => {
+            errln!("error: --pick {x},{y}: {error}");
+            EXIT_BAD_INPUT
+        }
     }
 }
 

@@ -24,6 +24,7 @@ pub mod bench;
 pub mod check;
 pub mod cli;
 pub mod diag;
+pub mod inspect;
 pub mod lighting;
 pub mod lsp;
 pub mod mesh;

@@ -103,6 +103,35 @@ pub fn illuminate_with_visibility(
     to_viewer: Vec3,
     visibility: impl Fn(usize, Vec3) -> f32,
 ) -> LightingTerms {
+    illuminate_each_light(
+        material,
+        lights,
+        ambient_light,
+        position,
+        normal,
+        to_viewer,
+        visibility,
+        |_, _| {},
+    )
+}
+
+/// [`illuminate_with_visibility`], also handing `each` every light's part of the sums, in the
+/// order they are added: the terms' diffuse and specular sums are exactly the per-light parts
+/// added one after the other from zero. The renderer passes a closure that does nothing (it
+/// inlines away); the pixel inspector (`render::inspect`) keeps the parts, so its breakdown is
+/// the frame's own arithmetic, not a copy of it.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn illuminate_each_light(
+    material: &Material,
+    lights: &[ShadingLight],
+    ambient_light: Vec3,
+    position: Vec3,
+    normal: Vec3,
+    to_viewer: Vec3,
+    visibility: impl Fn(usize, Vec3) -> f32,
+    mut each: impl FnMut(usize, &LightContribution),
+) -> LightingTerms {
     let mut terms = LightingTerms {
         emission: material.emission,
         ..LightingTerms::default()
@@ -112,45 +141,103 @@ pub fn illuminate_with_visibility(
         return terms;
     }
     terms.ambient = material.ambient * ambient_light;
-    let has_specular = material.specular != Vec3::ZERO;
     for (index, light) in lights.iter().enumerate() {
-        let Some((to_light, strength)) = incidence(light, position) else {
-            continue;
-        };
-        let n_dot_l = normal.dot(to_light);
-        if n_dot_l <= 0.0 || strength <= 0.0 {
-            continue;
-        }
-        let strength = strength * visibility(index, to_light);
-        if strength <= 0.0 {
-            continue;
-        }
-        let irradiance = light.color * strength * n_dot_l;
-        match material.model {
-            LightingModel::Unlit => {}
-            LightingModel::Lambert => terms.diffuse += material.diffuse * irradiance,
-            LightingModel::Phong | LightingModel::BlinnPhong => {
-                terms.diffuse += material.diffuse * irradiance;
-                if has_specular {
-                    let cosine = if material.model == LightingModel::BlinnPhong {
-                        normal.dot((to_light + to_viewer).normalize_or_zero())
-                    } else {
-                        reflect(to_light, normal).dot(to_viewer)
-                    };
-                    // The seeds' specular term has no N·L factor: undo the one in `irradiance`.
-                    let intensity = light.color * strength;
-                    terms.specular +=
-                        material.specular * intensity * specular_power(cosine, material.shininess);
-                }
-            }
-            LightingModel::CookTorrance(surface) => {
-                let reflection = cook_torrance(&surface, normal, to_light, to_viewer);
-                terms.diffuse += material.diffuse * (Vec3::ONE - reflection.fresnel) * irradiance;
-                terms.specular += reflection.specular * irradiance;
-            }
+        let contribution = light_contribution(material, light, position, normal, to_viewer, |to_light| {
+            visibility(index, to_light)
+        });
+        each(index, &contribution);
+        if contribution.reaches {
+            terms.diffuse += contribution.diffuse;
+            terms.specular += contribution.specular;
         }
     }
     terms
+}
+
+/// What one light adds at a point, with the factors it is made of:
+/// `diffuse = k_d·I·att·spot·S·(N·L)`, `specular = k_s·I·att·spot·S·spec` (Phong, Blinn-Phong;
+/// Cook-Torrance as [`cook_torrance`] gives it).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LightContribution {
+    /// Unit vector from the point towards the light; zero where the light has no direction
+    /// (it sits on the point).
+    pub to_light: Vec3,
+    /// `N·L`, with the normal the side is lit with.
+    pub n_dot_l: f32,
+    /// Distance attenuation (1 for directional lights).
+    pub attenuation: f32,
+    /// The spot cone's factor (1 for other lights, 0 outside the cone).
+    pub spot: f32,
+    /// The shadow term `S`: 1 where the light is not asked (it does not face the surface, or
+    /// its cone or attenuation leaves nothing) or casts no shadow.
+    pub visibility: f32,
+    pub diffuse: Vec3,
+    pub specular: Vec3,
+    /// Whether the light adds anything (`diffuse` and `specular` are zero when it does not).
+    pub reaches: bool,
+}
+
+/// One light's part of [`illuminate_each_light`]'s sums at a point of a lit model (not
+/// `Unlit`); `visibility(L)` is asked only when the light faces the surface with some strength.
+#[inline]
+pub fn light_contribution(
+    material: &Material,
+    light: &ShadingLight,
+    position: Vec3,
+    normal: Vec3,
+    to_viewer: Vec3,
+    visibility: impl FnOnce(Vec3) -> f32,
+) -> LightContribution {
+    let mut contribution = LightContribution {
+        attenuation: 1.0,
+        spot: 1.0,
+        visibility: 1.0,
+        ..LightContribution::default()
+    };
+    let Some(incidence) = incidence_factors(light, position) else {
+        return contribution;
+    };
+    let to_light = incidence.to_light;
+    contribution.to_light = to_light;
+    contribution.attenuation = incidence.attenuation;
+    contribution.spot = incidence.spot;
+    let strength = incidence.strength();
+    let n_dot_l = normal.dot(to_light);
+    contribution.n_dot_l = n_dot_l;
+    if n_dot_l <= 0.0 || strength <= 0.0 {
+        return contribution;
+    }
+    contribution.visibility = visibility(to_light);
+    let strength = strength * contribution.visibility;
+    if strength <= 0.0 {
+        return contribution;
+    }
+    contribution.reaches = true;
+    let irradiance = light.color * strength * n_dot_l;
+    match material.model {
+        LightingModel::Unlit => contribution.reaches = false,
+        LightingModel::Lambert => contribution.diffuse = material.diffuse * irradiance,
+        LightingModel::Phong | LightingModel::BlinnPhong => {
+            contribution.diffuse = material.diffuse * irradiance;
+            if material.specular != Vec3::ZERO {
+                let cosine = if material.model == LightingModel::BlinnPhong {
+                    normal.dot((to_light + to_viewer).normalize_or_zero())
+                } else {
+                    reflect(to_light, normal).dot(to_viewer)
+                };
+                // The seeds' specular term has no N·L factor: undo the one in `irradiance`.
+                let intensity = light.color * strength;
+                contribution.specular =
+                    material.specular * intensity * specular_power(cosine, material.shininess);
+            }
+        }
+        LightingModel::CookTorrance(surface) => {
+            let reflection = cook_torrance(&surface, normal, to_light, to_viewer);
+            contribution.diffuse = material.diffuse * (Vec3::ONE - reflection.fresnel) * irradiance;
+            contribution.specular = reflection.specular * irradiance;
+        }
+    }
+    contribution
 }
 
 /// What a Cook-Torrance surface reflects towards the viewer from one light.
@@ -271,14 +358,47 @@ pub fn power_by_squaring<T: Copy + std::ops::Mul<Output = T>>(base: T, one: T, e
 /// (spot factor × attenuation), or `None` when the light has no direction at that point. The
 /// fast lighting's one-point form calls it too; its lanes repeat it operation for operation.
 pub fn incidence(light: &ShadingLight, position: Vec3) -> Option<(Vec3, f32)> {
+    incidence_factors(light, position).map(|incidence| (incidence.to_light, incidence.strength()))
+}
+
+/// How a light arrives at a point: its direction, and its strength's two factors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Incidence {
+    /// Unit vector towards the light.
+    pub to_light: Vec3,
+    /// The spot cone's factor: 1 for directional and point lights, 0 outside a spot's cone.
+    pub spot: f32,
+    /// `1 / (c + l·d + q·d²)`; 1 for directional lights.
+    pub attenuation: f32,
+}
+
+impl Incidence {
+    /// `spot × attenuation` (exactly the attenuation for a point light, `1·a = a`).
+    #[inline]
+    pub fn strength(&self) -> f32 {
+        self.spot * self.attenuation
+    }
+}
+
+/// [`incidence`] with its factors apart, for the lighting's breakdown per light.
+#[inline]
+pub fn incidence_factors(light: &ShadingLight, position: Vec3) -> Option<Incidence> {
     match light.kind {
-        ShadingLightKind::Directional { to_light } => Some((to_light, 1.0)),
+        ShadingLightKind::Directional { to_light } => Some(Incidence {
+            to_light,
+            spot: 1.0,
+            attenuation: 1.0,
+        }),
         ShadingLightKind::Point {
             position: light_position,
             attenuation,
         } => {
             let (to_light, distance) = direction_and_distance(light_position - position)?;
-            Some((to_light, attenuate(attenuation, distance)))
+            Some(Incidence {
+                to_light,
+                spot: 1.0,
+                attenuation: attenuate(attenuation, distance),
+            })
         }
         ShadingLightKind::Spot {
             position: light_position,
@@ -289,11 +409,16 @@ pub fn incidence(light: &ShadingLight, position: Vec3) -> Option<(Vec3, f32)> {
         } => {
             let (to_light, distance) = direction_and_distance(light_position - position)?;
             let cos_angle = -to_light.dot(axis);
-            if cos_angle < cos_cutoff {
-                return Some((to_light, 0.0));
-            }
-            let spot = specular_power(cos_angle, exponent);
-            Some((to_light, spot * attenuate(attenuation, distance)))
+            let spot = if cos_angle < cos_cutoff {
+                0.0
+            } else {
+                specular_power(cos_angle, exponent)
+            };
+            Some(Incidence {
+                to_light,
+                spot,
+                attenuation: attenuate(attenuation, distance),
+            })
         }
     }
 }

@@ -4,15 +4,20 @@
 //! scene, nowhere, or atomically on every save), so this stage does no output I/O.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::diag::{Diagnostic, Sources};
 use crate::render::{FrameBuffer, RenderOptions, RenderStats, Renderer};
+use crate::scene::Scene;
 use crate::scene::load::{LoadError, LoadOptions, MeshCache, load_scene_cached};
 
 /// A scene file that loaded and rendered.
 #[derive(Debug, Clone)]
 pub struct RenderedScene {
+    /// The scene as loaded and rendered (command-line overrides applied), kept so that the
+    /// image's pixels can be inspected afterwards (`inspect`).
+    pub scene: Arc<Scene>,
     pub framebuffer: FrameBuffer,
     pub stats: RenderStats,
     /// Reading, parsing, checking and mesh loading.
@@ -44,6 +49,7 @@ pub fn render_scene_file(
     let load_time = started.elapsed();
     let stats = cache.renderer.render(&loaded.scene, render_options);
     Ok(RenderedScene {
+        scene: Arc::new(loaded.scene),
         framebuffer: cache.renderer.take_framebuffer(),
         stats,
         load_time,

@@ -868,6 +868,7 @@ pub fn render_reference_file(
         ..RenderStats::default()
     };
     Ok(RenderedScene {
+        scene: std::sync::Arc::new(loaded.scene),
         framebuffer: reference.framebuffer,
         stats,
         load_time,

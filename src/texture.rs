@@ -264,6 +264,21 @@ impl Texture {
         self.levels.first().map_or(0, |level| level.height)
     }
 
+    /// The mipmap level of detail [`Texture::sample`] reads at for a footprint spanning `uv_dx`
+    /// and `uv_dy`: log2 of its longer side in texels of level 0 (≤ 0 reads level 0 alone).
+    #[inline]
+    pub fn level_of_detail(&self, uv_dx: Vec2, uv_dy: Vec2) -> f32 {
+        let Some(base) = self.levels.first() else {
+            return 0.0;
+        };
+        let size = Vec2::new(base.width as f32, base.height as f32);
+        // Lengths of finite vectors: finite or +∞ (for huge derivatives), never NaN.
+        let footprint = (finite_or_zero(uv_dx) * size)
+            .length()
+            .max((finite_or_zero(uv_dy) * size).length());
+        footprint.log2()
+    }
+
     /// The filtered value at `uv` for a pixel whose footprint spans `uv_dx` and `uv_dy` (the
     /// change of `uv` per pixel step in x and y): trilinear when minified, bilinear when
     /// magnified, wrapped per `sampler` (module documentation). Never NaN for a texture built
@@ -287,12 +302,7 @@ impl Texture {
             return Vec4::ZERO;
         };
         let uv = finite_or_zero(uv);
-        let size = Vec2::new(base.width as f32, base.height as f32);
-        // Lengths of finite vectors: finite or +∞ (for huge derivatives), never NaN.
-        let footprint = (finite_or_zero(uv_dx) * size)
-            .length()
-            .max((finite_or_zero(uv_dy) * size).length());
-        let lod = footprint.log2() + mip_bias;
+        let lod = self.level_of_detail(uv_dx, uv_dy) + mip_bias;
         let last_level = self.levels.len() - 1;
         if lod.is_nan() || lod <= 0.0 || last_level == 0 {
             return bilinear(base, uv, sampler);

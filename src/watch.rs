@@ -39,17 +39,20 @@
 
 mod debounce;
 mod files;
+mod pick;
 mod server;
 
 use std::collections::BTreeSet;
 use std::panic::{self, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::mpsc::{self, Sender};
 use std::time::{Duration, Instant};
 
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK, EXIT_OUTPUT_FAILED, shadow_maps_part, thousands, use_color};
 use crate::diag::render_diagnostics;
-use crate::output::{self, Destination, OutputError, OutputFormat, PngCompression};
+use crate::inspect::ImageOrigin;
+use crate::output::{self, Destination, Encoding, OutputError, OutputFormat, PngCompression};
 use crate::pipeline::{BuildCache, RenderedScene, render_scene_file};
 use crate::render::RenderOptions;
 use crate::scene::load::{LoadError, LoadOptions};
@@ -65,6 +68,9 @@ const DEBOUNCE: Debounce = Debounce {
     after_save: Duration::from_millis(15),
     max_delay: Duration::from_millis(500),
 };
+
+/// The preview's source links when `--editor` is not given: Visual Studio Code's.
+pub const DEFAULT_EDITOR_LINK: &str = "vscode://file{path}:{line}:{column}";
 
 /// The preview's port when `--port` is not given.
 pub const DEFAULT_PORT: u16 = 7800;
@@ -93,6 +99,13 @@ pub struct WatchArgs {
     /// The preview's port; 0, or a port in use, picks a free one (the address is printed).
     #[arg(long, default_value_t = DEFAULT_PORT, requires = "serve")]
     pub port: u16,
+    /// The link the preview's inspector opens a source location with: a URL template with
+    /// `{path}` (absolute, so starting with `/`; URL-encoded), `{line}` and `{column}` (1-based),
+    /// e.g.
+    /// `idea://open?file={path}&line={line}&column={column}` or
+    /// `subl://open?url=file://{path}&line={line}&column={column}`. Default: VS Code's.
+    #[arg(long, value_name = "TEMPLATE", default_value = DEFAULT_EDITOR_LINK, requires = "serve")]
+    pub editor: String,
     #[command(flatten)]
     pub limits: crate::cli::InputLimits,
 }
@@ -155,6 +168,7 @@ pub fn run(args: &WatchArgs) -> i32 {
                     errln!("note: {note}");
                 }
                 outln!("preview at {}", started.server.url());
+                started.server.set_editor_link(&args.editor);
                 Some(started.server)
             }
             Err(error) => {
@@ -270,7 +284,8 @@ struct WatchSession {
 
 /// What one build did.
 enum BuildOutcome {
-    Written(WrittenImage),
+    /// Boxed: the other outcomes are small.
+    Written(Box<WrittenImage>),
     BadInput {
         error: LoadError,
         /// Reading and checking, until the problems were found.
@@ -418,7 +433,14 @@ impl WatchSession {
                         milliseconds(render_time),
                         milliseconds(latency),
                     );
-                    preview.publish_image(png, summary);
+                    let origin = ImageOrigin {
+                        scene: Arc::clone(&written.rendered.scene),
+                        sources: Arc::new(sources.clone()),
+                        load_options: self.load_options.clone(),
+                        render_options: self.render_options,
+                        encoding: Encoding::Linear,
+                    };
+                    preview.publish_image(png, summary, Arc::new(origin));
                 }
                 Err(error) => errln!(
                     "warning: preview: cannot read back `{}`: {error}",
@@ -547,11 +569,11 @@ fn build_once(
         };
     }
     let written_at = Instant::now();
-    BuildOutcome::Written(WrittenImage {
+    BuildOutcome::Written(Box::new(WrittenImage {
         rendered,
         encode_time: written_at - encode_started,
         written_at,
-    })
+    }))
 }
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {

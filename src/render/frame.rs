@@ -12,7 +12,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3, Vec4};
 
-use crate::lighting::{LightingTerms, ShadingLight, illuminate_with_visibility};
+use crate::lighting::{LightContribution, LightingTerms, ShadingLight, illuminate_each_light};
 use crate::render::DebugView;
 use crate::render::bin::{self, RasterChunk, TileGrid};
 pub use crate::render::raster::FrameTriangle;
@@ -298,7 +298,23 @@ impl Frame {
         normal: Vec3,
         lit_side: bool,
     ) -> (Vec3, Vec3) {
-        let terms = illuminate_with_visibility(
+        let terms = self.light_side_terms(material, position, normal, lit_side, |_, _| {});
+        select_component_split(self.debug_view, component, &terms)
+    }
+
+    /// Every term of the lighting [`Frame::light_side`] selects from, handing `each` every
+    /// light's part of the sums (`lighting::illuminate_each_light`): the one computation both
+    /// the frame and the pixel inspector run.
+    #[inline]
+    pub fn light_side_terms(
+        &self,
+        material: &Material,
+        position: Vec3,
+        normal: Vec3,
+        lit_side: bool,
+        each: impl FnMut(usize, &LightContribution),
+    ) -> LightingTerms {
+        illuminate_each_light(
             material,
             if lit_side { &self.lights } else { &[] },
             self.ambient_light,
@@ -309,8 +325,8 @@ impl Frame {
                 Some(Some(map)) => map.visibility(position, normal, to_light),
                 _ => 1.0,
             },
-        );
-        select_component_split(self.debug_view, component, &terms)
+            each,
+        )
     }
 }
 

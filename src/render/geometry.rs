@@ -747,9 +747,7 @@ fn add_object_vertices(
     // bounds with the normal facing the viewer.
     frame.constant_colors.resize(frame.materials.len(), Vec3::ZERO);
     if style.shading == Shading::Constant {
-        let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
-        let center = transforms.world_from_model.transform_point3((lo + hi) / 2.0);
-        let normal = frame.viewer.to_viewer(center);
+        let (center, normal) = constant_point(mesh, &transforms, &frame.viewer);
         for material in material_base..material_base + material_count {
             frame.constant_colors[material as usize] = frame.light(material, &style, center, normal, false);
         }
@@ -764,6 +762,23 @@ fn add_object_vertices(
         mirrored: transforms.mirrored,
         skip_back_faces: back_faces_hidden(object, camera),
     }
+}
+
+/// Where a constant-shaded object is lit: the centre of its mesh's bounds (eye-relative), with
+/// the normal facing the viewer.
+fn constant_point(mesh: &crate::mesh::Mesh, transforms: &ObjectTransforms, viewer: &Viewer) -> (Vec3, Vec3) {
+    let (lo, hi) = mesh.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    let center = transforms.world_from_model.transform_point3((lo + hi) / 2.0);
+    (center, viewer.to_viewer(center))
+}
+
+/// [`constant_point`] of a scene's object, for the pixel inspector.
+pub(crate) fn constant_lighting_point(object: &Object, scene: &Scene, viewer: &Viewer) -> (Vec3, Vec3) {
+    let camera = CameraSetup::new(
+        &scene.camera,
+        scene.image.width as f64 / scene.image.height as f64,
+    );
+    constant_point(&object.mesh, &ObjectTransforms::new(object, &camera), viewer)
 }
 
 /// Whether no back face of `object` can be seen: its mesh is closed and its bounding sphere lies

@@ -24,6 +24,7 @@ pub mod clip;
 pub mod depth;
 pub mod frame;
 pub mod geometry;
+pub mod inspect;
 pub mod lanes;
 pub mod normals;
 pub mod raster;

@@ -538,7 +538,9 @@ impl Visibility {
 
     /// Rasterizes tile `tile` (the pixels `rect`) into this buffer, replacing what it held:
     /// every chunk's triangles binned to it, chunk by chunk and in order within each, keeping
-    /// the nearest at every sample. The arrays keep their capacity from tile to tile.
+    /// the nearest at every sample. The arrays keep their capacity from tile to tile. Always
+    /// inlined into the frame's band loop, as `shade::shade_tile` is (the inspector calls both).
+    #[inline(always)]
     pub fn rasterize(
         &mut self,
         rect: PixelRect,

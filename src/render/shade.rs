@@ -14,7 +14,7 @@
 //! here, for the few back faces that are actually visible, instead of for every vertex. Colours
 //! lit per triangle are kept in a small per-tile cache, so each is lit about once per tile.
 
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Vec2, Vec3, Vec3A, Vec4};
 
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
@@ -223,6 +223,67 @@ impl GouraudColors {
     }
 }
 
+/// The Gouraud colour a pixel of `raster` shows at the fixed-point point `at`, from the source
+/// triangle's vertex colours `colors`: [`GouraudColors::at`], as every Gouraud pixel is made.
+pub(crate) fn gouraud_color_at(
+    raster: &RasterTriangle,
+    corners: &Corners,
+    colors: [Vec3; 3],
+    at: (i64, i64),
+) -> Vec3 {
+    GouraudColors::new(raster, corners, colors).at(edge_values(raster, at.0, at.1))
+}
+
+/// Where the frame shades pixel `(x, y)` of the tile `visibility` holds: per distinct triangle
+/// its samples show (in the order of their first samples), the tile's number of the triangle,
+/// how many samples it covers and the point it is shaded at (1/256 pixel). The first pass of
+/// [`shade_multisampled`] itself, run over the tile; with one sample, the pixel's centre.
+pub(crate) fn pixel_shading_points(visibility: &Visibility, x: u32, y: u32) -> Vec<(u32, u32, (i64, i64))> {
+    let rect = visibility.rect;
+    let pixel = ((y - rect.y0) * rect.width() + (x - rect.x0)) as usize;
+    let samples = visibility.pattern.len();
+    if samples == 1 {
+        let local = visibility.triangle[pixel];
+        return if local == NO_TRIANGLE {
+            Vec::new()
+        } else {
+            vec![(local, 1, (pixel_centre(x), pixel_centre(y)))]
+        };
+    }
+    let offset_sum = visibility
+        .pattern
+        .offsets()
+        .iter()
+        .fold((0, 0), |(x, y), &(ox, oy)| (x + i64::from(ox), y + i64::from(oy)));
+    let whole_pixel = (
+        offset_sum.0.div_euclid(samples as i64),
+        offset_sum.1.div_euclid(samples as i64),
+    );
+    let pixel_count = (rect.width() * rect.height()) as usize;
+    let mut points = vec![ShadingPoint::default(); pixel_count * samples];
+    let mut pixel_start = vec![0; pixel_count + 1];
+    let mut triangle_start = vec![0; visibility.raster_ids.len() + 2];
+    let find = match samples {
+        2 => find_points::<2>,
+        4 => find_points::<4>,
+        8 => find_points::<8>,
+        16 => find_points::<16>,
+        _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
+    };
+    let point_count = find(
+        visibility,
+        whole_pixel,
+        &mut points,
+        &mut pixel_start,
+        &mut triangle_start,
+    );
+    pixel_start[pixel_count] = point_count as u32;
+    points[pixel_start[pixel] as usize..pixel_start[pixel + 1] as usize]
+        .iter()
+        .map(|point| (point.local, point.count, point.at))
+        .collect()
+}
+
 /// A Gouraud triangle's colours split as for a colour texture: the part it multiplies and the
 /// rest, each interpolated as [`GouraudColors`].
 struct SplitGouraudColors {
@@ -326,6 +387,10 @@ impl<'f> FlatBatch<'f> {
 ///
 /// Writes every pixel of the tile into `target` (the background where nothing is seen) and
 /// returns the number of shading evaluations (one per distinct triangle per covered pixel).
+///
+/// Always inlined: the pixel inspector calls it too, and with a second caller it was left out of
+/// line in the frame's band loop, which then ran 1–2 % more instructions (callgrind, S1).
+#[inline(always)]
 pub fn shade_tile<'f>(
     frame: &'f Frame,
     visibility: &Visibility,
@@ -907,7 +972,7 @@ fn shade_varying<'f>(
 
 /// The centre of pixel row or column `p`, in 1/256 pixel.
 #[inline]
-fn pixel_centre(p: u32) -> i64 {
+pub(crate) fn pixel_centre(p: u32) -> i64 {
     i64::from(p) * SUBPIXEL_ONE + SUBPIXEL_ONE / 2
 }
 
@@ -1278,31 +1343,105 @@ fn shade_sample(
             }
         }
         Shading::Phong => {
-            let mut surface = if frame.vertex_attributes.is_empty() {
-                *material
-            } else {
-                let [ta, tb, tc] = attributes();
-                tinted(material, interpolate(ta.tint, tb.tint, tc.tint))
-            };
-            if let Some(binding) = material.textures.diffuse {
-                let texel = sample(&binding).truncate();
-                surface.diffuse *= texel;
-                if material.textures.ambient.is_none() {
-                    surface.ambient *= texel;
-                }
-            }
-            if let Some(binding) = material.textures.ambient {
-                surface.ambient *= sample(&binding).truncate();
-            }
-            let mut normal = smooth_normal();
-            if let Some(binding) = material.textures.normal {
-                let [ta, tb, tc] = attributes();
-                let tangent = ta.tangent * weights.x + tb.tangent * weights.y + tc.tangent * weights.z;
-                normal = perturb_normal(normal, tangent, sample(&binding).truncate(), binding.scale);
-            }
-            let (textured_part, rest) = frame.light_material(&surface, style, position, normal, back);
+            let surface = phong_surface(frame, raster, weights, (weights_dx, weights_dy));
+            let (textured_part, rest) =
+                frame.light_material(&surface.material, style, position, surface.normal, back);
             textured_part + rest
         }
+    }
+}
+
+/// What a Phong-shaded point is lit with, once textures, vertex colours and the normal map
+/// have done their work.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhongSurface {
+    /// The material with `k_a` and `k_d` multiplied by the colour textures and the vertex
+    /// colour.
+    pub material: Material,
+    /// The interpolated normal (Nlerp or Slerp, renormalised; the face normal where it
+    /// vanishes), normal-mapped, of the front side.
+    pub normal: Vec3,
+    /// The texture coordinates and filtered value of each texture read: diffuse, ambient,
+    /// normal map.
+    pub texels: [Option<TexelRead>; 3],
+}
+
+/// One texture lookup of a point: where, with what footprint, and what it gave.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TexelRead {
+    pub binding: TextureBinding,
+    pub uv: Vec2,
+    /// How far `uv` moves one pixel right and one pixel down.
+    pub uv_dx: Vec2,
+    pub uv_dy: Vec2,
+    pub value: Vec4,
+}
+
+/// The surface [`shade_sample`] lights at a Phong point with the source weights `weights`
+/// (and `footprint`, the weights one pixel right and one pixel down, read only when a texture
+/// is). The pixel inspector reads the same surface.
+pub fn phong_surface(
+    frame: &Frame,
+    raster: &RasterTriangle,
+    weights: Vec3,
+    footprint: (Vec3, Vec3),
+) -> PhongSurface {
+    let triangle = &raster.triangle;
+    let style = &frame.objects[triangle.object as usize];
+    let material = &frame.materials[triangle.material as usize];
+    let [a, b, c] = triangle.vertices.map(|v| &frame.vertices[v as usize]);
+    let interpolate = |x: Vec3, y: Vec3, z: Vec3| x * weights.x + y * weights.y + z * weights.z;
+    let attributes = || triangle.vertices.map(|v| frame.attributes(v));
+    let read = |binding: TextureBinding| -> TexelRead {
+        let [a, b, c] = attributes();
+        let uv_of = |v: &VertexAttributes| if binding.uv_set == 1 { v.uv1 } else { v.uv };
+        let uv_at = |w: Vec3| uv_of(&a) * w.x + uv_of(&b) * w.y + uv_of(&c) * w.z;
+        let uv = uv_at(weights);
+        let (uv_dx, uv_dy) = (uv_at(footprint.0) - uv, uv_at(footprint.1) - uv);
+        TexelRead {
+            binding,
+            uv,
+            uv_dx,
+            uv_dy,
+            value: frame.textures[binding.texture as usize].sample(uv, uv_dx, uv_dy, &binding.sampler),
+        }
+    };
+    let mut surface = if frame.vertex_attributes.is_empty() {
+        *material
+    } else {
+        let [ta, tb, tc] = attributes();
+        tinted(material, interpolate(ta.tint, tb.tint, tc.tint))
+    };
+    let mut texels = [None; 3];
+    if let Some(binding) = material.textures.diffuse {
+        let texel = read(binding);
+        surface.diffuse *= texel.value.truncate();
+        if material.textures.ambient.is_none() {
+            surface.ambient *= texel.value.truncate();
+        }
+        texels[0] = Some(texel);
+    }
+    if let Some(binding) = material.textures.ambient {
+        let texel = read(binding);
+        surface.ambient *= texel.value.truncate();
+        texels[1] = Some(texel);
+    }
+    let interpolated = match style.normal_interpolation {
+        NormalInterpolation::Nlerp => interpolate(a.normal, b.normal, c.normal),
+        NormalInterpolation::Slerp => slerp_triangle([a.normal, b.normal, c.normal], weights),
+    };
+    let mut normal = renormalize_or_else(interpolated, || frame.face_normal(triangle));
+    if let Some(binding) = material.textures.normal {
+        let [ta, tb, tc] = attributes();
+        let tangent = ta.tangent * weights.x + tb.tangent * weights.y + tc.tangent * weights.z;
+        let texel = read(binding);
+        normal = perturb_normal(normal, tangent, texel.value.truncate(), binding.scale);
+        texels[2] = Some(texel);
+    }
+    PhongSurface {
+        material: surface,
+        normal,
+        texels,
     }
 }
 

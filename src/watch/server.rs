@@ -6,8 +6,9 @@
 //!   for the person at this machine, and scene files, paths and diagnostics are theirs. The
 //!   `Host` header must name `127.0.0.1` or `localhost` at our port, so a web page elsewhere
 //!   cannot reach the server through DNS rebinding.
-//! - Three routes: `/` (a static page, `preview.html`), `/image.png` (the last good image) and
-//!   `/events` (server-sent events). Each build publishes one small JSON state, the same shape the
+//! - Routes: `/` (a static page, `preview.html`), `/image.png` (the last good image),
+//!   `/events` (server-sent events), and the inspector's (`watch::pick`): `/api/pick`,
+//!   `/api/object-mask` and the page's scripts under `/page/`. Each build publishes one small JSON state, the same shape the
 //!   page receives on connecting; the page swaps the image in only once the new one has loaded
 //!   (no flicker) and shows or hides the diagnostics overlay.
 //! - The last good image is kept in memory as the PNG bytes just written, so the page can never
@@ -32,6 +33,8 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use serde::Serialize;
 use tiny_http::{Header, Method, Request, Response, Server};
 
+use crate::inspect::ImageOrigin;
+
 /// The page, served as is.
 const PAGE: &str = include_str!("preview.html");
 
@@ -52,6 +55,8 @@ struct PreviewState {
     summary: String,
     /// The diagnostics of the last build, plain text, if it failed.
     error: Option<String>,
+    /// The URL template source links open (`watch --editor`).
+    editor: String,
 }
 
 /// What the server threads share with the watch loop.
@@ -64,6 +69,8 @@ struct Hub {
 struct HubInner {
     state: PreviewState,
     image_bytes: Option<Arc<Vec<u8>>>,
+    /// What made the image shown, for `/api/pick` (none for an earlier run's image).
+    image_origin: Option<Arc<ImageOrigin>>,
     generation: u64,
     /// One sender per open `/events` stream.
     subscribers: Vec<Sender<String>>,
@@ -146,8 +153,10 @@ impl PreviewServer {
                     image: has_image.then(|| format!("{run_id}-0")),
                     summary: String::from("rendering…"),
                     error: None,
+                    editor: String::from(crate::watch::DEFAULT_EDITOR_LINK),
                 },
                 image_bytes: initial_image.map(Arc::new),
+                image_origin: None,
                 generation: 0,
                 subscribers: Vec::new(),
             }),
@@ -177,12 +186,19 @@ impl PreviewServer {
         &self.url
     }
 
-    /// A build wrote `png`: show it.
-    pub fn publish_image(&self, png: Vec<u8>, summary: String) {
+    /// The URL template the page's source links follow (`watch --editor`).
+    /// Set before the first page connects; pages get it with the state.
+    pub fn set_editor_link(&self, template: &str) {
+        self.hub.lock().state.editor = template.to_owned();
+    }
+
+    /// A build wrote `png`, made as `origin` says: show it, and answer `/api/pick` about it.
+    pub fn publish_image(&self, png: Vec<u8>, summary: String, origin: Arc<ImageOrigin>) {
         let run_id = self.hub.run_id;
         self.hub.update(|inner| {
             inner.generation += 1;
             inner.image_bytes = Some(Arc::new(png));
+            inner.image_origin = Some(origin);
             inner.state.image = Some(format!("{run_id}-{}", inner.generation));
             inner.state.summary = summary;
             inner.state.error = None;
@@ -271,6 +287,28 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
                 None => respond(request, text(404, "no image yet")),
             }
         }
+        "/api/pick" | "/api/object-mask" => {
+            let origin = hub.lock().image_origin.clone();
+            let (status, content_type, body) = super::pick::answer(request.url(), origin.as_deref());
+            let response = Response::from_data(body).with_status_code(status);
+            respond(
+                request,
+                with_headers(
+                    response,
+                    &[("Content-Type", content_type), ("Cache-Control", "no-store")],
+                ),
+            );
+        }
+        path if path.starts_with("/page/") => match super::pick::page_file(path) {
+            Some((content_type, body)) => respond(
+                request,
+                with_headers(
+                    Response::from_string(body),
+                    &[("Content-Type", content_type), ("Cache-Control", "no-store")],
+                ),
+            ),
+            None => respond(request, text(404, "not found")),
+        },
         "/events" => {
             let hub = hub.clone();
             let spawned = std::thread::Builder::new()

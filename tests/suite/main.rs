@@ -13,7 +13,9 @@
 //!   errors and recovery, Ctrl-C, the preview server);
 //! - `lsp`: `lampshade lsp` driven over standard input and output as an editor drives it;
 //! - `watch_browser`: the preview page in headless Chromium (skipped without Chromium);
-//!   `browser` drives Chromium for it.
+//!   `browser` drives Chromium for it;
+//! - `pick`: the pixel inspector, `render --pick` and `GET /api/pick`; `pick_browser`: its panel,
+//!   source links and highlight in headless Chromium.
 
 mod browser;
 mod check;
@@ -23,6 +25,8 @@ mod hard_cases;
 mod loading;
 mod lsp;
 mod outputs;
+mod pick;
+mod pick_browser;
 mod render;
 mod robustness;
 mod watch;
