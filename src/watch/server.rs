@@ -35,6 +35,9 @@ use tiny_http::{Header, Method, Request, Response, Server};
 /// The page, served as is.
 const PAGE: &str = include_str!("preview.html");
 
+/// The compare views (swipe, onion skin, difference), shared with `check --report`'s page.
+const COMPARE_SCRIPT: &str = include_str!("page/compare.js");
+
 /// How often an idle event stream sends a comment, so a closed page is noticed and its thread
 /// ends.
 const KEEP_ALIVE: Duration = Duration::from_secs(15);
@@ -254,6 +257,16 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
             );
             respond(request, page);
         }
+        "/page/compare.js" => respond(
+            request,
+            with_headers(
+                Response::from_string(COMPARE_SCRIPT),
+                &[
+                    ("Content-Type", "text/javascript; charset=utf-8"),
+                    ("Cache-Control", "no-store"),
+                ],
+            ),
+        ),
         "/image.png" => {
             let image = hub.lock().image_bytes.clone();
             match image {
