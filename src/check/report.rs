@@ -290,14 +290,14 @@ fn write_problem(
     // Expected and actual feed the viewer (compare.js); the heat map and FLIP's map are modes
     // of it. Without scripts the figures still show side by side.
     let pictures = [
-        ("expected", "expected", &result.pictures.expected),
-        ("actual", "actual", &result.pictures.actual),
-        ("difference", "layer", &result.pictures.difference),
-        ("FLIP error", "layer", &result.pictures.flip),
+        ("expected", "expected", "expected", &result.pictures.expected),
+        ("actual", "actual", "actual", &result.pictures.actual),
+        ("difference", "layer", "heat map", &result.pictures.difference),
+        ("FLIP error", "layer", "FLIP", &result.pictures.flip),
     ];
-    if pictures.iter().any(|(_, _, file)| file.is_some()) {
+    if pictures.iter().any(|(.., file)| file.is_some()) {
         html.push_str("<div class=\"pictures\" data-compare>\n");
-        for (caption, role, file) in pictures {
+        for (caption, role, mode, file) in pictures {
             let Some(file) = file else { continue };
             let link = escape::attribute(&format!("{PICTURE_FOLDER}/{file}"));
             // Embedded, so the page is one file; linked when it cannot be read back.
@@ -305,7 +305,7 @@ fn write_problem(
                 picture(file).map_or_else(|| link.clone(), |png| escape::data_url("image/png", &png));
             let _ = writeln!(
                 html,
-                "<figure><img src=\"{source}\" alt=\"{caption}\" data-role=\"{role}\" data-name=\"{caption}\">\
+                "<figure><img src=\"{source}\" alt=\"{caption}\" data-role=\"{role}\" data-name=\"{mode}\">\
                  <figcaption>{caption} <a href=\"{link}\">(file)</a></figcaption></figure>"
             );
         }

@@ -12,12 +12,16 @@
 //! - `watch`: `lampshade watch` as a process on a temporary folder (save styles, includes, meshes,
 //!   errors and recovery, Ctrl-C, the preview server);
 //! - `lsp`: `lampshade lsp` driven over standard input and output as an editor drives it;
+//! - `turntable`: `render --turntable` (APNG frames against single renders, numbered frames,
+//!   shards, refused arguments);
 //! - `watch_browser`: the preview page in headless Chromium (skipped without Chromium);
-//!   `browser` drives Chromium for it.
+//!   `compare_browser`: the preview's compare views and the `check --report` viewer there;
+//!   `browser` drives Chromium for them.
 
 mod browser;
 mod check;
 mod cli;
+mod compare_browser;
 mod golden;
 mod hard_cases;
 mod loading;
@@ -25,6 +29,7 @@ mod lsp;
 mod outputs;
 mod render;
 mod robustness;
+mod turntable;
 mod watch;
 mod watch_browser;
 

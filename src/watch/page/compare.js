@@ -10,7 +10,8 @@
 // - the preview: `#stage` holding `<img id="view">`; the compare bar goes above the stage;
 // - a report: every `[data-compare]` element holding `<img data-role="expected">` and
 //   `<img data-role="actual">`, and optionally more `<img data-role="layer" data-name="…">`
-//   (the heat map, FLIP's error map), each shown alone as a mode of its own.
+//   (the heat map, FLIP's error map), each shown alone as a mode of its own; small images are
+//   enlarged (pixelated) there.
 // The chosen mode, divider, opacity and gain are remembered in localStorage.
 "use strict";
 
@@ -36,6 +37,7 @@
       border-left: 1px solid #fff; box-shadow: 0 0 0 1px rgba(0,0,0,.6); pointer-events: none; }
     .compare-divider[hidden] { display: none; }
     .compare-note { color: #aaa; }
+    #compare-bar { margin: 8px 12px 0; }
   `;
 
   const MODE_NAMES = {
@@ -113,8 +115,9 @@
   // One viewer: a bar of modes and a canvas. `modes` lists the compare modes offered (keys of
   // MODE_NAMES), `layers` extra single images by name; `storageKey` remembers the settings.
   class CompareView {
-    constructor({ modes, layers = [], storageKey, defaultMode }) {
+    constructor({ modes, layers = [], storageKey, defaultMode, zoomTo = 0 }) {
       this.modes = modes;
+      this.zoomTo = zoomTo; // small images are shown enlarged to about this many CSS pixels
       this.layers = layers; // [{ name, image }]
       this.storageKey = storageKey;
       this.settings = load(storageKey, { mode: defaultMode, split: 0.5, opacity: 0.5, gain: 4 });
@@ -230,6 +233,8 @@
         canvas.width = shown.width;
         canvas.height = shown.height;
       }
+      const zoom = Math.max(1, Math.floor(this.zoomTo / Math.max(shown.width, shown.height)));
+      canvas.style.width = this.zoomTo ? shown.width * zoom + "px" : "";
       const context = canvas.getContext("2d");
       context.imageSmoothingEnabled = false;
       context.globalAlpha = 1;
@@ -339,6 +344,7 @@
       layers,
       storageKey: "lampshade-report-compare",
       defaultMode: "side",
+      zoomTo: 640,
     });
     viewer.frame.dataset.scene = String(index);
     holder.parentNode.insertBefore(viewer.bar, holder);
