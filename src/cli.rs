@@ -784,11 +784,14 @@ fn run_turntable(
     if let TurntableOutput::Animation(path) = &destination {
         render_record().current = Some((path.clone(), SystemTime::now()));
     }
+    let orbit = crate::turntable::Orbit {
+        axis,
+        frame_count: turntable.frames,
+        frames: &frames,
+    };
     let rendered = crate::turntable::render_turntable(
         &loaded.scene,
-        axis,
-        turntable.frames,
-        &frames,
+        &orbit,
         render_options,
         &destination,
         encoding,

@@ -174,33 +174,80 @@ pub struct TurntableStats {
     pub threads: usize,
 }
 
+/// The orbit a turntable renders: which frames of how many, about which axis.
+#[derive(Debug, Clone)]
+pub struct Orbit<'a> {
+    /// A unit vector through the camera's target.
+    pub axis: DVec3,
+    /// Frames in a full turn.
+    pub frame_count: u32,
+    /// The frame numbers to render, in the order they are handed on.
+    pub frames: &'a [u32],
+}
+
 /// Renders `frames` (frame numbers of `frame_count`) of `scene` orbiting about `axis` and writes
 /// them to `destination`; `written` is told each file as it is in place.
 pub fn render_turntable(
     scene: &Scene,
-    axis: DVec3,
-    frame_count: u32,
-    frames: &[u32],
+    orbit: &Orbit,
     render_options: &RenderOptions,
     destination: &TurntableOutput,
     encoding: Encoding,
     mut written: impl FnMut(&Path) + Send,
 ) -> Result<TurntableStats, OutputError> {
+    match destination {
+        TurntableOutput::Animation(path) => {
+            let (bytes, mut stats) = render_animation(scene, orbit, render_options, encoding, path)?;
+            let started = Instant::now();
+            write_bytes(path, &bytes)?;
+            written(path);
+            stats.encode += started.elapsed();
+            Ok(stats)
+        }
+        TurntableOutput::Numbered(pattern, format) => {
+            render_frames(scene, orbit, render_options, |frame, framebuffer| {
+                let path = pattern.path(frame);
+                output::write_image(&path, framebuffer, *format, encoding, PngCompression::Fast)?;
+                written(&path);
+                Ok(())
+            })
+        }
+    }
+}
+
+/// The frames of `orbit` as one APNG in memory (`path` names it in errors).
+pub fn render_animation(
+    scene: &Scene,
+    orbit: &Orbit,
+    render_options: &RenderOptions,
+    encoding: Encoding,
+    path: &Path,
+) -> Result<(Vec<u8>, TurntableStats), OutputError> {
+    let mut bytes = Vec::new();
+    let mut animation = AnimationEncoder::new(path, scene, orbit.frames.len(), &mut bytes)?;
+    let mut stats = render_frames(scene, orbit, render_options, |_, framebuffer| {
+        animation.add_frame(framebuffer, encoding)
+    })?;
+    let started = Instant::now();
+    animation.finish()?;
+    stats.encode += started.elapsed();
+    Ok((bytes, stats))
+}
+
+/// Renders the frames of `orbit` in groups of one per thread and hands each to `take`, in
+/// order.
+fn render_frames(
+    scene: &Scene,
+    orbit: &Orbit,
+    render_options: &RenderOptions,
+    mut take: impl FnMut(u32, &FrameBuffer) -> Result<(), OutputError> + Send,
+) -> Result<TurntableStats, OutputError> {
     let mut run = || {
+        let frames = orbit.frames;
         let mut stats = TurntableStats {
             frames: frames.len(),
             threads: rayon::current_num_threads(),
             ..TurntableStats::default()
-        };
-        let mut animation_bytes = Vec::new();
-        let mut animation = match destination {
-            TurntableOutput::Animation(path) => Some(AnimationEncoder::new(
-                path,
-                scene,
-                frames.len(),
-                &mut animation_bytes,
-            )?),
-            TurntableOutput::Numbered(..) => None,
         };
         // Each render uses the pool this runs in; building a pool per frame would cost threads.
         let options = RenderOptions {
@@ -216,7 +263,7 @@ pub fn render_turntable(
                 .zip(group)
                 .map(|(renderer, &frame)| {
                     let mut orbiting = scene.clone();
-                    orbiting.camera = orbit_camera(&scene.camera, axis, frame, frame_count);
+                    orbiting.camera = orbit_camera(&scene.camera, orbit.axis, frame, orbit.frame_count);
                     let frame_stats = renderer.render(&orbiting, &options);
                     (frame, renderer.take_framebuffer(), frame_stats)
                 })
@@ -225,24 +272,9 @@ pub fn render_turntable(
             let started = Instant::now();
             for ((frame, framebuffer, frame_stats), renderer) in rendered.into_iter().zip(&mut renderers) {
                 stats.triangles = frame_stats.triangles;
-                match (&mut animation, destination) {
-                    (Some(animation), _) => animation.add_frame(&framebuffer, encoding)?,
-                    (None, TurntableOutput::Numbered(pattern, format)) => {
-                        let path = pattern.path(frame);
-                        output::write_image(&path, &framebuffer, *format, encoding, PngCompression::Fast)?;
-                        written(&path);
-                    }
-                    (None, TurntableOutput::Animation(_)) => unreachable!("an animation has its encoder"),
-                }
+                take(frame, &framebuffer)?;
                 renderer.reuse_framebuffer(framebuffer);
             }
-            stats.encode += started.elapsed();
-        }
-        let started = Instant::now();
-        animation.map(AnimationEncoder::finish).transpose()?;
-        if let TurntableOutput::Animation(path) = destination {
-            write_bytes(path, &animation_bytes)?;
-            written(path);
             stats.encode += started.elapsed();
         }
         Ok(stats)

@@ -6,8 +6,9 @@
 //!   for the person at this machine, and scene files, paths and diagnostics are theirs. The
 //!   `Host` header must name `127.0.0.1` or `localhost` at our port, so a web page elsewhere
 //!   cannot reach the server through DNS rebinding.
-//! - Three routes: `/` (a static page, `preview.html`), `/image.png` (the last good image) and
-//!   `/events` (server-sent events). Each build publishes one small JSON state, the same shape the
+//! - Five routes: `/` (a static page, `preview.html`), `/page/compare.js` (the compare views,
+//!   shared with `check --report`), `/image.png` (the last good image), `/turntable.png` (the
+//!   scene orbiting, made on request: `super::turntable`) and `/events` (server-sent events). Each build publishes one small JSON state, the same shape the
 //!   page receives on connecting; the page swaps the image in only once the new one has loaded
 //!   (no flicker) and shows or hides the diagnostics overlay.
 //! - The last good image is kept in memory as the PNG bytes just written, so the page can never
@@ -31,6 +32,8 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use serde::Serialize;
 use tiny_http::{Header, Method, Request, Response, Server};
+
+use super::turntable::TurntableSource;
 
 /// The page, served as is.
 const PAGE: &str = include_str!("preview.html");
@@ -70,6 +73,8 @@ struct HubInner {
     generation: u64,
     /// One sender per open `/events` stream.
     subscribers: Vec<Sender<String>>,
+    /// What `/turntable.png` renders, once the watch has said.
+    turntable: Option<Arc<TurntableSource>>,
 }
 
 impl Hub {
@@ -153,6 +158,7 @@ impl PreviewServer {
                 image_bytes: initial_image.map(Arc::new),
                 generation: 0,
                 subscribers: Vec::new(),
+                turntable: None,
             }),
             run_id,
         });
@@ -178,6 +184,11 @@ impl PreviewServer {
     /// The page's address, `http://127.0.0.1:PORT/`.
     pub fn url(&self) -> &str {
         &self.url
+    }
+
+    /// What `/turntable.png` renders: the watched scene with the watch's options.
+    pub fn set_turntable(&self, source: TurntableSource) {
+        self.hub.lock().turntable = Some(Arc::new(source));
     }
 
     /// A build wrote `png`: show it.
@@ -267,6 +278,7 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
                 ],
             ),
         ),
+        "/turntable.png" => super::turntable::answer(request, hub.lock().turntable.clone()),
         "/image.png" => {
             let image = hub.lock().image_bytes.clone();
             match image {
@@ -346,14 +358,14 @@ fn send(writer: &mut dyn Write, text: &str) -> io::Result<()> {
     writer.flush()
 }
 
-fn text(status: u16, message: &str) -> Response<io::Cursor<Vec<u8>>> {
+pub(super) fn text(status: u16, message: &str) -> Response<io::Cursor<Vec<u8>>> {
     with_headers(
         Response::from_string(format!("{message}\n")).with_status_code(status),
         &[("Content-Type", "text/plain; charset=utf-8")],
     )
 }
 
-fn with_headers<R: io::Read>(mut response: Response<R>, headers: &[(&str, &str)]) -> Response<R> {
+pub(super) fn with_headers<R: io::Read>(mut response: Response<R>, headers: &[(&str, &str)]) -> Response<R> {
     for (name, value) in headers {
         // Our header names and values are constant ASCII, which `from_bytes` always accepts.
         if let Ok(header) = Header::from_bytes(name.as_bytes(), value.as_bytes()) {
@@ -363,7 +375,7 @@ fn with_headers<R: io::Read>(mut response: Response<R>, headers: &[(&str, &str)]
     response
 }
 
-fn respond<R: io::Read>(request: Request, response: Response<R>) {
+pub(super) fn respond<R: io::Read>(request: Request, response: Response<R>) {
     // A page that went away mid-answer is not our problem.
     let _ = request.respond(response);
 }

@@ -9,7 +9,7 @@ use serde_json::{Value, json};
 
 use crate::browser::{Browser, chromium_or_skip};
 use crate::check::{GREEN, everything, three_spheres};
-use crate::watch::{SceneFolder, WatchProcess, preview_port, render_once, scene_text, wait_for};
+use crate::watch::{SceneFolder, WatchProcess, http_get, preview_port, render_once, scene_text, wait_for};
 
 /// Colour management may move an untagged PNG's values by a step or two.
 const TOLERANCE: i64 = 2;
@@ -262,14 +262,38 @@ fn the_preview_compares_the_new_image_with_the_previous_or_the_pinned_one() {
     );
 
     // The mode is remembered across a reload.
-    browser.evaluate("location.reload()");
-    let state = wait_for_page(&mut browser, &probe, "the reloaded page", context, |state| {
-        state["ready"] == true && state["mode"] == "swipe"
-    });
+    browser.evaluate("window.beforeReload = true; location.reload()");
+    wait_for_page(
+        &mut browser,
+        "window.beforeReload === undefined && document.body !== null && document.body.dataset.compareBase !== undefined",
+        "the reloaded page",
+        context,
+        |reloaded| reloaded == true,
+    );
+    let state = browser.evaluate(&probe);
+    assert_eq!(state["mode"], "swipe", "the mode is remembered: {state}");
     assert_eq!(
         state["base"], "none",
         "a reloaded page has no earlier image: {state}"
     );
+
+    // The turntable button plays the watch's APNG of the scene orbiting.
+    browser.evaluate("document.getElementById('turntable-button').click()");
+    let player = r#"(() => { const img = document.getElementById("turntable");
+        return img && !img.hidden && img.complete ? img.naturalWidth : 0; })()"#;
+    wait_for_page(&mut browser, player, "the turntable playing", context, |width| {
+        width.as_u64() == Some(32)
+    });
+    browser.save_screenshot("compare-preview-turntable.png");
+    let host = format!("127.0.0.1:{port}");
+    let (status, body) = http_get(port, "/turntable.png?frames=4", &host);
+    assert_eq!(status, 200);
+    let reader = png::Decoder::new(std::io::Cursor::new(body))
+        .read_info()
+        .expect("a PNG");
+    assert_eq!(reader.info().animation_control.map(|a| a.num_frames), Some(4));
+    let (status, _) = http_get(port, "/turntable.png?frames=0", &host);
+    assert_eq!(status, 400);
 }
 
 #[test]

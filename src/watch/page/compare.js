@@ -7,7 +7,8 @@
 // pixels shown are the images' own (no smoothing: `image-rendering: pixelated`).
 //
 // Markup it recognises, on load:
-// - the preview: `#stage` holding `<img id="view">`; the compare bar goes above the stage;
+// - the preview: `#stage` holding `<img id="view">`; the compare bar goes above the stage, with
+//   a pin button and a turntable button (which plays the watch's `/turntable.png` below it);
 // - a report: every `[data-compare]` element holding `<img data-role="expected">` and
 //   `<img data-role="actual">`, and optionally more `<img data-role="layer" data-name="…">`
 //   (the heat map, FLIP's error map), each shown alone as a mode of its own; small images are
@@ -38,6 +39,8 @@
     .compare-divider[hidden] { display: none; }
     .compare-note { color: #aaa; }
     #compare-bar { margin: 8px 12px 0; }
+    #turntable { display: block; margin: 0 12px 12px; max-width: calc(100vw - 24px); }
+    #turntable[hidden] { display: none; }
   `;
 
   const MODE_NAMES = {
@@ -127,6 +130,7 @@
       this.bar = element("div", { class: "compare-bar" });
       this.frame = element("div", { class: "compare-frame" });
       this.canvas = element("canvas");
+      this.canvas.width = 0; // nothing drawn yet
       this.divider = element("div", { class: "compare-divider", hidden: "" });
       this.frame.append(this.canvas, this.divider);
       this.buildBar();
@@ -296,6 +300,21 @@
     stage.parentNode.insertBefore(viewer.bar, stage);
     stage.insertBefore(viewer.frame, view.nextSibling);
 
+    // The scene turning about its up direction, at reduced size, made by the watch on request
+    // (an APNG, which an <img> plays); the version makes each image's turntable a new request.
+    const spin = element("button", { type: "button", id: "turntable-button", "aria-pressed": "false" }, "turntable");
+    spin.title = "play the scene orbiting its target (36 frames at reduced size)";
+    viewer.bar.insertBefore(spin, viewer.note);
+    const player = element("img", { id: "turntable", alt: "the scene turning", hidden: "" });
+    stage.parentNode.insertBefore(player, stage.nextSibling);
+    spin.addEventListener("click", () => {
+      const on = player.hidden;
+      player.hidden = !on;
+      spin.setAttribute("aria-pressed", String(on));
+      if (on) player.src = "/turntable.png?frames=36&v=" + encodeURIComponent(document.body.dataset.image ?? "");
+      else player.removeAttribute("src");
+    });
+
     let previous = null;
     let current = null;
     let pinned = null;
@@ -311,12 +330,15 @@
       document.body.dataset.compare = viewer.settings.mode;
       document.body.dataset.compareBase = pinned ? "pinned" : previous ? "previous" : "none";
     };
-    view.addEventListener("load", () => {
+    const loaded = () => {
       if (!view.naturalWidth) return;
       previous = current;
       current = snapshot(view);
       show();
-    });
+    };
+    view.addEventListener("load", loaded);
+    // This script may arrive after the first image did.
+    if (view.complete && view.getAttribute("src")) loaded();
     pin.addEventListener("click", () => {
       pinned = pinned === null ? current : null;
       pin.setAttribute("aria-pressed", String(pinned !== null));
@@ -325,7 +347,7 @@
     });
     const change = viewer.change.bind(viewer);
     viewer.change = (settings) => { change(settings); show(); };
-    show();
+    if (current === null) show();
     window.lampshadeCompare = viewer;
   }
 
