@@ -68,9 +68,15 @@ impl TurntableAxis {
 pub fn orbit_camera(camera: &Camera, axis: DVec3, frame: u32, frames: u32) -> Camera {
     let angle = std::f64::consts::TAU * f64::from(frame) / f64::from(frames);
     let rotation = DQuat::from_axis_angle(axis, angle);
+    // An up along the axis stays as it is, bit for bit (the rotation would round it).
+    let up_is_axis = camera.up.reject_from(axis).length() <= 1e-12 * camera.up.length();
     Camera {
         eye: camera.target + rotation * (camera.eye - camera.target),
-        up: rotation * camera.up,
+        up: if up_is_axis {
+            camera.up
+        } else {
+            rotation * camera.up
+        },
         ..*camera
     }
 }
