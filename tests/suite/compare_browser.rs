@@ -262,7 +262,10 @@ fn the_preview_compares_the_new_image_with_the_previous_or_the_pinned_one() {
     );
 
     // The mode is remembered across a reload.
-    browser.evaluate("window.beforeReload = true; location.reload()");
+    // `Page.navigate` answers once the new document has committed, so no evaluation below
+    // lands in the page being torn down.
+    browser.evaluate("window.beforeReload = true");
+    browser.call("Page.navigate", json!({ "url": url }));
     let mode = wait_for_page(
         &mut browser,
         "window.beforeReload === undefined && document.body !== null ? document.body.dataset.compare ?? null : null",
