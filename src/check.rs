@@ -300,7 +300,10 @@ pub fn run(args: &CheckArgs) -> i32 {
         }
     }
     if let Some(folder) = report_folder {
-        let html = report::report_html(&scenes, &results, &summary);
+        let images = folder.join(report::PICTURE_FOLDER);
+        let html = report::report_html(&scenes, &results, &summary, &|file| {
+            std::fs::read(images.join(file)).ok()
+        });
         let index = folder.join("index.html");
         match report::write_report(folder, &html) {
             Ok(()) => {

@@ -78,6 +78,8 @@ Examples:
   lampshade render scene.ron --reference -o exact.exr      the f64 ray-cast image it converges to
   lampshade render scene.ron --reference=mesh --reference-samples 4
   lampshade render scene.ron -o - | display               PNG on standard output
+  lampshade render scene.ron --turntable 36                an animated PNG, scene-turntable.png
+  lampshade render scene.ron --turntable 120 -o spin-%03d.png --shard 1/4
   lampshade render scenes/*.ron                            each beside its scene";
 
 const CHECK_EXAMPLES: &str = "\
@@ -164,8 +166,21 @@ pub struct RenderArgs {
     /// Print what the frame drew at image pixel X,Y (from the top-left corner) as JSON on
     /// standard output, with the lighting per light and term and where each thing is defined
     /// (docs/pick.md). No image is written unless -o is given too.
-    #[arg(long, value_name = "X,Y", value_parser = parse_pixel, conflicts_with = "reference")]
+    #[arg(long, value_name = "X,Y", value_parser = parse_pixel, conflicts_with_all = ["reference", "turntable"])]
     pub pick: Option<(u32, u32)>,
+    /// Render N frames of the camera orbiting its target (a full turn, frame 0 the scene's
+    /// camera) as an animated PNG, or as numbered images when -o has a `%03d`-style pattern
+    /// (`-o spin-%03d.png`). Default output: SCENE-turntable.png.
+    #[arg(long, value_name = "N", conflicts_with = "reference", value_parser = clap::value_parser!(u32).range(1..))]
+    pub turntable: Option<u32>,
+    /// The axis the turntable turns about, through the camera's target (default: the camera's
+    /// up direction).
+    #[arg(long, value_enum, requires = "turntable")]
+    pub axis: Option<crate::turntable::TurntableAxis>,
+    /// With --turntable and numbered frames: render only frames K−1, K−1+N, K−1+2N, … (every
+    /// N-th frame), as `check --shard` splits a suite over N CI jobs.
+    #[arg(long, value_name = "K/N", requires = "turntable")]
+    pub shard: Option<crate::check::select::Shard>,
     #[command(flatten)]
     pub limits: InputLimits,
 }
@@ -434,6 +449,20 @@ fn run_render(args: &RenderArgs) -> i32 {
     };
     if let Some(pixel) = args.pick {
         return run_pick(args, pixel, &load_options, &render_options, output_settings);
+    }
+    if let Some(frames) = args.turntable {
+        let turntable = TurntableRun {
+            frames,
+            axis: args.axis.unwrap_or_default(),
+            shard: args.shard,
+        };
+        return run_turntable(
+            args,
+            &turntable,
+            &load_options,
+            &render_options,
+            output_settings.encoding,
+        );
     }
     let mut bad_inputs = Vec::new();
     let mut failed_outputs = 0;
@@ -756,6 +785,185 @@ fn render_one(
         }
     }
     Ok(())
+}
+
+/// What `render --turntable` was asked for.
+struct TurntableRun {
+    frames: u32,
+    axis: crate::turntable::TurntableAxis,
+    shard: Option<crate::check::select::Shard>,
+}
+
+/// `render --turntable N`: one scene, its frames to an APNG or to numbered files.
+fn run_turntable(
+    args: &RenderArgs,
+    turntable: &TurntableRun,
+    load_options: &LoadOptions,
+    render_options: &RenderOptions,
+    encoding: Encoding,
+) -> i32 {
+    use crate::turntable::TurntableOutput;
+    let [scene_path] = args.scenes.as_slice() else {
+        errln!(
+            "error: --turntable renders one scene, but {} were given",
+            args.scenes.len()
+        );
+        return EXIT_BAD_INPUT;
+    };
+    let destination = match turntable_output(args, scene_path) {
+        Ok(destination) => destination,
+        Err(message) => {
+            errln!("error: {message}");
+            return EXIT_BAD_INPUT;
+        }
+    };
+    let outputs: Vec<PathBuf> = match &destination {
+        TurntableOutput::Animation(path) => vec![path.clone()],
+        TurntableOutput::Numbered(pattern, _) => {
+            crate::turntable::frames_to_render(turntable.frames, turntable.shard)
+                .into_iter()
+                .map(|frame| pattern.path(frame))
+                .collect()
+        }
+    };
+    if let TurntableOutput::Animation(_) = destination
+        && turntable.shard.is_some()
+    {
+        errln!(
+            "error: --shard splits a turntable into numbered frames; one animated PNG cannot be split\n  \
+             = help: give -o a frame pattern, e.g. `-o spin-%03d.png`"
+        );
+        return EXIT_BAD_INPUT;
+    }
+    if let Some(output) = outputs
+        .iter()
+        .find(|output| output::overwritten_input(output, [scene_path.as_path()]).is_some())
+    {
+        report_overwritten_input(output, scene_path, scene_path);
+        return EXIT_BAD_INPUT;
+    }
+    let started = Instant::now();
+    let loaded = match crate::scene::load::load_scene(scene_path, load_options) {
+        Ok(loaded) => loaded,
+        Err(error) => {
+            print_load_error(&error);
+            return EXIT_BAD_INPUT;
+        }
+    };
+    let load_time = started.elapsed();
+    for output in &outputs {
+        if let Some(input) = output::overwritten_input(output, loaded.files_read.iter().map(PathBuf::as_path))
+        {
+            report_overwritten_input(output, input, scene_path);
+            return EXIT_BAD_INPUT;
+        }
+    }
+    if !loaded.warnings.is_empty() && !args.quiet {
+        errout!(
+            "{}",
+            render_diagnostics(&loaded.warnings, &loaded.sources, use_color())
+        );
+    }
+    let axis = turntable.axis.direction(&loaded.scene.camera);
+    if let Some(problem) = crate::turntable::orbit_problem(&loaded.scene.camera, axis) {
+        errln!("error: {problem}");
+        return EXIT_BAD_INPUT;
+    }
+    let frames = crate::turntable::frames_to_render(turntable.frames, turntable.shard);
+    if let TurntableOutput::Animation(path) = &destination {
+        render_record().current = Some((path.clone(), SystemTime::now()));
+    }
+    let orbit = crate::turntable::Orbit {
+        axis,
+        frame_count: turntable.frames,
+        frames: &frames,
+    };
+    let rendered = crate::turntable::render_turntable(
+        &loaded.scene,
+        &orbit,
+        render_options,
+        &destination,
+        encoding,
+        |path| {
+            let mut record = render_record();
+            record.current = None;
+            record.written.push(path.display().to_string());
+        },
+    );
+    let stats = match rendered {
+        Ok(stats) => stats,
+        Err(error) => {
+            render_record().current = None;
+            errln!("error: {error}");
+            return EXIT_OUTPUT_FAILED;
+        }
+    };
+    if !args.quiet {
+        let target = match &destination {
+            TurntableOutput::Animation(path) => format!("{} (animated PNG)", path.display()),
+            TurntableOutput::Numbered(..) => match (outputs.first(), outputs.last()) {
+                (Some(first), Some(last)) if outputs.len() > 1 => {
+                    format!("{} … {}", first.display(), last.display())
+                }
+                (Some(only), _) => only.display().to_string(),
+                _ => String::from("no frames"),
+            },
+        };
+        let of_all = match turntable.shard {
+            Some(shard) => format!(" of {} (shard {shard})", turntable.frames),
+            None => String::new(),
+        };
+        outln!(
+            "{} → {target}: {} frames{of_all}, {} triangles, {}×{} px | load {}, render {}, encode {} ({} threads)",
+            scene_path.display(),
+            stats.frames,
+            thousands(stats.triangles),
+            loaded.scene.image.width,
+            loaded.scene.image.height,
+            milliseconds(load_time),
+            milliseconds(stats.render),
+            milliseconds(stats.encode),
+            stats.threads,
+        );
+    }
+    EXIT_OK
+}
+
+/// Where a turntable goes: an APNG (`-o spin.png`, default `SCENE-turntable.png`) or numbered
+/// frames in the pattern's format (`-o spin-%03d.png`, `.exr`, `.hdr`).
+fn turntable_output(
+    args: &RenderArgs,
+    scene_path: &Path,
+) -> Result<crate::turntable::TurntableOutput, String> {
+    use crate::turntable::{FramePattern, TurntableOutput};
+    let Some(output) = &args.output else {
+        if args.format.is_some_and(|format| format != FormatArg::Png) {
+            return Err(String::from(
+                "a turntable is one animated PNG, or numbered frames in any format with -o (e.g. `-o spin-%03d.exr`)",
+            ));
+        }
+        let stem = scene_path.file_stem().unwrap_or_default().to_string_lossy();
+        return Ok(TurntableOutput::Animation(
+            scene_path.with_file_name(format!("{stem}-turntable.png")),
+        ));
+    };
+    if output.as_os_str() == output::STDOUT_NAME {
+        return Err(String::from(
+            "--turntable writes files, not standard output: give -o a file (`spin.png`) or a frame pattern (`spin-%03d.png`)",
+        ));
+    }
+    let pattern = FramePattern::parse(output)?;
+    let (_, format) = output::choose_format(Some(output), args.format.map(FormatArg::format))?;
+    match pattern {
+        Some(pattern) => Ok(TurntableOutput::Numbered(pattern, format)),
+        None if format == OutputFormat::Png => Ok(TurntableOutput::Animation(output.clone())),
+        None => Err(format!(
+            "`{}`: a turntable is one animated PNG or numbered frames; for {} frames give a pattern, e.g. `-o spin-%03d.{}`",
+            output.display(),
+            format.name(),
+            format.extension(),
+        )),
+    }
 }
 
 /// Says that `output` is `input`, a file the scene reads, and that nothing was written.

@@ -37,4 +37,5 @@ pub mod render;
 pub mod report;
 pub mod scene;
 pub mod texture;
+pub mod turntable;
 pub mod watch;

@@ -41,6 +41,7 @@ mod debounce;
 mod files;
 mod pick;
 mod server;
+mod turntable;
 
 use std::collections::BTreeSet;
 use std::panic::{self, AssertUnwindSafe};
@@ -196,6 +197,13 @@ pub fn run(args: &WatchArgs) -> i32 {
         ..RenderOptions::default()
     };
     let mut session = WatchSession::new(&args.scene, &output, load_options, render_options, watches);
+    if let Some(preview) = &preview {
+        preview.set_turntable(turntable::TurntableSource {
+            scene: args.scene.clone(),
+            load_options: session.load_options.clone(),
+            render_options,
+        });
+    }
     session.preview = preview;
     session.build(&Trigger::Start(started));
     let mut report_watch_error = |error: notify::Error| errln!("warning: watching files: {error}");

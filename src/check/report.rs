@@ -1,14 +1,17 @@
-//! `--report DIR`: an HTML page for people, `DIR/index.html`, with the pictures of every
-//! failing scene in `DIR/images/`.
+//! `--report DIR`: an HTML page for people, `DIR/index.html`, one self-contained file: the
+//! pictures of every failing scene are embedded in it (data URLs) and also written to
+//! `DIR/images/` (linked, for tools and full-size viewing).
 //!
-//! Failures and errors come first (in suite order), each with its reason, its metrics and its
-//! pictures side by side: expected (the reference, copied byte for byte), actual (the new
-//! render), the difference heat map ([`crate::check::compare::heat_map`]) and, with `--flip`,
-//! FLIP's error map. Blessed, passed and skipped scenes follow in one table with their
-//! metrics, without pictures: a suite of a thousand passing scenes would otherwise write three
-//! thousand images nobody looks at. Images are pixelated when enlarged, since a reference
-//! test is about single pixels. The page has no scripts and no external resources, so it can
-//! be opened from a CI artifact as is.
+//! The page opens with a summary table of every scene (verdict, metrics, time), failures and
+//! errors first, with filters (a checkbox per verdict, a text filter on the path; `report.js`).
+//! Then each failure and error, in suite order, with its reason, its metrics and its pictures:
+//! expected (the reference, copied byte for byte), actual (the new render), the difference heat
+//! map ([`crate::check::compare::heat_map`]) and, with `--flip`, FLIP's error map, in the
+//! viewer the watch preview uses (`src/watch/page/compare.js`, inlined): side by side, swipe,
+//! onion skin, the difference amplified, the heat map, FLIP. Passing scenes get no pictures: a
+//! suite of a thousand passing scenes would otherwise carry three thousand images nobody looks
+//! at. Images are pixelated when enlarged, since a reference test is about single pixels. The
+//! page loads nothing from elsewhere, so it can be opened from a CI artifact as is.
 //!
 //! The pictures are written by the workers as scenes fail ([`crate::check::runner`]); this
 //! module writes only the page, atomically, once all results are in.
@@ -94,7 +97,14 @@ pub fn write_report(folder: &Path, html: &str) -> Result<(), OutputError> {
 }
 
 /// The report page for `results` (one per scene, in `scenes` order), headed by `summary`.
-pub fn report_html(scenes: &[SuiteScene], results: &[SceneResult], summary: &str) -> String {
+/// `picture` reads a picture the run wrote (by its file name in `DIR/images/`), to embed it;
+/// a picture it cannot read is linked instead.
+pub fn report_html(
+    scenes: &[SuiteScene],
+    results: &[SceneResult],
+    summary: &str,
+    picture: &dyn Fn(&str) -> Option<Vec<u8>>,
+) -> String {
     let mut html = String::new();
     let _ = write!(
         html,
@@ -104,63 +114,122 @@ pub fn report_html(scenes: &[SuiteScene], results: &[SceneResult], summary: &str
         escape::text(summary),
         escape::text(summary)
     );
-    let pairs: Vec<(&SuiteScene, &SceneResult)> = scenes.iter().zip(results).collect();
-    let problems: Vec<_> = pairs.iter().filter(|(_, result)| result.is_problem()).collect();
+    // Failures and errors first, then the rest, each part in suite order.
+    let pairs: Vec<(usize, &SuiteScene, &SceneResult)> = scenes
+        .iter()
+        .zip(results)
+        .enumerate()
+        .map(|(index, (scene, result))| (index, scene, result))
+        .collect();
+    let (problems, others): (Vec<_>, Vec<_>) = pairs.iter().partition(|(_, _, result)| result.is_problem());
+    write_filters(&mut html, &pairs);
+    html.push_str(
+        "<table id=\"scenes\">\n<thead><tr><th>scene</th><th>verdict</th><th>differing pixels</th>\
+         <th>largest difference</th><th>FLIP mean</th><th>time</th></tr></thead>\n<tbody>\n",
+    );
+    for &&(index, scene, result) in problems.iter().chain(&others) {
+        write_summary_row(&mut html, index, scene, result);
+    }
+    html.push_str("</tbody>\n</table>\n");
     if problems.is_empty() {
         html.push_str("<p>No failures.</p>\n");
     } else {
         html.push_str(LEGEND);
     }
-    for (scene, result) in problems {
-        write_problem(&mut html, scene, result);
+    for &(index, scene, result) in problems {
+        write_problem(&mut html, index, scene, result, picture);
     }
-    let others: Vec<_> = pairs.iter().filter(|(_, result)| !result.is_problem()).collect();
-    if !others.is_empty() {
-        html.push_str(
-            "<h2>Other scenes</h2>\n<table class=\"others\">\n<tr><th>scene</th><th>result</th>\
-             <th>differing pixels</th><th>largest difference</th><th>FLIP mean</th><th>time</th></tr>\n",
-        );
-        for (scene, result) in others {
-            let (status, note) = match &result.status {
-                SceneStatus::Passed(_) => ("passed", String::new()),
-                SceneStatus::Blessed(reason) => ("blessed", format!(": {reason}")),
-                SceneStatus::NotRun(reason) => ("not run", format!(": {}", reason.describe())),
-                // Problems are listed above.
-                SceneStatus::Failed(_) | SceneStatus::Errored(_) => continue,
-            };
-            let comparison = result.comparison();
-            let _ = writeln!(
-                html,
-                "<tr class=\"{}\"><td>{}</td><td>{}{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                status.replace(' ', "-"),
-                escape::text(&scene.path.display().to_string()),
-                status,
-                escape::text(&note),
-                comparison.map_or(String::new(), |c| thousands(c.differing_pixels)),
-                comparison.map_or(String::new(), |c| c.largest_difference.to_string()),
-                comparison
-                    .and_then(|c| c.flip)
-                    .map_or(String::new(), |flip| format!("{:.4}", flip.mean)),
-                milliseconds(result.times.total()),
-            );
-        }
-        html.push_str("</table>\n");
-    }
-    html.push_str("</body>\n</html>\n");
+    let _ = write!(
+        html,
+        "<script>\n{}\n</script>\n<script>\n{}\n</script>\n</body>\n</html>\n",
+        COMPARE_SCRIPT, FILTER_SCRIPT
+    );
     html
 }
 
-fn write_problem(html: &mut String, scene: &SuiteScene, result: &SceneResult) {
+/// The viewer the preview shows too: swipe, onion skin, amplified difference.
+const COMPARE_SCRIPT: &str = include_str!("../watch/page/compare.js");
+
+/// The summary table's filters.
+const FILTER_SCRIPT: &str = include_str!("report.js");
+
+/// A scene's verdict, as the summary table and the filters name it.
+fn verdict(result: &SceneResult) -> (&'static str, String) {
+    match &result.status {
+        SceneStatus::Passed(_) => ("passed", String::new()),
+        SceneStatus::Failed(_) => ("failed", String::new()),
+        SceneStatus::Errored(_) => ("errored", String::new()),
+        SceneStatus::Blessed(reason) => ("blessed", format!(": {reason}")),
+        SceneStatus::NotRun(reason) => ("not run", format!(": {}", reason.describe())),
+    }
+}
+
+/// A checkbox per verdict the run has (with its count) and a text filter on the name.
+fn write_filters(html: &mut String, pairs: &[(usize, &SuiteScene, &SceneResult)]) {
+    html.push_str("<form id=\"filters\" onsubmit=\"return false\"><span>show</span>\n");
+    for name in ["failed", "errored", "passed", "blessed", "not run"] {
+        let count = pairs
+            .iter()
+            .filter(|(_, _, result)| verdict(result).0 == name)
+            .count();
+        if count > 0 {
+            let _ = writeln!(
+                html,
+                "<label><input type=\"checkbox\" value=\"{}\" checked> {name} ({count})</label>",
+                name.replace(' ', "-")
+            );
+        }
+    }
+    html.push_str(
+        "<label>name <input type=\"search\" id=\"name-filter\" placeholder=\"part of a scene's path\"></label>\n\
+         <span id=\"shown\"></span></form>\n",
+    );
+}
+
+fn write_summary_row(html: &mut String, index: usize, scene: &SuiteScene, result: &SceneResult) {
+    let (status, note) = verdict(result);
+    let name = scene.path.display().to_string();
+    let comparison = result.comparison();
+    let shown_name = if result.is_problem() {
+        format!("<a href=\"#scene-{index}\">{}</a>", escape::text(&name))
+    } else {
+        escape::text(&name)
+    };
+    let _ = writeln!(
+        html,
+        "<tr class=\"{verdict}\" data-verdict=\"{verdict}\" data-name=\"{}\"><td>{shown_name}</td>\
+         <td>{status}{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+        escape::attribute(&name),
+        escape::text(&note),
+        comparison.map_or(String::new(), |c| thousands(c.differing_pixels)),
+        comparison.map_or(String::new(), |c| c.largest_difference.to_string()),
+        comparison
+            .and_then(|c| c.flip)
+            .map_or(String::new(), |flip| format!("{:.4}", flip.mean)),
+        milliseconds(result.times.total()),
+        verdict = status.replace(' ', "-"),
+    );
+}
+
+fn write_problem(
+    html: &mut String,
+    index: usize,
+    scene: &SuiteScene,
+    result: &SceneResult,
+    picture: &dyn Fn(&str) -> Option<Vec<u8>>,
+) {
     let (class, reason) = match &result.status {
         SceneStatus::Failed(failure) => ("failed", failure.describe(scene)),
         SceneStatus::Errored(error) => ("errored", error.describe()),
         _ => return,
     };
+    let name = scene.path.display().to_string();
     let _ = write!(
         html,
-        "<section class=\"scene {class}\">\n<h2><span class=\"status\">{class}</span> {}</h2>\n\
-         <p class=\"reason\">{}</p>\n",
-        escape::text(&scene.path.display().to_string()),
+        "<section class=\"scene {class}\" id=\"scene-{index}\" data-verdict=\"{class}\" data-name=\"{}\">\n\
+         <h2><span class=\"status\">{class}</span> {}</h2>\n<p class=\"reason\">{}</p>\n",
+        escape::attribute(&name),
+        escape::text(&name),
         escape::text(&reason)
     );
     if let SceneStatus::Errored(SceneError::Load(error)) = &result.status {
@@ -218,23 +287,27 @@ fn write_problem(html: &mut String, scene: &SuiteScene, result: &SceneResult) {
     row("time", phase_times(&result.times));
     html.push_str("</table>\n");
 
+    // Expected and actual feed the viewer (compare.js); the heat map and FLIP's map are modes
+    // of it. Without scripts the figures still show side by side.
     let pictures = [
-        ("expected", &result.pictures.expected),
-        ("actual", &result.pictures.actual),
-        ("difference", &result.pictures.difference),
-        ("FLIP error", &result.pictures.flip),
+        ("expected", "expected", "expected", &result.pictures.expected),
+        ("actual", "actual", "actual", &result.pictures.actual),
+        ("difference", "layer", "heat map", &result.pictures.difference),
+        ("FLIP error", "layer", "FLIP", &result.pictures.flip),
     ];
-    if pictures.iter().any(|(_, file)| file.is_some()) {
-        html.push_str("<div class=\"pictures\">\n");
-        for (caption, file) in pictures {
-            if let Some(file) = file {
-                let source = escape::attribute(&format!("{PICTURE_FOLDER}/{file}"));
-                let _ = writeln!(
-                    html,
-                    "<figure><a href=\"{source}\"><img src=\"{source}\" alt=\"{caption}\"></a>\
-                     <figcaption>{caption}</figcaption></figure>"
-                );
-            }
+    if pictures.iter().any(|(.., file)| file.is_some()) {
+        html.push_str("<div class=\"pictures\" data-compare>\n");
+        for (caption, role, mode, file) in pictures {
+            let Some(file) = file else { continue };
+            let link = escape::attribute(&format!("{PICTURE_FOLDER}/{file}"));
+            // Embedded, so the page is one file; linked when it cannot be read back.
+            let source =
+                picture(file).map_or_else(|| link.clone(), |png| escape::data_url("image/png", &png));
+            let _ = writeln!(
+                html,
+                "<figure><img src=\"{source}\" alt=\"{caption}\" data-role=\"{role}\" data-name=\"{mode}\">\
+                 <figcaption>{caption} <a href=\"{link}\">(file)</a></figcaption></figure>"
+            );
         }
         html.push_str("</div>\n");
     }
@@ -261,6 +334,11 @@ const LEGEND: &str = "<p class=\"legend\">Difference: the reference in dim grey;
     through purple to yellow where it is most visible.</p>\n";
 
 const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:#222}\
+    #filters{display:flex;flex-wrap:wrap;gap:.3em 1em;align-items:center;margin:.6em 0}\
+    #shown{color:#666}\
+    #scenes td,#scenes th{border-bottom:1px solid #eee}\
+    tr.failed td:nth-child(2){color:#c33;font-weight:600}tr.errored td:nth-child(2){color:#e80;font-weight:600}\
+    .compare-frame canvas{background:#888}
     h2{font-size:1.1em;margin:0 0 .4em}\
     .scene{border:1px solid #ccc;border-left:6px solid #c33;padding:.8em;margin:1em 0}\
     .scene.errored{border-left-color:#e80}\
@@ -269,7 +347,6 @@ const STYLE: &str = "body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:
     .reason{font-weight:600}\
     pre{background:#f6f6f6;padding:.6em;overflow:auto}\
     table{border-collapse:collapse}th,td{text-align:left;padding:.15em .8em .15em 0;vertical-align:top}\
-    .others td,.others th{border-bottom:1px solid #eee}\
     .pictures{display:grid;grid-template-columns:repeat(auto-fill,minmax(260px,1fr));gap:.8em;margin-top:.8em}\
     figure{margin:0}figure img{width:100%;image-rendering:pixelated;background:#888;display:block}\
     figcaption{font-size:.9em;color:#555}";

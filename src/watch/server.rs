@@ -7,8 +7,10 @@
 //!   `Host` header must name `127.0.0.1` or `localhost` at our port, so a web page elsewhere
 //!   cannot reach the server through DNS rebinding.
 //! - Routes: `/` (a static page, `preview.html`), `/image.png` (the last good image),
-//!   `/events` (server-sent events), and the inspector's (`watch::pick`): `/api/pick`,
-//!   `/api/object-mask` and the page's scripts under `/page/`. Each build publishes one small JSON state, the same shape the
+//!   `/events` (server-sent events), `/turntable.png` (the scene orbiting, made on request:
+//!   `super::turntable`), the inspector's (`watch::pick`): `/api/pick`, `/api/object-mask`, and
+//!   the page's scripts under `/page/` (`compare.js`, shared with `check --report`). Each build
+//!   publishes one small JSON state, the same shape the
 //!   page receives on connecting; the page swaps the image in only once the new one has loaded
 //!   (no flicker) and shows or hides the diagnostics overlay.
 //! - The last good image is kept in memory as the PNG bytes just written, so the page can never
@@ -34,9 +36,13 @@ use serde::Serialize;
 use tiny_http::{Header, Method, Request, Response, Server};
 
 use crate::inspect::ImageOrigin;
+use super::turntable::TurntableSource;
 
 /// The page, served as is.
 const PAGE: &str = include_str!("preview.html");
+
+/// The compare views (swipe, onion skin, difference), shared with `check --report`'s page.
+const COMPARE_SCRIPT: &str = include_str!("page/compare.js");
 
 /// How often an idle event stream sends a comment, so a closed page is noticed and its thread
 /// ends.
@@ -74,6 +80,8 @@ struct HubInner {
     generation: u64,
     /// One sender per open `/events` stream.
     subscribers: Vec<Sender<String>>,
+    /// What `/turntable.png` renders, once the watch has said.
+    turntable: Option<Arc<TurntableSource>>,
 }
 
 impl Hub {
@@ -159,6 +167,7 @@ impl PreviewServer {
                 image_origin: None,
                 generation: 0,
                 subscribers: Vec::new(),
+                turntable: None,
             }),
             run_id,
         });
@@ -184,6 +193,11 @@ impl PreviewServer {
     /// The page's address, `http://127.0.0.1:PORT/`.
     pub fn url(&self) -> &str {
         &self.url
+    }
+
+    /// What `/turntable.png` renders: the watched scene with the watch's options.
+    pub fn set_turntable(&self, source: TurntableSource) {
+        self.hub.lock().turntable = Some(Arc::new(source));
     }
 
     /// The URL template the page's source links follow (`watch --editor`).
@@ -270,6 +284,17 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
             );
             respond(request, page);
         }
+        "/page/compare.js" => respond(
+            request,
+            with_headers(
+                Response::from_string(COMPARE_SCRIPT),
+                &[
+                    ("Content-Type", "text/javascript; charset=utf-8"),
+                    ("Cache-Control", "no-store"),
+                ],
+            ),
+        ),
+        "/turntable.png" => super::turntable::answer(request, hub.lock().turntable.clone()),
         "/image.png" => {
             let image = hub.lock().image_bytes.clone();
             match image {
@@ -371,14 +396,14 @@ fn send(writer: &mut dyn Write, text: &str) -> io::Result<()> {
     writer.flush()
 }
 
-fn text(status: u16, message: &str) -> Response<io::Cursor<Vec<u8>>> {
+pub(super) fn text(status: u16, message: &str) -> Response<io::Cursor<Vec<u8>>> {
     with_headers(
         Response::from_string(format!("{message}\n")).with_status_code(status),
         &[("Content-Type", "text/plain; charset=utf-8")],
     )
 }
 
-fn with_headers<R: io::Read>(mut response: Response<R>, headers: &[(&str, &str)]) -> Response<R> {
+pub(super) fn with_headers<R: io::Read>(mut response: Response<R>, headers: &[(&str, &str)]) -> Response<R> {
     for (name, value) in headers {
         // Our header names and values are constant ASCII, which `from_bytes` always accepts.
         if let Ok(header) = Header::from_bytes(name.as_bytes(), value.as_bytes()) {
@@ -388,7 +413,7 @@ fn with_headers<R: io::Read>(mut response: Response<R>, headers: &[(&str, &str)]
     response
 }
 
-fn respond<R: io::Read>(request: Request, response: Response<R>) {
+pub(super) fn respond<R: io::Read>(request: Request, response: Response<R>) {
     // A page that went away mid-answer is not our problem.
     let _ = request.respond(response);
 }

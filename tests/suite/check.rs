@@ -22,7 +22,7 @@ fn stdout(output: &Output) -> String {
     String::from_utf8_lossy(&output.stdout).into_owned()
 }
 
-fn everything(output: &Output) -> String {
+pub(crate) fn everything(output: &Output) -> String {
     format!(
         "--- stdout\n{}--- stderr\n{}",
         stdout(output),
@@ -31,14 +31,14 @@ fn everything(output: &Output) -> String {
 }
 
 /// A tiny lit sphere of the given colour.
-fn sphere(color: &str) -> String {
+pub(crate) fn sphere(color: &str) -> String {
     format!(
         "(image: (width: 32, height: 24), objects: [(mesh: Sphere(segments: 8), material: (color: {color}))])"
     )
 }
 
 /// A temporary suite folder `suite/` with the given scenes (relative path, text).
-struct Suite {
+pub(crate) struct Suite {
     work: tempfile::TempDir,
 }
 
@@ -54,7 +54,7 @@ impl Suite {
     }
 
     /// The folder the commands run in; the suite is its `suite/` folder.
-    fn dir(&self) -> &Path {
+    pub(crate) fn dir(&self) -> &Path {
         self.work.path()
     }
 
@@ -62,34 +62,34 @@ impl Suite {
         self.dir().join("suite").join(relative)
     }
 
-    fn write(&self, relative: &str, text: &str) {
+    pub(crate) fn write(&self, relative: &str, text: &str) {
         let path = self.path(relative);
         std::fs::create_dir_all(path.parent().expect("a parent")).expect("folders");
         std::fs::write(path, text).expect("a scene");
     }
 
-    fn check(&self, extra: &[&str]) -> Output {
+    pub(crate) fn check(&self, extra: &[&str]) -> Output {
         let mut args = vec!["check", "suite"];
         args.extend(extra);
         lampshade(&args, self.dir())
     }
 
     /// Blesses every scene and checks the references exist.
-    fn bless_all(&self) {
+    pub(crate) fn bless_all(&self) {
         let output = self.check(&["--bless"]);
         assert_eq!(output.status.code(), Some(0), "{}", everything(&output));
     }
 
-    fn reference(&self, name: &str) -> PathBuf {
+    pub(crate) fn reference(&self, name: &str) -> PathBuf {
         self.path(&format!("refs/{name}.png"))
     }
 }
 
 const RED: &str = "(0.8, 0.2, 0.2)";
-const GREEN: &str = "(0.2, 0.8, 0.2)";
+pub(crate) const GREEN: &str = "(0.2, 0.8, 0.2)";
 const BLUE: &str = "(0.2, 0.2, 0.8)";
 
-fn three_spheres() -> Suite {
+pub(crate) fn three_spheres() -> Suite {
     Suite::new(&[
         ("a.ron", &sphere(RED)),
         ("b.ron", &sphere(GREEN)),
@@ -342,10 +342,43 @@ fn the_html_report_lists_failures_first_with_their_pictures() {
         .map(|(source, _)| source)
         .collect();
     assert_eq!(sources.len(), 3, "expected, actual, difference: {sources:?}");
+    // One self-contained file: every picture is embedded.
     for source in sources {
-        let picture = image::open(report.join(source)).expect("a picture the report shows");
+        let base64 = source
+            .strip_prefix("data:image/png;base64,")
+            .unwrap_or_else(|| panic!("not an embedded PNG: {}", &source[..source.len().min(80)]));
+        let png = crate::browser::decode_base64(base64).expect("base64");
+        let picture = image::load_from_memory(&png).expect("a picture the report shows");
         assert_eq!(picture.width(), 32);
     }
+    for external in ["<script src", "<link", "http://", "https://"] {
+        assert!(!html.contains(external), "the report loads `{external}`");
+    }
+    // The pictures are written beside it too, and linked.
+    let links: Vec<&str> = html
+        .split("<a href=\"images/")
+        .skip(1)
+        .filter_map(|rest| rest.split_once('"'))
+        .map(|(file, _)| file)
+        .collect();
+    assert_eq!(links.len(), 3, "{links:?}");
+    for file in links {
+        assert!(report.join("images").join(file).is_file(), "{file}");
+    }
+    // The summary table lists every scene, the failure first, with the filters above it.
+    let table = &html[html.find("<table id=\"scenes\">").expect("the summary table")..];
+    let table = &table[..table.find("</table>").unwrap()];
+    let rows: Vec<&str> = table.split("<tr class=").skip(1).collect();
+    assert_eq!(rows.len(), 3, "{table}");
+    assert!(
+        rows[0].contains("data-verdict=\"failed\"") && rows[0].contains("suite/c.ron"),
+        "{table}"
+    );
+    assert!(html.contains("id=\"name-filter\""), "the name filter");
+    assert!(
+        html.contains("value=\"passed\" checked> passed (2)"),
+        "the verdict filter"
+    );
 }
 
 #[test]

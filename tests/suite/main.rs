@@ -12,14 +12,18 @@
 //! - `watch`: `lampshade watch` as a process on a temporary folder (save styles, includes, meshes,
 //!   errors and recovery, Ctrl-C, the preview server);
 //! - `lsp`: `lampshade lsp` driven over standard input and output as an editor drives it;
+//! - `turntable`: `render --turntable` (APNG frames against single renders, numbered frames,
+//!   shards, refused arguments);
 //! - `watch_browser`: the preview page in headless Chromium (skipped without Chromium);
-//!   `browser` drives Chromium for it;
+//!   `browser` drives Chromium for them;
 //! - `pick`: the pixel inspector, `render --pick` and `GET /api/pick`; `pick_browser`: its panel,
-//!   source links and highlight in headless Chromium.
+//!   source links and highlight in headless Chromium; `compare_browser`: the preview's compare
+//!   views and the `check --report` viewer there.
 
 mod browser;
 mod check;
 mod cli;
+mod compare_browser;
 mod golden;
 mod hard_cases;
 mod loading;
@@ -29,6 +33,7 @@ mod pick;
 mod pick_browser;
 mod render;
 mod robustness;
+mod turntable;
 mod watch;
 mod watch_browser;
 
