@@ -35,8 +35,8 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use serde::Serialize;
 use tiny_http::{Header, Method, Request, Response, Server};
 
-use crate::inspect::ImageOrigin;
 use super::turntable::TurntableSource;
+use crate::inspect::ImageOrigin;
 
 /// The page, served as is.
 const PAGE: &str = include_str!("preview.html");
