@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::diag::{Diagnostic, Sources};
+use crate::scene::Camera;
 use crate::render::{FrameBuffer, RenderOptions, RenderStats, Renderer};
 use crate::scene::load::{LoadError, LoadOptions, MeshCache, load_scene_cached};
 
@@ -21,6 +22,8 @@ pub struct RenderedScene {
     pub sources: Sources,
     /// Every file the scene read (scene, includes, meshes and what they reference).
     pub files_read: Vec<PathBuf>,
+    /// The camera the image was rendered with.
+    pub camera: Camera,
 }
 
 /// What one build keeps for the next: the meshes whose files have not changed, and the
@@ -50,5 +53,6 @@ pub fn render_scene_file(
         warnings: loaded.warnings,
         sources: loaded.sources,
         files_read: loaded.files_read,
+        camera: loaded.scene.camera,
     })
 }

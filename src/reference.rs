@@ -784,6 +784,7 @@ pub fn render_reference_file(
         warnings,
         sources: loaded.sources,
         files_read: loaded.files_read,
+        camera: loaded.scene.camera,
     })
 }
 

@@ -6,8 +6,10 @@
 //!   for the person at this machine, and scene files, paths and diagnostics are theirs. The
 //!   `Host` header must name `127.0.0.1` or `localhost` at our port, so a web page elsewhere
 //!   cannot reach the server through DNS rebinding.
-//! - Three routes: `/` (a static page, `preview.html`), `/image.png` (the last good image) and
-//!   `/events` (server-sent events). Each build publishes one small JSON state, the same shape the
+//! - Routes: `/` (a static page, `preview.html`, and its scripts under `/page/`), `/image.png`
+//!   (the last good image), `/events` (server-sent events), and the POST routes of the view
+//!   (`watch::view`: `/api/view`, `/api/camera`, `/api/buffer`), which a page of another site
+//!   may not call (its `Origin` is refused). Each build publishes one small JSON state, the same shape the
 //!   page receives on connecting; the page swaps the image in only once the new one has loaded
 //!   (no flicker) and shows or hides the diagnostics overlay.
 //! - The last good image is kept in memory as the PNG bytes just written, so the page can never
@@ -32,8 +34,13 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use serde::Serialize;
 use tiny_http::{Header, Method, Request, Response, Server};
 
+use super::view::{Inbox, ViewSummary};
+
 /// The page, served as is.
 const PAGE: &str = include_str!("preview.html");
+
+/// The page's scripts, served under `/page/`.
+const PAGE_FILES: &[(&str, &str)] = &[("view.js", include_str!("page/view.js"))];
 
 /// How often an idle event stream sends a comment, so a closed page is noticed and its thread
 /// ends.
@@ -52,6 +59,8 @@ struct PreviewState {
     summary: String,
     /// The diagnostics of the last build, plain text, if it failed.
     error: Option<String>,
+    /// The camera, overrides and size of the image (`watch::view`).
+    view: Option<ViewSummary>,
 }
 
 /// What the server threads share with the watch loop.
@@ -119,7 +128,13 @@ pub struct StartedPreview {
 impl PreviewServer {
     /// Serves on `127.0.0.1:port`, or on a free port if that one cannot be had (port 0 always
     /// picks a free one). `initial_image` is shown until the first build (an earlier run's image).
-    pub fn start(port: u16, scene_name: &str, initial_image: Option<Vec<u8>>) -> io::Result<StartedPreview> {
+    /// POST requests go to `inbox` (`watch::view`).
+    pub fn start(
+        port: u16,
+        scene_name: &str,
+        initial_image: Option<Vec<u8>>,
+        inbox: Arc<Inbox>,
+    ) -> io::Result<StartedPreview> {
         let (listener, port_note) = match TcpListener::bind((Ipv4Addr::LOCALHOST, port)) {
             Ok(listener) => (listener, None),
             Err(error) if port != 0 => {
@@ -146,6 +161,7 @@ impl PreviewServer {
                     image: has_image.then(|| format!("{run_id}-0")),
                     summary: String::from("rendering…"),
                     error: None,
+                    view: None,
                 },
                 image_bytes: initial_image.map(Arc::new),
                 generation: 0,
@@ -158,7 +174,7 @@ impl PreviewServer {
             let (server, hub, stopping) = (server.clone(), hub.clone(), stopping.clone());
             std::thread::Builder::new()
                 .name("preview server".into())
-                .spawn(move || answer_requests(&server, &hub, &stopping, address.port()))?
+                .spawn(move || answer_requests(&server, &hub, &inbox, &stopping, address.port()))?
         };
         Ok(StartedPreview {
             server: PreviewServer {
@@ -177,8 +193,18 @@ impl PreviewServer {
         &self.url
     }
 
-    /// A build wrote `png`: show it.
-    pub fn publish_image(&self, png: Vec<u8>, summary: String) {
+    /// The port served on.
+    pub fn port(&self) -> u16 {
+        self.server.server_addr().to_ip().map_or(0, |address| address.port())
+    }
+
+    /// The state the page was last sent, as JSON (the answer to a view request).
+    pub fn state_json(&self) -> String {
+        to_json(&self.hub.lock().state)
+    }
+
+    /// A build wrote `png`, or the preview rendered it with its `view`: show it.
+    pub fn publish_image(&self, png: Vec<u8>, summary: String, view: ViewSummary) {
         let run_id = self.hub.run_id;
         self.hub.update(|inner| {
             inner.generation += 1;
@@ -186,6 +212,7 @@ impl PreviewServer {
             inner.state.image = Some(format!("{run_id}-{}", inner.generation));
             inner.state.summary = summary;
             inner.state.error = None;
+            inner.state.view = Some(view);
         });
     }
 
@@ -216,10 +243,10 @@ impl Drop for PreviewServer {
     }
 }
 
-fn answer_requests(server: &Server, hub: &Arc<Hub>, stopping: &AtomicBool, port: u16) {
+fn answer_requests(server: &Server, hub: &Arc<Hub>, inbox: &Inbox, stopping: &AtomicBool, port: u16) {
     loop {
         match server.recv() {
-            Ok(request) => answer(request, hub, port),
+            Ok(request) => answer(request, hub, inbox, port),
             Err(_) if stopping.load(Ordering::SeqCst) => return,
             // A failed accept (e.g. out of file descriptors) is transient: wait a little.
             Err(_) => std::thread::sleep(Duration::from_millis(50)),
@@ -227,7 +254,7 @@ fn answer_requests(server: &Server, hub: &Arc<Hub>, stopping: &AtomicBool, port:
     }
 }
 
-fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
+fn answer(request: Request, hub: &Arc<Hub>, inbox: &Inbox, port: u16) {
     if !names_us(&request, port) {
         respond(
             request,
@@ -238,8 +265,16 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
         );
         return;
     }
+    if *request.method() == Method::Post {
+        if from_another_site(&request, port) {
+            respond(request, text(403, "forbidden: requests from other sites may not change the view"));
+        } else {
+            inbox.answer_post(request);
+        }
+        return;
+    }
     if !matches!(request.method(), Method::Get | Method::Head) {
-        respond(request, text(405, "only GET and HEAD are supported"));
+        respond(request, text(405, "only GET, HEAD and POST are supported"));
         return;
     }
     let path = request.url().split('?').next().unwrap_or_default();
@@ -271,6 +306,21 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
                 None => respond(request, text(404, "no image yet")),
             }
         }
+        script if script.starts_with("/page/") => {
+            match PAGE_FILES.iter().find(|(name, _)| script["/page/".len()..] == **name) {
+                Some((_, code)) => respond(
+                    request,
+                    with_headers(
+                        Response::from_string(*code),
+                        &[
+                            ("Content-Type", "text/javascript; charset=utf-8"),
+                            ("Cache-Control", "no-store"),
+                        ],
+                    ),
+                ),
+                None => respond(request, text(404, "not found")),
+            }
+        }
         "/events" => {
             let hub = hub.clone();
             let spawned = std::thread::Builder::new()
@@ -297,6 +347,17 @@ fn names_us(request: &Request, port: u16) -> bool {
         }
         None => false,
     }
+}
+
+/// Whether a browser sent `request` from a page that is not ours (its `Origin` names another
+/// site): any web page may POST to 127.0.0.1, and the view routes write the scene file. Scripts
+/// and editors send no `Origin`.
+fn from_another_site(request: &Request, port: u16) -> bool {
+    let Some(origin) = request.headers().iter().find(|h| h.field.equiv("Origin")) else {
+        return false;
+    };
+    let origin = origin.value.as_str();
+    origin != format!("http://127.0.0.1:{port}") && origin != format!("http://localhost:{port}")
 }
 
 fn stream_events(request: Request, hub: &Hub) {

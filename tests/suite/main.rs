@@ -13,7 +13,9 @@
 //!   errors and recovery, Ctrl-C, the preview server);
 //! - `lsp`: `lampshade lsp` driven over standard input and output as an editor drives it;
 //! - `watch_browser`: the preview page in headless Chromium (skipped without Chromium);
-//!   `browser` drives Chromium for it.
+//!   `browser` drives Chromium for it;
+//! - `view_browser`: the preview's camera, toggles and camera writeback in headless Chromium,
+//!   and the drag benchmark (ignored).
 
 mod browser;
 mod check;
@@ -25,6 +27,7 @@ mod lsp;
 mod outputs;
 mod render;
 mod robustness;
+mod view_browser;
 mod watch;
 mod watch_browser;
 
