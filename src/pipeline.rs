@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::diag::{Diagnostic, Sources};
-use crate::scene::Camera;
 use crate::render::{FrameBuffer, RenderOptions, RenderStats, Renderer};
+use crate::scene::Camera;
 use crate::scene::load::{LoadError, LoadOptions, MeshCache, load_scene_cached};
 
 /// A scene file that loaded and rendered.

@@ -173,13 +173,16 @@ pub fn run(args: &WatchArgs) -> i32 {
     };
 
     // An editor's language server finds the preview through this file (`watch::registry`).
-    let _registration = preview.as_ref().and_then(|server| match registry::register(&args.scene, server.port()) {
-        Ok(registration) => Some(registration),
-        Err(error) => {
-            errln!("warning: editors will not find this preview: {error}");
-            None
-        }
-    });
+    let _registration =
+        preview
+            .as_ref()
+            .and_then(|server| match registry::register(&args.scene, server.port()) {
+                Ok(registration) => Some(registration),
+                Err(error) => {
+                    errln!("warning: editors will not find this preview: {error}");
+                    None
+                }
+            });
 
     let load_options = match args.limits.load_options() {
         Ok(limited) => LoadOptions {
@@ -476,7 +479,10 @@ impl WatchSession {
     /// (written from the page or edited by hand).
     fn follow_the_file_where_it_changed(&mut self, trigger: &Trigger, camera: &Camera) {
         if let Trigger::Changes(changes) = trigger
-            && changes.files.iter().any(|file| files::same_location(file, &self.scene))
+            && changes
+                .files
+                .iter()
+                .any(|file| files::same_location(file, &self.scene))
         {
             self.view.buffer = None;
         }
@@ -539,13 +545,24 @@ impl WatchSession {
             Ok(Err(PreviewError::Load(error))) => {
                 let report = render_diagnostics(&error.diagnostics, &error.sources, false);
                 let errors = error.diagnostics.iter().filter(|d| d.is_error()).count();
-                let what = if self.view.buffer.is_some() { "unsaved text" } else { "preview" };
-                (report, format!("{what}: {errors} error{}", if errors == 1 { "" } else { "s" }))
+                let what = if self.view.buffer.is_some() {
+                    "unsaved text"
+                } else {
+                    "preview"
+                };
+                (
+                    report,
+                    format!("{what}: {errors} error{}", if errors == 1 { "" } else { "s" }),
+                )
             }
-            Ok(Err(PreviewError::Read(error))) => {
-                (format!("cannot read `{}`: {error}", self.scene.display()), String::from("preview: cannot read the scene"))
-            }
-            Ok(Err(PreviewError::Encode(error))) => (error.to_string(), String::from("preview: cannot encode the image")),
+            Ok(Err(PreviewError::Read(error))) => (
+                format!("cannot read `{}`: {error}", self.scene.display()),
+                String::from("preview: cannot read the scene"),
+            ),
+            Ok(Err(PreviewError::Encode(error))) => (
+                error.to_string(),
+                String::from("preview: cannot encode the image"),
+            ),
             Err(payload) => {
                 self.cache = BuildCache::default();
                 let message = panic_message(payload.as_ref());
@@ -702,7 +719,11 @@ fn describe_view(view: &view::ViewSummary) -> String {
     if view.preview_camera {
         parts.push_str(" · preview camera");
     }
-    for (what, value) in [("shading", &view.shading), ("model", &view.model), ("debug", &view.debug)] {
+    for (what, value) in [
+        ("shading", &view.shading),
+        ("model", &view.model),
+        ("debug", &view.debug),
+    ] {
         if let Some(value) = value {
             parts.push_str(&format!(" · {what} {value}"));
         }

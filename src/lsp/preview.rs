@@ -50,7 +50,10 @@ impl PreviewLink {
 
     /// `path`'s unsaved text changed.
     pub fn text(&self, path: PathBuf, text: String) {
-        self.send(Update { path, text: Some(text) });
+        self.send(Update {
+            path,
+            text: Some(text),
+        });
     }
 
     /// `path` was saved or closed: its preview shows the file again.

@@ -272,7 +272,10 @@ mod tests {
     fn a_view_request_wakes_the_loop_unless_changes_are_pending() {
         let (_temporary, dir, files, sender, receiver) = setup();
         sender.send(Signal::View).unwrap();
-        assert_eq!(wait_for_changes(&receiver, &files, TIMING, &mut no_errors), Some(Wake::View));
+        assert_eq!(
+            wait_for_changes(&receiver, &files, TIMING, &mut no_errors),
+            Some(Wake::View)
+        );
         let now = Instant::now();
         sender.send(modified(&dir.join("scene.ron"), now)).unwrap();
         sender.send(Signal::View).unwrap();

@@ -44,7 +44,10 @@ pub fn registry_file(scene: &Path) -> Option<(PathBuf, PathBuf)> {
         .filter(|dir| dir.is_dir())
         .unwrap_or_else(std::env::temp_dir)
         .join("lampshade");
-    let name = format!("watch-{:016x}.json", fnv1a_64(canonical.as_os_str().as_encoded_bytes()));
+    let name = format!(
+        "watch-{:016x}.json",
+        fnv1a_64(canonical.as_os_str().as_encoded_bytes())
+    );
     Some((folder.join(name), canonical))
 }
 
@@ -61,7 +64,8 @@ impl Drop for Registration {
 
 /// Says that the preview of `scene` is served on `port`.
 pub fn register(scene: &Path, port: u16) -> io::Result<Registration> {
-    let (file, canonical) = registry_file(scene).ok_or_else(|| io::Error::other("the scene has no canonical path"))?;
+    let (file, canonical) =
+        registry_file(scene).ok_or_else(|| io::Error::other("the scene has no canonical path"))?;
     let entry = Entry {
         scene: canonical,
         port,

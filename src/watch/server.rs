@@ -7,7 +7,8 @@
 //!   `Host` header must name `127.0.0.1` or `localhost` at our port, so a web page elsewhere
 //!   cannot reach the server through DNS rebinding.
 //! - Routes: `/` (a static page, `preview.html`, and its scripts under `/page/`), `/image.png`
-//!   (the last good image), `/events` (server-sent events), and the POST routes of the view
+//!   (the last good image), `/events` (server-sent events), `/api/state` (the state the page
+//!   was last sent, for a script loaded after the first event), and the POST routes of the view
 //!   (`watch::view`: `/api/view`, `/api/camera`, `/api/buffer`), which a page of another site
 //!   may not call (its `Origin` is refused). Each build publishes one small JSON state, the same shape the
 //!   page receives on connecting; the page swaps the image in only once the new one has loaded
@@ -195,7 +196,10 @@ impl PreviewServer {
 
     /// The port served on.
     pub fn port(&self) -> u16 {
-        self.server.server_addr().to_ip().map_or(0, |address| address.port())
+        self.server
+            .server_addr()
+            .to_ip()
+            .map_or(0, |address| address.port())
     }
 
     /// The state the page was last sent, as JSON (the answer to a view request).
@@ -267,7 +271,13 @@ fn answer(request: Request, hub: &Arc<Hub>, inbox: &Inbox, port: u16) {
     }
     if *request.method() == Method::Post {
         if from_another_site(&request, port) {
-            respond(request, text(403, "forbidden: requests from other sites may not change the view"));
+            respond(
+                request,
+                text(
+                    403,
+                    "forbidden: requests from other sites may not change the view",
+                ),
+            );
         } else {
             inbox.answer_post(request);
         }
@@ -307,7 +317,10 @@ fn answer(request: Request, hub: &Arc<Hub>, inbox: &Inbox, port: u16) {
             }
         }
         script if script.starts_with("/page/") => {
-            match PAGE_FILES.iter().find(|(name, _)| script["/page/".len()..] == **name) {
+            match PAGE_FILES
+                .iter()
+                .find(|(name, _)| script["/page/".len()..] == **name)
+            {
                 Some((_, code)) => respond(
                     request,
                     with_headers(
@@ -321,6 +334,16 @@ fn answer(request: Request, hub: &Arc<Hub>, inbox: &Inbox, port: u16) {
                 None => respond(request, text(404, "not found")),
             }
         }
+        "/api/state" => respond(
+            request,
+            with_headers(
+                Response::from_string(to_json(&hub.lock().state)),
+                &[
+                    ("Content-Type", "application/json"),
+                    ("Cache-Control", "no-store"),
+                ],
+            ),
+        ),
         "/events" => {
             let hub = hub.clone();
             let spawned = std::thread::Builder::new()

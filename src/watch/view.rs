@@ -178,7 +178,9 @@ impl std::fmt::Display for WriteError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             WriteError::Read(error) => write!(f, "cannot read the scene: {error}"),
-            WriteError::NotAScene => f.write_str("the scene file does not hold a scene `( … )` to put the camera in"),
+            WriteError::NotAScene => {
+                f.write_str("the scene file does not hold a scene `( … )` to put the camera in")
+            }
             WriteError::Write(error) => write!(f, "cannot write the scene: {error}"),
         }
     }
@@ -275,7 +277,9 @@ pub struct ViewSummary {
 
 /// Names a value the way the command line does (`blinn-phong`).
 fn value_name<T: ValueEnum>(value: Option<T>) -> Option<String> {
-    value.and_then(|v| v.to_possible_value()).map(|v| v.get_name().to_owned())
+    value
+        .and_then(|v| v.to_possible_value())
+        .map(|v| v.get_name().to_owned())
 }
 
 /// The requests waiting for the watch loop: the newest view request and the newest buffer.
@@ -307,7 +311,9 @@ impl Inbox {
     }
 
     fn waiting(&self) -> MutexGuard<'_, Waiting> {
-        self.waiting.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+        self.waiting
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner())
     }
 
     fn wake_loop(&self) {
@@ -331,7 +337,11 @@ impl Inbox {
         let path = request.url().split('?').next().unwrap_or_default().to_owned();
         let mut body = Vec::new();
         if let Err(error) = request.as_reader().take(MAX_BODY).read_to_end(&mut body) {
-            respond_json(request, 400, &error_json(&format!("cannot read the request: {error}")));
+            respond_json(
+                request,
+                400,
+                &error_json(&format!("cannot read the request: {error}")),
+            );
             return;
         }
         match path.as_str() {
@@ -476,12 +486,16 @@ impl View {
             None => text,
         };
         let options = LoadOptions {
-            shading: self.overrides.shading.map(ShadingArg::shading).or(load_options.shading),
+            shading: self
+                .overrides
+                .shading
+                .map(ShadingArg::shading)
+                .or(load_options.shading),
             model: self.overrides.model.map(ModelArg::model).or(load_options.model),
             ..load_options.clone()
         };
-        let mut loaded =
-            load_scene_from_str_cached(scene, text, &options, &mut cache.meshes).map_err(PreviewError::Load)?;
+        let mut loaded = load_scene_from_str_cached(scene, text, &options, &mut cache.meshes)
+            .map_err(PreviewError::Load)?;
         let (width, height) = (loaded.scene.image.width, loaded.scene.image.height);
         let scale = if moving { self.moving_scale.max(2) } else { 1 };
         if moving {
@@ -491,7 +505,11 @@ impl View {
             image.samples = 1;
         }
         let render_options = RenderOptions {
-            debug_view: self.overrides.debug.map(DebugArg::debug_view).or(render_options.debug_view),
+            debug_view: self
+                .overrides
+                .debug
+                .map(DebugArg::debug_view)
+                .or(render_options.debug_view),
             ..*render_options
         };
         cache.renderer.render(&loaded.scene, &render_options);
@@ -565,7 +583,8 @@ mod tests {
             "Perspective(eye: (0.30000000000000004, -5.8, 0.0000001), target: (-1, 0, 0), up: (0, 0, 1), fov: 30)"
         );
         let text = format!("(camera: {ron}, objects: [(mesh: Sphere(segments: 8))])");
-        let loaded = crate::scene::load_scene_from_str(Path::new("s.ron"), &text, &LoadOptions::default()).unwrap();
+        let loaded =
+            crate::scene::load_scene_from_str(Path::new("s.ron"), &text, &LoadOptions::default()).unwrap();
         assert_eq!(PreviewCamera::of(&loaded.scene.camera), Some(camera));
     }
 
@@ -596,12 +615,16 @@ mod tests {
             with_camera("(objects: [(mesh: Cube)])", &ron).unwrap(),
             format!("(camera: {ron}, objects: [(mesh: Cube)])")
         );
-        assert_eq!(with_camera("Scene()", &ron).unwrap(), format!("Scene(camera: {ron})"));
+        assert_eq!(
+            with_camera("Scene()", &ron).unwrap(),
+            format!("Scene(camera: {ron})")
+        );
         assert_eq!(with_camera("[1, 2]", &ron), None);
         for text in [multiline, "(objects: [(mesh: Cube)])"] {
             let edited = with_camera(text, &ron).unwrap();
             let loaded =
-                crate::scene::load_scene_from_str(Path::new("s.ron"), &edited, &LoadOptions::default()).unwrap();
+                crate::scene::load_scene_from_str(Path::new("s.ron"), &edited, &LoadOptions::default())
+                    .unwrap();
             assert_eq!(PreviewCamera::of(&loaded.scene.camera), Some(camera()));
         }
     }
@@ -617,7 +640,10 @@ mod tests {
         write_camera(&scene, &camera()).unwrap();
         let after = std::fs::read_to_string(&scene).unwrap();
         only_span_changed(before, &after, "Perspective(fov: 20)");
-        assert_eq!(std::fs::read_to_string(folder.path().join("mats.ron")).unwrap(), library);
+        assert_eq!(
+            std::fs::read_to_string(folder.path().join("mats.ron")).unwrap(),
+            library
+        );
         let loaded = crate::scene::load_scene(&scene, &LoadOptions::default()).unwrap();
         assert_eq!(PreviewCamera::of(&loaded.scene.camera), Some(camera()));
         let leftovers: Vec<_> = std::fs::read_dir(folder.path()).unwrap().collect();
@@ -629,11 +655,23 @@ mod tests {
         let valid = camera();
         assert!(valid.is_valid());
         let cases = [
-            PreviewCamera { eye: valid.target, ..valid },
-            PreviewCamera { up: [1.5, -2.0, 0.1], ..valid },
-            PreviewCamera { up: [0.0; 3], ..valid },
+            PreviewCamera {
+                eye: valid.target,
+                ..valid
+            },
+            PreviewCamera {
+                up: [1.5, -2.0, 0.1],
+                ..valid
+            },
+            PreviewCamera {
+                up: [0.0; 3],
+                ..valid
+            },
             PreviewCamera { fov: 180.0, ..valid },
-            PreviewCamera { eye: [f64::NAN, 0.0, 0.0], ..valid },
+            PreviewCamera {
+                eye: [f64::NAN, 0.0, 0.0],
+                ..valid
+            },
         ];
         for case in cases {
             assert!(!case.is_valid(), "{case:?}");
@@ -655,7 +693,10 @@ mod tests {
             debug: Some("wireframe".into()),
             ..ViewRequest::default()
         };
-        assert_eq!(Overrides::parse(&unknown), Err("unknown debug view `wireframe`".into()));
+        assert_eq!(
+            Overrides::parse(&unknown),
+            Err("unknown debug view `wireframe`".into())
+        );
     }
 
     #[test]
@@ -683,8 +724,14 @@ mod tests {
         };
         let mut cache = BuildCache::default();
         let (load, render) = (LoadOptions::default(), RenderOptions::default());
-        let preview = view.render(&scene, false, &load, &render, &mut cache).ok().unwrap();
-        let moving = view.render(&scene, true, &load, &render, &mut cache).ok().unwrap();
+        let preview = view
+            .render(&scene, false, &load, &render, &mut cache)
+            .ok()
+            .unwrap();
+        let moving = view
+            .render(&scene, true, &load, &render, &mut cache)
+            .ok()
+            .unwrap();
         assert_eq!((moving.summary.width, moving.summary.height), (40, 30));
         assert!(moving.summary.moving);
         let small = image::load_from_memory(&moving.png).unwrap();
@@ -692,7 +739,10 @@ mod tests {
 
         write_camera(&scene, &camera()).unwrap();
         let mut file_view = View::default();
-        let written = file_view.render(&scene, false, &load, &render, &mut cache).ok().unwrap();
+        let written = file_view
+            .render(&scene, false, &load, &render, &mut cache)
+            .ok()
+            .unwrap();
         assert_eq!(preview.png, written.png);
         assert_eq!(written.summary.camera, Some(camera()));
         assert!(!written.summary.preview_camera);

@@ -470,12 +470,17 @@ fn an_editor_session() {
 /// image file untouched), and closing the document brings the file's image back.
 #[test]
 fn the_preview_of_a_running_watch_follows_the_unsaved_buffer() {
-    use crate::watch::{SceneFolder, WatchProcess, http_get, preview_port, render_once, scene_text, wait_for};
+    use crate::watch::{
+        SceneFolder, WatchProcess, http_get, preview_port, render_once, scene_text, wait_for,
+    };
 
     let folder = SceneFolder::new();
     let scene = folder.file("scene.ron");
     let saved = std::fs::read_to_string(&scene).unwrap();
-    let watch = WatchProcess::start(&folder.path, &["scene.ron", "-o", "out.png", "--serve", "--port", "0"]);
+    let watch = WatchProcess::start(
+        &folder.path,
+        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
+    );
     let port = preview_port(&watch);
     let shown = || {
         let (status, body) = http_get(port, "/image.png", &format!("127.0.0.1:{port}"));
@@ -502,15 +507,30 @@ fn the_preview_of_a_running_watch_follows_the_unsaved_buffer() {
         "textDocument/didChange",
         json!({ "textDocument": { "uri": document, "version": 2 }, "contentChanges": [{ "text": unsaved }] }),
     );
-    wait_for("the unsaved text in the preview", || watch.output(), || {
-        (shown()? == expected).then_some(())
-    });
-    assert_eq!(std::fs::read_to_string(&scene).unwrap(), saved, "the scene file was written");
-    assert_eq!(folder.image().unwrap(), file_image, "the image file shows the unsaved text");
+    wait_for(
+        "the unsaved text in the preview",
+        || watch.output(),
+        || (shown()? == expected).then_some(()),
+    );
+    assert_eq!(
+        std::fs::read_to_string(&scene).unwrap(),
+        saved,
+        "the scene file was written"
+    );
+    assert_eq!(
+        folder.image().unwrap(),
+        file_image,
+        "the image file shows the unsaved text"
+    );
 
-    client.notify("textDocument/didClose", json!({ "textDocument": { "uri": document } }));
-    wait_for("the file's image again", || watch.output(), || {
-        (shown()? == file_pixels).then_some(())
-    });
+    client.notify(
+        "textDocument/didClose",
+        json!({ "textDocument": { "uri": document } }),
+    );
+    wait_for(
+        "the file's image again",
+        || watch.output(),
+        || (shown()? == file_pixels).then_some(()),
+    );
     client.shut_down();
 }

@@ -67,10 +67,16 @@ fn drag(browser: &mut Browser, dx: f64, dy: f64, steps: u32, pause: Duration, sh
     browser.call("Input.dispatchMouseEvent", mouse("mousePressed", x, y, 1));
     for step in 1..=steps {
         let t = f64::from(step) / f64::from(steps);
-        browser.call("Input.dispatchMouseEvent", mouse("mouseMoved", x + dx * t, y + dy * t, 1));
+        browser.call(
+            "Input.dispatchMouseEvent",
+            mouse("mouseMoved", x + dx * t, y + dy * t, 1),
+        );
         std::thread::sleep(pause);
     }
-    browser.call("Input.dispatchMouseEvent", mouse("mouseReleased", x + dx, y + dy, 0));
+    browser.call(
+        "Input.dispatchMouseEvent",
+        mouse("mouseReleased", x + dx, y + dy, 0),
+    );
 }
 
 /// Waits until the page is idle on a full-size image other than `not`.
@@ -88,7 +94,9 @@ fn open_preview(folder: &std::path::Path, args: &[&str]) -> Option<(WatchProcess
     let watch = WatchProcess::start(folder, args);
     let port = preview_port(&watch);
     let mut browser = Browser::open(&chromium, &format!("http://127.0.0.1:{port}/"));
-    browser.wait_for_page(PROBE, "the page with a camera", &watch, |state| state["ready"] == true);
+    browser.wait_for_page(PROBE, "the page with a camera", &watch, |state| {
+        state["ready"] == true
+    });
     Some((watch, browser, port))
 }
 
@@ -98,9 +106,10 @@ fn orbiting_copying_writing_the_camera_toggles_and_reset() {
     let scene = folder.path().join("scene.ron");
     let original = scene_text();
     std::fs::write(&scene, &original).unwrap();
-    let Some((watch, mut browser, port)) =
-        open_preview(folder.path(), &["scene.ron", "-o", "out.png", "--serve", "--port", "0"])
-    else {
+    let Some((watch, mut browser, port)) = open_preview(
+        folder.path(),
+        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
+    ) else {
         return;
     };
     let first = browser.evaluate(PROBE);
@@ -111,18 +120,36 @@ fn orbiting_copying_writing_the_camera_toggles_and_reset() {
     drag(&mut browser, 120.0, -40.0, 12, Duration::from_millis(30), false);
     let orbited = wait_for_still_image(&mut browser, &watch, &first["image"]);
     assert_eq!(orbited["previewCamera"], "true", "{orbited}");
-    assert!(orbited["movingFrames"].as_u64() > Some(0), "no reduced frame painted: {orbited}");
+    assert!(
+        orbited["movingFrames"].as_u64() > Some(0),
+        "no reduced frame painted: {orbited}"
+    );
     browser.save_screenshot("view-orbited.png");
     let preview_image = shown_image(port);
     assert_eq!(image_pixels(&preview_image).dimensions(), (160, 120));
-    assert_ne!(image_pixels(&preview_image), image_pixels(&file_image), "the orbit changed nothing");
-    assert_eq!(std::fs::read_to_string(&scene).unwrap(), original, "the preview wrote the scene");
+    assert_ne!(
+        image_pixels(&preview_image),
+        image_pixels(&file_image),
+        "the orbit changed nothing"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&scene).unwrap(),
+        original,
+        "the preview wrote the scene"
+    );
 
     // Copy: the copied camera, put into the file by hand, renders the preview's image exactly.
     browser.evaluate(r#"document.getElementById("view-copy").click()"#);
-    let copied = wait_for("the copied camera", || watch.output(), || {
-        browser.evaluate("window.lampshadeView.lastCopied()").as_str().map(str::to_owned)
-    });
+    let copied = wait_for(
+        "the copied camera",
+        || watch.output(),
+        || {
+            browser
+                .evaluate("window.lampshadeView.lastCopied()")
+                .as_str()
+                .map(str::to_owned)
+        },
+    );
     assert!(copied.starts_with("camera: Perspective(eye: ("), "{copied}");
     let by_hand = tempfile::tempdir().unwrap();
     let by_hand_scene = by_hand.path().join("scene.ron");
@@ -139,10 +166,14 @@ fn orbiting_copying_writing_the_camera_toggles_and_reset() {
 
     // Write: only the camera's span changes, and the watch renders the file as the preview was.
     browser.evaluate(r#"document.getElementById("view-write").click()"#);
-    let written = wait_for("the camera written", || watch.output(), || {
-        let text = std::fs::read_to_string(&scene).ok()?;
-        (text != original).then_some(text)
-    });
+    let written = wait_for(
+        "the camera written",
+        || watch.output(),
+        || {
+            let text = std::fs::read_to_string(&scene).ok()?;
+            (text != original).then_some(text)
+        },
+    );
     let span = original.find(FILE_CAMERA).unwrap();
     let tail = &original[span + FILE_CAMERA.len()..];
     assert!(written.starts_with(&original[..span]), "{written}");
@@ -152,10 +183,14 @@ fn orbiting_copying_writing_the_camera_toggles_and_reset() {
     let after_write = browser.wait_for_page(PROBE, "the file's new camera", &watch, |state| {
         state["previewCamera"] == "false" && state["busy"] == false && state["image"] != orbited["image"]
     });
-    wait_for("the image file of the written camera", || watch.output(), || {
-        let out = std::fs::read(folder.path().join("out.png")).ok()?;
-        (image_pixels(&out) == image_pixels(&preview_image)).then_some(())
-    });
+    wait_for(
+        "the image file of the written camera",
+        || watch.output(),
+        || {
+            let out = std::fs::read(folder.path().join("out.png")).ok()?;
+            (image_pixels(&out) == image_pixels(&preview_image)).then_some(())
+        },
+    );
     assert_eq!(image_pixels(&shown_image(port)), image_pixels(&preview_image));
 
     // Toggles: the debug view changes the image; reset brings the file's image back.
@@ -175,7 +210,10 @@ fn orbiting_copying_writing_the_camera_toggles_and_reset() {
     assert_eq!(flat["view"]["shading"], "flat", "{flat}");
     browser.evaluate(r#"document.getElementById("view-reset").click()"#);
     let reset = wait_for_still_image(&mut browser, &watch, &flat["image"]);
-    assert!(reset["view"]["debug"].is_null() && reset["view"]["shading"].is_null(), "{reset}");
+    assert!(
+        reset["view"]["debug"].is_null() && reset["view"]["shading"].is_null(),
+        "{reset}"
+    );
     assert_eq!(image_pixels(&shown_image(port)), image_pixels(&preview_image));
     // The file was written once, by the write button.
     assert_eq!(std::fs::read_to_string(&scene).unwrap(), written);
@@ -185,9 +223,10 @@ fn orbiting_copying_writing_the_camera_toggles_and_reset() {
 fn the_page_s_camera_math_keeps_the_up_vector_and_never_reaches_the_poles() {
     let folder = tempfile::tempdir().unwrap();
     std::fs::write(folder.path().join("scene.ron"), scene_text()).unwrap();
-    let Some((_watch, mut browser, _port)) =
-        open_preview(folder.path(), &["scene.ron", "-o", "out.png", "--serve", "--port", "0"])
-    else {
+    let Some((_watch, mut browser, _port)) = open_preview(
+        folder.path(),
+        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
+    ) else {
         return;
     };
     let result = browser.evaluate(
@@ -251,13 +290,25 @@ fn preview_orbit_speed() {
     let scene = crate::repo().join("scenes/matlab-shiny.ron");
     std::fs::copy(&scene, folder.path().join("scene.ron")).unwrap();
     let args = [
-        "scene.ron", "-o", "out.png", "--width", "800", "--height", "600", "--threads", "2", "--serve", "--port",
+        "scene.ron",
+        "-o",
+        "out.png",
+        "--width",
+        "800",
+        "--height",
+        "600",
+        "--threads",
+        "2",
+        "--serve",
+        "--port",
         "0",
     ];
     let watch = WatchProcess::start(folder.path(), &args);
     let port = preview_port(&watch);
     let mut browser = Browser::open(&chromium, &format!("http://127.0.0.1:{port}/"));
-    browser.wait_for_page(PROBE, "the page with a camera", &watch, |state| state["ready"] == true);
+    browser.wait_for_page(PROBE, "the page with a camera", &watch, |state| {
+        state["ready"] == true
+    });
     let runs: u32 = std::env::var("LAMPSHADE_ORBIT_RUNS")
         .ok()
         .and_then(|runs| runs.parse().ok())
@@ -268,7 +319,14 @@ fn preview_orbit_speed() {
         browser.evaluate("window.lampshadeView.frames.length = 0");
         // Three seconds of a 60 Hz mouse.
         let started = Instant::now();
-        drag(&mut browser, if run % 2 == 0 { 300.0 } else { -300.0 }, 30.0, 180, Duration::from_millis(16), false);
+        drag(
+            &mut browser,
+            if run % 2 == 0 { 300.0 } else { -300.0 },
+            30.0,
+            180,
+            Duration::from_millis(16),
+            false,
+        );
         let dragged = started.elapsed().as_secs_f64();
         let before = browser.evaluate(PROBE);
         let state = wait_for_still_image(&mut browser, &watch, &before["image"]);
@@ -277,7 +335,10 @@ fn preview_orbit_speed() {
         let mut run_latencies: Vec<f64> = frames.iter().map(|f| f["latency"].as_f64().unwrap()).collect();
         run_latencies.sort_by(f64::total_cmp);
         let rate = frames.len() as f64 / dragged;
-        let median = run_latencies.get(run_latencies.len() / 2).copied().unwrap_or(f64::NAN);
+        let median = run_latencies
+            .get(run_latencies.len() / 2)
+            .copied()
+            .unwrap_or(f64::NAN);
         let width = frames.last().map_or(0, |f| f["width"].as_u64().unwrap_or(0));
         let _ = writeln_stderr(&format!(
             "run {run}: {rate:.1} updates/s over {dragged:.2} s, input to paint median {median:.1} ms, \

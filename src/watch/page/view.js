@@ -321,10 +321,16 @@
     controls.note.textContent = answer.error ?? "";
   }
 
-  // The states every build publishes (the page's own event stream, see preview.html).
+  // The states every build publishes (the page's own event stream, see preview.html), and the
+  // current one, which the stream may have sent before this script ran.
   if (typeof events !== "undefined") {
     events.addEventListener("message", (message) => adopt(JSON.parse(message.data)));
   }
+  fetch("/api/state")
+    .then((response) => response.json())
+    .then((state) => {
+      if (lastState === null) adopt(state);
+    });
 
   window.lampshadeView = {
     orbit,
