@@ -534,9 +534,9 @@ impl WatchSession {
                     "#{} · preview{} · {}×{} px{} · rendered in {}",
                     self.builds,
                     describe_view(&frame.summary),
-                    frame.summary.width,
-                    frame.summary.height,
-                    if moving { ", moving: reduced" } else { "" },
+                    frame.size.0,
+                    frame.size.1,
+                    if moving { " while moving" } else { "" },
                     milliseconds(frame.time),
                 );
                 preview.publish_image(frame.png, summary, frame.summary);

@@ -425,6 +425,8 @@ pub struct View {
 pub struct PreviewFrame {
     pub png: Vec<u8>,
     pub summary: ViewSummary,
+    /// The frame's own size (smaller than the summary's while moving).
+    pub size: (u32, u32),
     /// Load, render and encode.
     pub time: Duration,
 }
@@ -514,6 +516,7 @@ impl View {
         };
         cache.renderer.render(&loaded.scene, &render_options);
         let framebuffer = cache.renderer.take_framebuffer();
+        let size = (framebuffer.width, framebuffer.height);
         let png = output::encode_png_to_vec(&output::to_rgb8(&framebuffer), PngCompression::Fast);
         cache.renderer.reuse_framebuffer(framebuffer);
         let time = started.elapsed();
@@ -523,6 +526,7 @@ impl View {
         Ok(PreviewFrame {
             png: png.map_err(PreviewError::Encode)?,
             summary: self.summary(&loaded.scene.camera, width, height, moving),
+            size,
             time,
         })
     }

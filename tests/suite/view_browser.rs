@@ -52,11 +52,11 @@ fn shown_image(port: u16) -> Vec<u8> {
     body
 }
 
-/// Drags from the middle of the image by `(dx, dy)` pixels in `steps` moves, `pause` apart.
+/// Drags from the middle of the image's top part (inside a small window) by `(dx, dy)` pixels in `steps` moves, `pause` apart.
 fn drag(browser: &mut Browser, dx: f64, dy: f64, steps: u32, pause: Duration, shift: bool) {
     let rect = browser.evaluate(
         r#"(() => { const r = document.getElementById("view").getBoundingClientRect();
-           return [r.left + r.width / 2, r.top + r.height / 2]; })()"#,
+           return [r.left + r.width / 2, r.top + Math.min(r.height / 2, 60)]; })()"#,
     );
     let (x, y) = (rect[0].as_f64().unwrap(), rect[1].as_f64().unwrap());
     let modifiers = if shift { 8 } else { 0 };
@@ -364,4 +364,98 @@ fn preview_orbit_speed() {
 fn writeln_stderr(line: &str) -> std::io::Result<()> {
     use std::io::Write;
     writeln!(std::io::stderr(), "{line}")
+}
+
+/// POSTs `body` to the preview with extra `headers`; returns the status and the body.
+fn http_post(port: u16, path: &str, headers: &str, body: &str) -> (u16, String) {
+    use std::io::{Read, Write};
+    let mut stream = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
+    stream.set_read_timeout(Some(crate::watch::DEADLINE)).unwrap();
+    write!(
+        stream,
+        "POST {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n{headers}Content-Type: application/json\r\n\
+         Content-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    )
+    .unwrap();
+    let mut response = String::new();
+    let _ = stream.read_to_string(&mut response);
+    let status = response.split(' ').nth(1).unwrap().parse().unwrap();
+    let body = response
+        .split_once("\r\n\r\n")
+        .map_or("", |(_, body)| body)
+        .to_owned();
+    (status, body)
+}
+
+#[test]
+fn the_view_routes_answer_scripts_and_refuse_other_sites() {
+    let folder = tempfile::tempdir().unwrap();
+    let scene = folder.path().join("scene.ron");
+    let original = scene_text();
+    std::fs::write(&scene, &original).unwrap();
+    let watch = WatchProcess::start(
+        folder.path(),
+        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
+    );
+    let port = preview_port(&watch);
+    let camera = r#"{"eye": [3, 1, 2], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 35}"#;
+
+    let (status, _) = http_post(
+        port,
+        "/api/camera",
+        "Origin: http://elsewhere.example\r\n",
+        camera,
+    );
+    assert_eq!(status, 403);
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), original);
+
+    let (status, body) = http_post(port, "/api/view", "", r#"{"debug": "wireframe"}"#);
+    assert_eq!(
+        (status, body.contains("unknown debug view")),
+        (400, true),
+        "{body}"
+    );
+    let degenerate = r#"{"camera": {"eye": [0, 0, 0], "target": [0, 0, 0], "up": [0, 1, 0], "fov": 35}}"#;
+    assert_eq!(http_post(port, "/api/view", "", degenerate).0, 400);
+
+    let (status, body) = http_post(
+        port,
+        "/api/view",
+        "",
+        &format!(r#"{{"camera": {camera}, "moving": true}}"#),
+    );
+    assert_eq!(status, 200, "{body}");
+    let state: Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(state["view"]["moving"], true, "{state}");
+    assert_eq!(state["view"]["preview_camera"], true, "{state}");
+    assert_eq!(
+        (state["view"]["width"].as_u64(), state["view"]["height"].as_u64()),
+        (Some(160), Some(120))
+    );
+    let shown = image_pixels(&shown_image(port));
+    assert_eq!(shown.dimensions(), (80, 60), "a reduced frame while moving");
+
+    let (status, body) = http_post(
+        port,
+        "/api/camera",
+        &format!("Origin: http://127.0.0.1:{port}\r\n"),
+        camera,
+    );
+    assert_eq!(status, 200, "{body}");
+    let written = std::fs::read_to_string(&scene).unwrap();
+    assert_eq!(
+        written,
+        original.replace(
+            FILE_CAMERA,
+            "Perspective(eye: (3, 1, 2), target: (0, 0, 0), up: (0, 1, 0), fov: 35)"
+        )
+    );
+    let (status, _) = http_post(
+        port,
+        "/api/buffer",
+        "",
+        r#"{"path": "/elsewhere/other.ron", "text": "()"}"#,
+    );
+    assert_eq!(status, 404);
 }
