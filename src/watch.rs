@@ -301,7 +301,8 @@ struct WatchSession {
 
 /// What one build did.
 enum BuildOutcome {
-    Written(WrittenImage),
+    /// Boxed: an image's scene and statistics dwarf the other outcomes.
+    Written(Box<WrittenImage>),
     BadInput {
         error: LoadError,
         /// Reading and checking, until the problems were found.
@@ -696,11 +697,11 @@ fn build_once(
         };
     }
     let written_at = Instant::now();
-    BuildOutcome::Written(WrittenImage {
+    BuildOutcome::Written(Box::new(WrittenImage {
         rendered,
         encode_time: written_at - encode_started,
         written_at,
-    })
+    }))
 }
 
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
