@@ -95,7 +95,7 @@ fn open_preview(folder: &std::path::Path, args: &[&str]) -> Option<(WatchProcess
     let port = preview_port(&watch);
     let mut browser = Browser::open(&chromium, &format!("http://127.0.0.1:{port}/"));
     browser.wait_for_page(PROBE, "the page with a camera", &watch, |state| {
-        state["ready"] == true
+        state["ready"] == true && state["image"].as_str().is_some_and(|image| !image.is_empty())
     });
     Some((watch, browser, port))
 }
@@ -252,14 +252,15 @@ fn the_page_s_camera_math_keeps_the_up_vector_and_never_reaches_the_poles() {
       });
     }
   }
-  const panned = v.pan(start, 30, -20, 120);
+  const side = { ...start, eye: [3, -4, 0.5] };
+  const panned = v.pan(side, 30, -20, 120);
   const dollied = v.dolly(start, 5);
   const far = v.dolly(start, -5);
   const tooClose = v.dolly(start, 1e6);
   return {
     orbit: results,
-    panKeepsOffset: length(sub(sub(panned.eye, panned.target), sub(start.eye, start.target))) < 1e-12,
-    panMoves: length(sub(panned.target, start.target)) > 0,
+    panKeepsOffset: length(sub(sub(panned.eye, panned.target), sub(side.eye, side.target))) < 1e-12,
+    panMoves: length(sub(panned.target, side.target)) > 0,
     dollyCloser: length(dollied.eye) < 5 && length(far.eye) > 5,
     dollyNeverReaches: length(tooClose.eye) > 0 && finite(tooClose),
   };
@@ -307,7 +308,7 @@ fn preview_orbit_speed() {
     let port = preview_port(&watch);
     let mut browser = Browser::open(&chromium, &format!("http://127.0.0.1:{port}/"));
     browser.wait_for_page(PROBE, "the page with a camera", &watch, |state| {
-        state["ready"] == true
+        state["ready"] == true && state["image"].as_str().is_some_and(|image| !image.is_empty())
     });
     let runs: u32 = std::env::var("LAMPSHADE_ORBIT_RUNS")
         .ok()
