@@ -332,6 +332,18 @@ pub enum DebugArg {
     Depth,
 }
 
+impl DebugArg {
+    pub fn debug_view(self) -> DebugView {
+        match self {
+            DebugArg::Ambient => DebugView::Ambient,
+            DebugArg::Diffuse => DebugView::Diffuse,
+            DebugArg::Specular => DebugView::Specular,
+            DebugArg::Normals => DebugView::Normals,
+            DebugArg::Depth => DebugView::Depth,
+        }
+    }
+}
+
 /// Parses `args` and runs the command; returns the exit code.
 pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
     let cli = match Cli::try_parse_from(args) {
@@ -432,13 +444,7 @@ fn run_render(args: &RenderArgs) -> i32 {
     };
     let render_options = RenderOptions {
         threads: args.threads.map(usize::from),
-        debug_view: args.debug.map(|d| match d {
-            DebugArg::Ambient => DebugView::Ambient,
-            DebugArg::Diffuse => DebugView::Diffuse,
-            DebugArg::Specular => DebugView::Specular,
-            DebugArg::Normals => DebugView::Normals,
-            DebugArg::Depth => DebugView::Depth,
-        }),
+        debug_view: args.debug.map(DebugArg::debug_view),
     };
     let output_settings = OutputSettings {
         format,

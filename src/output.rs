@@ -353,6 +353,13 @@ fn encode_png<W: Write>(
         })
 }
 
+/// `image` as PNG bytes in memory (the preview's frames, which never touch a file).
+pub fn encode_png_to_vec(image: &RgbImage, compression: PngCompression) -> Result<Vec<u8>, OutputError> {
+    let mut bytes = Vec::new();
+    encode_png(&mut bytes, Path::new("(preview)"), image, compression)?;
+    Ok(bytes)
+}
+
 /// Writes `framebuffer` to `path` in `format`, atomically. PNG uses `encoding`; the float
 /// formats store linear light without clamping.
 pub fn write_image(

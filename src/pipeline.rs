@@ -9,8 +9,8 @@ use std::time::{Duration, Instant};
 
 use crate::diag::{Diagnostic, Sources};
 use crate::render::{FrameBuffer, RenderOptions, RenderStats, Renderer};
-use crate::scene::Scene;
 use crate::scene::load::{LoadError, LoadOptions, MeshCache, load_scene_cached};
+use crate::scene::{Camera, Scene};
 
 /// A scene file that loaded and rendered.
 #[derive(Debug, Clone)]
@@ -26,6 +26,8 @@ pub struct RenderedScene {
     pub sources: Sources,
     /// Every file the scene read (scene, includes, meshes and what they reference).
     pub files_read: Vec<PathBuf>,
+    /// The camera the image was rendered with.
+    pub camera: Camera,
 }
 
 /// What one build keeps for the next: the meshes whose files have not changed, and the
@@ -49,6 +51,7 @@ pub fn render_scene_file(
     let load_time = started.elapsed();
     let stats = cache.renderer.render(&loaded.scene, render_options);
     Ok(RenderedScene {
+        camera: loaded.scene.camera,
         scene: Arc::new(loaded.scene),
         framebuffer: cache.renderer.take_framebuffer(),
         stats,

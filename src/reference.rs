@@ -868,6 +868,7 @@ pub fn render_reference_file(
         ..RenderStats::default()
     };
     Ok(RenderedScene {
+        camera: loaded.scene.camera,
         scene: std::sync::Arc::new(loaded.scene),
         framebuffer: reference.framebuffer,
         stats,

@@ -40,8 +40,10 @@
 mod debounce;
 mod files;
 mod pick;
+pub mod registry;
 mod server;
 mod turntable;
+pub mod view;
 
 use std::collections::BTreeSet;
 use std::panic::{self, AssertUnwindSafe};
@@ -56,11 +58,13 @@ use crate::inspect::ImageOrigin;
 use crate::output::{self, Destination, Encoding, OutputError, OutputFormat, PngCompression};
 use crate::pipeline::{BuildCache, RenderedScene, render_scene_file};
 use crate::render::RenderOptions;
+use crate::scene::Camera;
 use crate::scene::load::{LoadError, LoadOptions};
 
-use debounce::{Changes, Debounce, Signal, wait_for_changes};
+use debounce::{Changes, Debounce, Signal, Wake, wait_for_changes};
 use files::{FolderWatches, WatchedFiles};
 use server::PreviewServer;
+use view::{Inbox, PreviewError, View};
 
 /// The debounce: long enough to cover the events of one save (a few milliseconds apart),
 /// short enough to stay well inside the 100 ms a change may take to show (see `watch::debounce`).
@@ -152,6 +156,7 @@ pub fn run(args: &WatchArgs) -> i32 {
             return EXIT_OUTPUT_FAILED;
         }
     };
+    let inbox = Arc::new(Inbox::new(&args.scene, signal_sender.clone()));
     if let Err(error) = stop_on_ctrl_c(signal_sender) {
         errln!("warning: cannot catch Ctrl-C ({error}); it will stop the watch abruptly");
     }
@@ -163,7 +168,7 @@ pub fn run(args: &WatchArgs) -> i32 {
         );
         // An image from an earlier run is the last good image until the first build says otherwise.
         let earlier_image = std::fs::read(&output).ok();
-        match PreviewServer::start(args.port, &scene_name, earlier_image) {
+        match PreviewServer::start(args.port, &scene_name, earlier_image, inbox.clone()) {
             Ok(started) => {
                 if let Some(note) = started.port_note {
                     errln!("note: {note}");
@@ -180,6 +185,18 @@ pub fn run(args: &WatchArgs) -> i32 {
     } else {
         None
     };
+
+    // An editor's language server finds the preview through this file (`watch::registry`).
+    let _registration =
+        preview
+            .as_ref()
+            .and_then(|server| match registry::register(&args.scene, server.port()) {
+                Ok(registration) => Some(registration),
+                Err(error) => {
+                    errln!("warning: editors will not find this preview: {error}");
+                    None
+                }
+            });
 
     let load_options = match args.limits.load_options() {
         Ok(limited) => LoadOptions {
@@ -204,15 +221,21 @@ pub fn run(args: &WatchArgs) -> i32 {
             render_options,
         });
     }
+    if preview.is_some() {
+        session.inbox = Some(inbox);
+    }
     session.preview = preview;
     session.build(&Trigger::Start(started));
     let mut report_watch_error = |error: notify::Error| errln!("warning: watching files: {error}");
     // Nobody reads the status lines any more (`watch s.ron | head -1`): end quietly, as a
     // Ctrl-C would, rather than render for no one.
     while !crate::console::stdout_closed()
-        && let Some(changes) = wait_for_changes(&signals, &session.files, DEBOUNCE, &mut report_watch_error)
+        && let Some(wake) = wait_for_changes(&signals, &session.files, DEBOUNCE, &mut report_watch_error)
     {
-        session.build(&Trigger::Changes(changes));
+        if let Wake::Changes(changes) = wake {
+            session.build(&Trigger::Changes(changes));
+        }
+        session.serve_view_requests();
     }
     outln!("stopped");
     EXIT_OK
@@ -283,6 +306,13 @@ struct WatchSession {
     files: WatchedFiles,
     watches: FolderWatches,
     preview: Option<PreviewServer>,
+    /// The page's and the editor's requests (with `--serve`).
+    inbox: Option<Arc<Inbox>>,
+    /// What the page asked to see instead of the file's own render.
+    view: View,
+    /// The camera of the last build that rendered: when an edit changes it, the file's camera
+    /// replaces the preview's.
+    file_camera: Option<Camera>,
     builds: u64,
     /// The followed files and the missing ones, as last printed (printed again when they change).
     announced_files: Vec<PathBuf>,
@@ -292,7 +322,7 @@ struct WatchSession {
 
 /// What one build did.
 enum BuildOutcome {
-    /// Boxed: the other outcomes are small.
+    /// Boxed: an image's scene and statistics dwarf the other outcomes.
     Written(Box<WrittenImage>),
     BadInput {
         error: LoadError,
@@ -332,6 +362,9 @@ impl WatchSession {
             files: WatchedFiles::new(output),
             watches,
             preview: None,
+            inbox: None,
+            view: View::default(),
+            file_camera: None,
             builds: 0,
             announced_files: Vec::new(),
             announced_missing: Vec::new(),
@@ -353,11 +386,15 @@ impl WatchSession {
         };
         match outcome {
             Ok(BuildOutcome::Written(written)) => {
+                self.follow_the_file_where_it_changed(trigger, &written.rendered.camera);
                 self.report_written(trigger, &written);
                 let rendered = written.rendered;
                 self.follow(rendered.files_read);
                 // The next build renders into the same pixels.
                 self.cache.renderer.reuse_framebuffer(rendered.framebuffer);
+                if !self.view.is_the_file_s() {
+                    self.show_view(false);
+                }
             }
             Ok(BuildOutcome::BadInput { error, load_time }) => {
                 let report = render_diagnostics(&error.diagnostics, &error.sources, self.color);
@@ -424,7 +461,9 @@ impl WatchSession {
             milliseconds(written.encode_time),
             milliseconds(latency),
         );
-        if let Some(preview) = &self.preview {
+        if let Some(preview) = &self.preview
+            && self.view.is_the_file_s()
+        {
             match std::fs::read(&self.output) {
                 Ok(png) => {
                     let render_time = *load_time
@@ -448,13 +487,122 @@ impl WatchSession {
                         render_options: self.render_options,
                         encoding: Encoding::Linear,
                     };
-                    preview.publish_image(png, summary, Arc::new(origin));
+                    let view = self.view.summary(
+                        &written.rendered.camera,
+                        framebuffer.width,
+                        framebuffer.height,
+                        false,
+                    );
+                    preview.publish_image(png, summary, view, Arc::new(origin));
                 }
                 Err(error) => errln!(
                     "warning: preview: cannot read back `{}`: {error}",
                     self.output.display()
                 ),
             }
+        }
+    }
+
+    /// After a build of the file: an unsaved buffer gives way to the scene file when the scene
+    /// file changed (saved), and the preview camera to the file's when the file's camera changed
+    /// (written from the page or edited by hand).
+    fn follow_the_file_where_it_changed(&mut self, trigger: &Trigger, camera: &Camera) {
+        if let Trigger::Changes(changes) = trigger
+            && changes
+                .files
+                .iter()
+                .any(|file| files::same_location(file, &self.scene))
+        {
+            self.view.buffer = None;
+        }
+        if self.file_camera.is_some_and(|before| before != *camera) {
+            self.view.camera = None;
+        }
+        self.file_camera = Some(*camera);
+    }
+
+    /// Takes the newest requests from the page and the editor, shows what they ask for, and
+    /// answers the page's request with the state of the image it made.
+    fn serve_view_requests(&mut self) {
+        let Some(inbox) = &self.inbox else {
+            return;
+        };
+        let taken = inbox.take();
+        let buffer_changed = taken.buffer.is_some();
+        if let Some(update) = taken.buffer {
+            // A buffer as saved is the file: the file's own view (and the image file) again.
+            let saved = std::fs::read_to_string(&self.scene).ok();
+            self.view.buffer = update.text.filter(|text| saved.as_ref() != Some(text));
+        }
+        let moving = taken.view.as_ref().is_some_and(|(request, _)| request.moving);
+        if let Some((request, _)) = &taken.view {
+            self.view.apply(request);
+        }
+        if buffer_changed || taken.view.is_some() {
+            self.show_view(moving);
+        }
+        if let (Some((_, page)), Some(preview)) = (taken.view, &self.preview) {
+            view::respond_json(page, 200, &preview.state_json());
+        }
+    }
+
+    /// Renders the view the page asked for (the file's own view included, after a reset) and
+    /// shows it in the page only; the image file is left as the file's build wrote it.
+    fn show_view(&mut self, moving: bool) {
+        let Some(preview) = &self.preview else {
+            return;
+        };
+        let (view, scene, cache) = (&mut self.view, &self.scene, &mut self.cache);
+        let (load_options, render_options) = (&self.load_options, &self.render_options);
+        let rendered = panic::catch_unwind(AssertUnwindSafe(|| {
+            view.render(scene, moving, load_options, render_options, cache)
+        }));
+        let problem = match rendered {
+            Ok(Ok(frame)) => {
+                let summary = format!(
+                    "#{} · preview{} · {}×{} px{} · rendered in {}",
+                    self.builds,
+                    describe_view(&frame.summary),
+                    frame.size.0,
+                    frame.size.1,
+                    if moving { " while moving" } else { "" },
+                    milliseconds(frame.time),
+                );
+                preview.publish_image(frame.png, summary, frame.summary, Arc::new(frame.origin));
+                return;
+            }
+            Ok(Err(PreviewError::Load(error))) => {
+                let report = render_diagnostics(&error.diagnostics, &error.sources, false);
+                let errors = error.diagnostics.iter().filter(|d| d.is_error()).count();
+                let what = if self.view.buffer.is_some() {
+                    "unsaved text"
+                } else {
+                    "preview"
+                };
+                (
+                    report,
+                    format!("{what}: {errors} error{}", if errors == 1 { "" } else { "s" }),
+                )
+            }
+            Ok(Err(PreviewError::Read(error))) => (
+                format!("cannot read `{}`: {error}", self.scene.display()),
+                String::from("preview: cannot read the scene"),
+            ),
+            Ok(Err(PreviewError::Encode(error))) => (
+                error.to_string(),
+                String::from("preview: cannot encode the image"),
+            ),
+            Err(payload) => {
+                self.cache = BuildCache::default();
+                let message = panic_message(payload.as_ref());
+                (
+                    format!("internal error (a bug in lampshade, not in your files): {message}"),
+                    String::from("preview: internal error"),
+                )
+            }
+        };
+        if let Some(preview) = &self.preview {
+            preview.publish_error(problem.0, &problem.1);
         }
     }
 
@@ -592,6 +740,27 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     } else {
         String::from("(no message)")
     }
+}
+
+/// What the preview shows besides the file: " · preview camera · shading gouraud".
+fn describe_view(view: &view::ViewSummary) -> String {
+    let mut parts = String::new();
+    if view.preview_camera {
+        parts.push_str(" · preview camera");
+    }
+    for (what, value) in [
+        ("shading", &view.shading),
+        ("model", &view.model),
+        ("debug", &view.debug),
+    ] {
+        if let Some(value) = value {
+            parts.push_str(&format!(" · {what} {value}"));
+        }
+    }
+    if view.buffer {
+        parts.push_str(" · unsaved text");
+    }
+    parts
 }
 
 fn milliseconds(duration: Duration) -> String {

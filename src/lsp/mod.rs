@@ -24,6 +24,7 @@ pub mod diagnostics;
 pub mod documents;
 pub mod hover;
 pub mod navigation;
+pub mod preview;
 
 use std::collections::HashMap;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -31,15 +32,16 @@ use std::sync::Arc;
 
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{
-    DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, Notification as _,
+    DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, DidSaveTextDocument, Notification as _,
 };
 use lsp_types::request::{Completion, DocumentSymbolRequest, GotoDefinition, HoverRequest, Request as _};
 use lsp_types::{
     CompletionOptions, CompletionParams, CompletionResponse, DidChangeTextDocumentParams,
-    DidCloseTextDocumentParams, DidOpenTextDocumentParams, DocumentSymbolParams, DocumentSymbolResponse,
-    GotoDefinitionParams, GotoDefinitionResponse, HoverParams, HoverProviderCapability, InitializeParams,
-    OneOf, ServerCapabilities, ServerInfo, TextDocumentPositionParams, TextDocumentSyncCapability,
-    TextDocumentSyncKind, Url,
+    DidCloseTextDocumentParams, DidOpenTextDocumentParams, DidSaveTextDocumentParams, DocumentSymbolParams,
+    DocumentSymbolResponse, GotoDefinitionParams, GotoDefinitionResponse, HoverParams,
+    HoverProviderCapability, InitializeParams, OneOf, ServerCapabilities, ServerInfo,
+    TextDocumentPositionParams, TextDocumentSyncCapability, TextDocumentSyncKind, TextDocumentSyncOptions,
+    TextDocumentSyncSaveOptions, Url,
 };
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -47,6 +49,7 @@ use serde::de::DeserializeOwned;
 use crate::cli::{EXIT_BAD_INPUT, EXIT_OK};
 use crate::lsp::diagnostics::{Checker, Publisher, to_lsp};
 use crate::lsp::documents::{Documents, offset_of};
+use crate::lsp::preview::PreviewLink;
 use crate::scene::load::{LoadOptions, check_library_text, parse_scene_text};
 
 /// `lampshade lsp`'s arguments.
@@ -80,9 +83,13 @@ pub fn run(_args: &LspArgs) -> i32 {
 /// What the server can do, as told to the editor.
 fn capabilities() -> ServerCapabilities {
     ServerCapabilities {
-        text_document_sync: Some(TextDocumentSyncCapability::Kind(
-            TextDocumentSyncKind::INCREMENTAL,
-        )),
+        // Saves matter to the preview only: a saved file is rendered from disk again.
+        text_document_sync: Some(TextDocumentSyncCapability::Options(TextDocumentSyncOptions {
+            open_close: Some(true),
+            change: Some(TextDocumentSyncKind::INCREMENTAL),
+            save: Some(TextDocumentSyncSaveOptions::Supported(true)),
+            ..TextDocumentSyncOptions::default()
+        })),
         completion_provider: Some(CompletionOptions {
             trigger_characters: Some(vec!["\"".into(), "/".into(), "(".into(), ",".into(), ":".into()]),
             ..CompletionOptions::default()
@@ -118,6 +125,7 @@ pub fn serve(connection: &Connection) -> Result<(), Box<dyn std::error::Error + 
         documents: Documents::default(),
         checker: Checker::start(publisher.clone(), LoadOptions::default()),
         publisher,
+        preview: PreviewLink::start(),
     };
 
     for message in &connection.receiver {
@@ -140,6 +148,8 @@ struct Server {
     documents: Documents,
     publisher: Publisher,
     checker: Checker,
+    /// Sends unsaved scene text to a `watch --serve` of the same scene.
+    preview: PreviewLink,
 }
 
 impl Server {
@@ -220,11 +230,21 @@ impl Server {
             }
             DidCloseTextDocument::METHOD => {
                 if let Ok(p) = serde_json::from_value::<DidCloseTextDocumentParams>(notification.params) {
+                    if let Some(document) = self.documents.get(&p.text_document.uri) {
+                        self.preview.file_wins(document.path.clone());
+                    }
                     self.documents.close(&p.text_document.uri);
                     self.publisher.clear(&p.text_document.uri);
                 }
             }
-            // `exit` without `shutdown`, saves, settings: nothing to do.
+            DidSaveTextDocument::METHOD => {
+                if let Ok(p) = serde_json::from_value::<DidSaveTextDocumentParams>(notification.params)
+                    && let Some(document) = self.documents.get(&p.text_document.uri)
+                {
+                    self.preview.file_wins(document.path.clone());
+                }
+            }
+            // `exit` without `shutdown`, settings: nothing to do.
             _ => {}
         }
     }
@@ -245,6 +265,8 @@ impl Server {
             self.publisher.publish(uri, document.version, diagnostics);
             return;
         }
+        self.preview.text(document.path.clone(), document.text.clone());
+        self.publisher.saw(uri, document.version);
         match parse_scene_text(&document.path, &document.text) {
             Err(error) => self.publisher.publish(uri, document.version, to_lsp(&error)),
             Ok(()) => {

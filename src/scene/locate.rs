@@ -233,6 +233,25 @@ pub fn surroundings(source: &str, offset: usize) -> Surroundings {
     }
 }
 
+/// Where the fields of the top-level struct begin: the byte just after its `(` (past an optional
+/// name such as `Scene`), and where its first field starts, if it has one; `None` when the text
+/// does not begin (after comments and attributes) with a `( )` struct. For inserting a field the
+/// text does not have yet.
+pub fn top_level_fields(source: &str) -> Option<(usize, Option<usize>)> {
+    let mut walker = Walker::new(source);
+    walker.skip_attributes()?;
+    let mut open = walker.next()?;
+    if open.kind == Kind::Ident {
+        open = walker.next()?;
+    }
+    if open.kind != Kind::Open(b'(') {
+        return None;
+    }
+    let first = walker.peek()?;
+    let first_field = (first.kind != Kind::Close(b')')).then_some(first.start);
+    Some((open.end, first_field))
+}
+
 /// The field names written in the `( )` group whose `(` is at byte `open`, in order (what an
 /// editor leaves out of the fields it offers); `None` when the group cannot be read to its end.
 pub fn fields_in_group(source: &str, open: usize) -> Option<Vec<String>> {
@@ -688,6 +707,16 @@ fn string_contents(token: &str) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_top_level_struct_s_fields_are_found_past_comments_attributes_and_its_name() {
+        let source = "#![enable(implicit_some)]\n// a scene\nScene( /* first */ objects: [])";
+        let (open, first) = top_level_fields(source).unwrap();
+        assert_eq!(&source[..open], "#![enable(implicit_some)]\n// a scene\nScene(");
+        assert!(source[first.unwrap()..].starts_with("objects"));
+        assert_eq!(top_level_fields("( )"), Some((1, None)));
+        assert_eq!(top_level_fields("[1, 2]"), None);
+    }
 
     /// Asserts that `path` leads to exactly `expected` in `source`.
     #[track_caller]

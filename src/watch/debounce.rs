@@ -48,6 +48,16 @@ pub enum Signal {
     },
     /// Ctrl-C or a termination request: stop after the current render.
     Stop,
+    /// The preview page or an editor left a request in the view inbox (`watch::view`).
+    View,
+}
+
+/// Why the watch loop wakes up.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Wake {
+    Changes(Changes),
+    /// A request waits in the view inbox, and no change to the files is pending.
+    View,
 }
 
 /// How long to wait before a batch of changes is rendered.
@@ -145,8 +155,9 @@ impl Batch {
     }
 }
 
-/// Waits for the next batch of changes to `files`. Returns `None` when asked to stop (the
-/// changes still waiting, if any, are dropped: the user is leaving).
+/// Waits for the next batch of changes to `files`, or for a request in the view inbox when no
+/// change is pending (a pending change's build serves the inbox after it). Returns `None` when
+/// asked to stop (the changes still waiting, if any, are dropped: the user is leaving).
 ///
 /// Every event already queued when it is called (saves made during the last render) joins the
 /// batch before anything is decided, however old: deciding on the first of them, already past
@@ -159,7 +170,7 @@ pub fn wait_for_changes(
     files: &WatchedFiles,
     timing: Debounce,
     on_error: &mut dyn FnMut(notify::Error),
-) -> Option<Changes> {
+) -> Option<Wake> {
     // Events stamped before this were queued while the loop was busy (rendering).
     let reading_since = Instant::now();
     let mut pending: Option<Batch> = None;
@@ -173,11 +184,13 @@ pub fn wait_for_changes(
                     let deadline = batch.ready_at(timing);
                     let now = Instant::now();
                     if now >= deadline {
-                        return pending.map(|batch| batch.changes);
+                        return pending.map(|batch| Wake::Changes(batch.changes));
                     }
                     match signals.recv_timeout(deadline - now) {
                         Ok(signal) => signal,
-                        Err(RecvTimeoutError::Timeout) => return pending.map(|batch| batch.changes),
+                        Err(RecvTimeoutError::Timeout) => {
+                            return pending.map(|batch| Wake::Changes(batch.changes));
+                        }
                         Err(RecvTimeoutError::Disconnected) => return None,
                     }
                 }
@@ -185,6 +198,8 @@ pub fn wait_for_changes(
         };
         match signal {
             Signal::Stop => return None,
+            Signal::View if pending.is_none() => return Some(Wake::View),
+            Signal::View => {}
             Signal::FileSystem {
                 event: Err(error), ..
             } => on_error(error),
@@ -205,7 +220,7 @@ pub fn wait_for_changes(
                     && at >= reading_since
                     && Instant::now() >= batch.cut_off(timing)
                 {
-                    return pending.map(|batch| batch.changes);
+                    return pending.map(|batch| Wake::Changes(batch.changes));
                 }
             }
         }
@@ -246,6 +261,28 @@ mod tests {
         (temporary, dir, files, sender, receiver)
     }
 
+    fn changes_of(wake: Option<Wake>) -> Changes {
+        match wake {
+            Some(Wake::Changes(changes)) => changes,
+            other => panic!("expected changes, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_view_request_wakes_the_loop_unless_changes_are_pending() {
+        let (_temporary, dir, files, sender, receiver) = setup();
+        sender.send(Signal::View).unwrap();
+        assert_eq!(
+            wait_for_changes(&receiver, &files, TIMING, &mut no_errors),
+            Some(Wake::View)
+        );
+        let now = Instant::now();
+        sender.send(modified(&dir.join("scene.ron"), now)).unwrap();
+        sender.send(Signal::View).unwrap();
+        let changes = changes_of(wait_for_changes(&receiver, &files, TIMING, &mut no_errors));
+        assert_eq!(changes.files, [dir.join("scene.ron")].into());
+    }
+
     fn no_errors(error: notify::Error) {
         panic!("unexpected watcher error: {error}");
     }
@@ -264,7 +301,7 @@ mod tests {
             ))
             .unwrap();
         let started = Instant::now();
-        let changes = wait_for_changes(&receiver, &files, TIMING, &mut no_errors).unwrap();
+        let changes = changes_of(wait_for_changes(&receiver, &files, TIMING, &mut no_errors));
         assert!(started.elapsed() < TIMING.quiet, "already quiet: no extra wait");
         assert_eq!(changes.first_seen, long_ago);
         assert_eq!(
@@ -294,7 +331,7 @@ mod tests {
                 })
                 .unwrap();
         }
-        let changes = wait_for_changes(&receiver, &files, TIMING, &mut no_errors).unwrap();
+        let changes = changes_of(wait_for_changes(&receiver, &files, TIMING, &mut no_errors));
         assert_eq!(
             changes.files,
             [dir.join("mats.ron"), dir.join("scene.ron")].into()
@@ -356,7 +393,7 @@ mod tests {
         let (_temporary, dir, files, sender, receiver) = setup();
         let now = Instant::now();
         sender.send(modified(&dir.join("scene.ron"), now)).unwrap();
-        let changes = wait_for_changes(&receiver, &files, TIMING, &mut no_errors).unwrap();
+        let changes = changes_of(wait_for_changes(&receiver, &files, TIMING, &mut no_errors));
         assert!(now.elapsed() >= TIMING.quiet);
         assert_eq!(changes.files.len(), 1);
     }
@@ -381,7 +418,7 @@ mod tests {
                 at: now,
             })
             .unwrap();
-        let changes = wait_for_changes(&receiver, &files, timing, &mut no_errors).unwrap();
+        let changes = changes_of(wait_for_changes(&receiver, &files, timing, &mut no_errors));
         assert!(now.elapsed() < Duration::from_secs(60));
         assert_eq!(changes.files, [scene].into());
     }
@@ -407,7 +444,7 @@ mod tests {
                 }
             })
         };
-        let changes = wait_for_changes(&receiver, &files, TIMING, &mut no_errors).unwrap();
+        let changes = changes_of(wait_for_changes(&receiver, &files, TIMING, &mut no_errors));
         let waited = started.elapsed();
         writing.store(false, std::sync::atomic::Ordering::Relaxed);
         writer.join().unwrap();

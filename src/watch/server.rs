@@ -6,11 +6,13 @@
 //!   for the person at this machine, and scene files, paths and diagnostics are theirs. The
 //!   `Host` header must name `127.0.0.1` or `localhost` at our port, so a web page elsewhere
 //!   cannot reach the server through DNS rebinding.
-//! - Routes: `/` (a static page, `preview.html`), `/image.png` (the last good image),
-//!   `/events` (server-sent events), `/turntable.png` (the scene orbiting, made on request:
-//!   `super::turntable`), the inspector's (`watch::pick`): `/api/pick`, `/api/object-mask`, and
-//!   the page's scripts under `/page/` (`compare.js`, shared with `check --report`). Each build
-//!   publishes one small JSON state, the same shape the
+//! - Routes: `/` (a static page, `preview.html`, and its scripts under `/page/`), `/image.png`
+//!   (the last good image), `/events` (server-sent events), `/api/state` (the state the page
+//!   was last sent, for a script loaded after the first event), `/turntable.png` (the scene
+//!   orbiting, made on request: `super::turntable`), the inspector's (`watch::pick`):
+//!   `/api/pick`, `/api/object-mask`, and the POST routes of the view (`watch::view`:
+//!   `/api/view`, `/api/camera`, `/api/buffer`), which a page of another site may not call (its
+//!   `Origin` is refused). Each build publishes one small JSON state, the same shape the
 //!   page receives on connecting; the page swaps the image in only once the new one has loaded
 //!   (no flicker) and shows or hides the diagnostics overlay.
 //! - The last good image is kept in memory as the PNG bytes just written, so the page can never
@@ -36,6 +38,7 @@ use serde::Serialize;
 use tiny_http::{Header, Method, Request, Response, Server};
 
 use super::turntable::TurntableSource;
+use super::view::{Inbox, ViewSummary};
 use crate::inspect::ImageOrigin;
 
 /// The page, served as is.
@@ -43,6 +46,9 @@ const PAGE: &str = include_str!("preview.html");
 
 /// The compare views (swipe, onion skin, difference), shared with `check --report`'s page.
 const COMPARE_SCRIPT: &str = include_str!("page/compare.js");
+
+/// The page's scripts, served under `/page/`.
+const PAGE_FILES: &[(&str, &str)] = &[("view.js", include_str!("page/view.js"))];
 
 /// How often an idle event stream sends a comment, so a closed page is noticed and its thread
 /// ends.
@@ -63,6 +69,8 @@ struct PreviewState {
     error: Option<String>,
     /// The URL template source links open (`watch --editor`).
     editor: String,
+    /// The camera, overrides and size of the image (`watch::view`).
+    view: Option<ViewSummary>,
 }
 
 /// What the server threads share with the watch loop.
@@ -134,7 +142,13 @@ pub struct StartedPreview {
 impl PreviewServer {
     /// Serves on `127.0.0.1:port`, or on a free port if that one cannot be had (port 0 always
     /// picks a free one). `initial_image` is shown until the first build (an earlier run's image).
-    pub fn start(port: u16, scene_name: &str, initial_image: Option<Vec<u8>>) -> io::Result<StartedPreview> {
+    /// POST requests go to `inbox` (`watch::view`).
+    pub fn start(
+        port: u16,
+        scene_name: &str,
+        initial_image: Option<Vec<u8>>,
+        inbox: Arc<Inbox>,
+    ) -> io::Result<StartedPreview> {
         let (listener, port_note) = match TcpListener::bind((Ipv4Addr::LOCALHOST, port)) {
             Ok(listener) => (listener, None),
             Err(error) if port != 0 => {
@@ -162,6 +176,7 @@ impl PreviewServer {
                     summary: String::from("rendering…"),
                     error: None,
                     editor: String::from(crate::watch::DEFAULT_EDITOR_LINK),
+                    view: None,
                 },
                 image_bytes: initial_image.map(Arc::new),
                 image_origin: None,
@@ -176,7 +191,7 @@ impl PreviewServer {
             let (server, hub, stopping) = (server.clone(), hub.clone(), stopping.clone());
             std::thread::Builder::new()
                 .name("preview server".into())
-                .spawn(move || answer_requests(&server, &hub, &stopping, address.port()))?
+                .spawn(move || answer_requests(&server, &hub, &inbox, &stopping, address.port()))?
         };
         Ok(StartedPreview {
             server: PreviewServer {
@@ -206,8 +221,22 @@ impl PreviewServer {
         self.hub.lock().state.editor = template.to_owned();
     }
 
-    /// A build wrote `png`, made as `origin` says: show it, and answer `/api/pick` about it.
-    pub fn publish_image(&self, png: Vec<u8>, summary: String, origin: Arc<ImageOrigin>) {
+    /// The port served on.
+    pub fn port(&self) -> u16 {
+        self.server
+            .server_addr()
+            .to_ip()
+            .map_or(0, |address| address.port())
+    }
+
+    /// The state the page was last sent, as JSON (the answer to a view request).
+    pub fn state_json(&self) -> String {
+        to_json(&self.hub.lock().state)
+    }
+
+    /// A build wrote `png`, or the preview rendered it with its `view`, made as `origin` says:
+    /// show it, and answer `/api/pick` about it.
+    pub fn publish_image(&self, png: Vec<u8>, summary: String, view: ViewSummary, origin: Arc<ImageOrigin>) {
         let run_id = self.hub.run_id;
         self.hub.update(|inner| {
             inner.generation += 1;
@@ -216,6 +245,7 @@ impl PreviewServer {
             inner.state.image = Some(format!("{run_id}-{}", inner.generation));
             inner.state.summary = summary;
             inner.state.error = None;
+            inner.state.view = Some(view);
         });
     }
 
@@ -246,10 +276,10 @@ impl Drop for PreviewServer {
     }
 }
 
-fn answer_requests(server: &Server, hub: &Arc<Hub>, stopping: &AtomicBool, port: u16) {
+fn answer_requests(server: &Server, hub: &Arc<Hub>, inbox: &Inbox, stopping: &AtomicBool, port: u16) {
     loop {
         match server.recv() {
-            Ok(request) => answer(request, hub, port),
+            Ok(request) => answer(request, hub, inbox, port),
             Err(_) if stopping.load(Ordering::SeqCst) => return,
             // A failed accept (e.g. out of file descriptors) is transient: wait a little.
             Err(_) => std::thread::sleep(Duration::from_millis(50)),
@@ -257,7 +287,7 @@ fn answer_requests(server: &Server, hub: &Arc<Hub>, stopping: &AtomicBool, port:
     }
 }
 
-fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
+fn answer(request: Request, hub: &Arc<Hub>, inbox: &Inbox, port: u16) {
     if !names_us(&request, port) {
         respond(
             request,
@@ -268,8 +298,22 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
         );
         return;
     }
+    if *request.method() == Method::Post {
+        if from_another_site(&request, port) {
+            respond(
+                request,
+                text(
+                    403,
+                    "forbidden: requests from other sites may not change the view",
+                ),
+            );
+        } else {
+            inbox.answer_post(request);
+        }
+        return;
+    }
     if !matches!(request.method(), Method::Get | Method::Head) {
-        respond(request, text(405, "only GET and HEAD are supported"));
+        respond(request, text(405, "only GET, HEAD and POST are supported"));
         return;
     }
     let path = request.url().split('?').next().unwrap_or_default();
@@ -324,6 +368,28 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
                 ),
             );
         }
+        script
+            if PAGE_FILES
+                .iter()
+                .any(|(name, _)| script.strip_prefix("/page/") == Some(*name)) =>
+        {
+            match PAGE_FILES
+                .iter()
+                .find(|(name, _)| script["/page/".len()..] == **name)
+            {
+                Some((_, code)) => respond(
+                    request,
+                    with_headers(
+                        Response::from_string(*code),
+                        &[
+                            ("Content-Type", "text/javascript; charset=utf-8"),
+                            ("Cache-Control", "no-store"),
+                        ],
+                    ),
+                ),
+                None => respond(request, text(404, "not found")),
+            }
+        }
         path if path.starts_with("/page/") => match super::pick::page_file(path) {
             Some((content_type, body)) => respond(
                 request,
@@ -334,6 +400,16 @@ fn answer(request: Request, hub: &Arc<Hub>, port: u16) {
             ),
             None => respond(request, text(404, "not found")),
         },
+        "/api/state" => respond(
+            request,
+            with_headers(
+                Response::from_string(to_json(&hub.lock().state)),
+                &[
+                    ("Content-Type", "application/json"),
+                    ("Cache-Control", "no-store"),
+                ],
+            ),
+        ),
         "/events" => {
             let hub = hub.clone();
             let spawned = std::thread::Builder::new()
@@ -360,6 +436,17 @@ fn names_us(request: &Request, port: u16) -> bool {
         }
         None => false,
     }
+}
+
+/// Whether a browser sent `request` from a page that is not ours (its `Origin` names another
+/// site): any web page may POST to 127.0.0.1, and the view routes write the scene file. Scripts
+/// and editors send no `Origin`.
+fn from_another_site(request: &Request, port: u16) -> bool {
+    let Some(origin) = request.headers().iter().find(|h| h.field.equiv("Origin")) else {
+        return false;
+    };
+    let origin = origin.value.as_str();
+    origin != format!("http://127.0.0.1:{port}") && origin != format!("http://localhost:{port}")
 }
 
 fn stream_events(request: Request, hub: &Hub) {

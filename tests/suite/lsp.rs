@@ -514,3 +514,73 @@ fn a_library_opened_on_its_own_is_checked() {
     );
     client.shut_down();
 }
+
+/// The preview follows the unsaved buffer: with `lampshade watch --serve` running on a scene the
+/// editor has open, a change the editor has not saved shows in the preview (the file and the
+/// image file untouched), and closing the document brings the file's image back.
+#[test]
+fn the_preview_of_a_running_watch_follows_the_unsaved_buffer() {
+    use crate::watch::{
+        SceneFolder, WatchProcess, http_get, preview_port, render_once, scene_text, wait_for,
+    };
+
+    let folder = SceneFolder::new();
+    let scene = folder.file("scene.ron");
+    let saved = std::fs::read_to_string(&scene).unwrap();
+    let watch = WatchProcess::start(
+        &folder.path,
+        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
+    );
+    let port = preview_port(&watch);
+    let shown = || {
+        let (status, body) = http_get(port, "/image.png", &format!("127.0.0.1:{port}"));
+        (status == 200).then(|| image::load_from_memory(&body).unwrap().to_rgb8())
+    };
+    let file_image = wait_for("the first image", || watch.output(), || folder.image());
+    let file_pixels = image::load_from_memory(&file_image).unwrap().to_rgb8();
+
+    let unsaved = scene_text((0.1, 0.9, 0.2));
+    let expected_folder = SceneFolder::new();
+    expected_folder.write("scene.ron", &unsaved);
+    let expected = image::load_from_memory(&render_once(&expected_folder.file("scene.ron")))
+        .unwrap()
+        .to_rgb8();
+    assert_ne!(expected, file_pixels);
+
+    let mut client = Client::start();
+    let document = uri(&scene);
+    client.notify(
+        "textDocument/didOpen",
+        json!({ "textDocument": { "uri": document, "languageId": "ron", "version": 1, "text": saved } }),
+    );
+    client.notify(
+        "textDocument/didChange",
+        json!({ "textDocument": { "uri": document, "version": 2 }, "contentChanges": [{ "text": unsaved }] }),
+    );
+    wait_for(
+        "the unsaved text in the preview",
+        || watch.output(),
+        || (shown()? == expected).then_some(()),
+    );
+    assert_eq!(
+        std::fs::read_to_string(&scene).unwrap(),
+        saved,
+        "the scene file was written"
+    );
+    assert_eq!(
+        folder.image().unwrap(),
+        file_image,
+        "the image file shows the unsaved text"
+    );
+
+    client.notify(
+        "textDocument/didClose",
+        json!({ "textDocument": { "uri": document } }),
+    );
+    wait_for(
+        "the file's image again",
+        || watch.output(),
+        || (shown()? == file_pixels).then_some(()),
+    );
+    client.shut_down();
+}

@@ -19,6 +19,8 @@
 //! - `pick`: the pixel inspector, `render --pick` and `GET /api/pick`; `pick_browser`: its panel,
 //!   source links and highlight in headless Chromium; `compare_browser`: the preview's compare
 //!   views and the `check --report` viewer there.
+//! - `view_browser`: the preview's camera, toggles and camera writeback in headless Chromium,
+//!   and the drag benchmark (ignored).
 
 mod browser;
 mod check;
@@ -34,6 +36,7 @@ mod pick_browser;
 mod render;
 mod robustness;
 mod turntable;
+mod view_browser;
 mod watch;
 mod watch_browser;
 
