@@ -74,7 +74,7 @@ impl Browser {
                 "--disable-dev-shm-usage",
                 "--remote-debugging-address=127.0.0.1",
                 "--remote-debugging-port=0",
-                "--window-size=640,420",
+                "--window-size=1024,768",
             ])
             .arg(format!("--user-data-dir={}", profile.path().display()))
             .arg(url)

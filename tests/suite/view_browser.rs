@@ -38,6 +38,7 @@ const PROBE: &str = r#"(() => {
     view: v.state().view,
     frames: v.frames.length,
     movingFrames: v.frames.filter(f => f.moving).length,
+    pick: document.body.dataset.pick ?? null,
   };
 })()"#;
 
@@ -116,13 +117,19 @@ fn orbiting_copying_writing_the_camera_toggles_and_reset() {
     let file_image = shown_image(port);
     assert_eq!(first["previewCamera"], "false");
 
-    // Orbit: reduced frames while moving, then the full image from elsewhere.
-    drag(&mut browser, 120.0, -40.0, 12, Duration::from_millis(30), false);
+    // Orbit: reduced frames while moving, then the full image from elsewhere. The drag ends
+    // inside the image, where its release must not also count as a click on a pixel.
+    drag(&mut browser, 60.0, -20.0, 12, Duration::from_millis(30), false);
     let orbited = wait_for_still_image(&mut browser, &watch, &first["image"]);
     assert_eq!(orbited["previewCamera"], "true", "{orbited}");
     assert!(
         orbited["movingFrames"].as_u64() > Some(0),
         "no reduced frame painted: {orbited}"
+    );
+    assert_eq!(
+        orbited["pick"],
+        Value::Null,
+        "the release that ended the drag also picked a pixel: {orbited}"
     );
     browser.save_screenshot("view-orbited.png");
     let preview_image = shown_image(port);

@@ -188,7 +188,7 @@
     event.preventDefault();
     view.setPointerCapture(event.pointerId);
     const panning = event.button === 2 || event.shiftKey;
-    dragging = { x: event.clientX, y: event.clientY, panning };
+    dragging = { x: event.clientX, y: event.clientY, panning, moved: false };
   });
   view.addEventListener("pointermove", (event) => {
     if (dragging === null) return;
@@ -197,6 +197,7 @@
     if (dx === 0 && dy === 0) return;
     dragging.x = event.clientX;
     dragging.y = event.clientY;
+    dragging.moved = true;
     noteInput(event);
     // Displayed pixels, converted to image pixels for the pan.
     const shownHeight = view.getBoundingClientRect().height || 1;
@@ -207,14 +208,31 @@
     previewCamera = true;
     send(true);
   });
+  // A press and release without movement is a click, left to the pixel inspector; the click
+  // that ends a drag is swallowed here (capture phase, before pick.js sees it), so an orbit does
+  // not also open the inspector at the pixel where it stopped.
+  let swallowNextClick = false;
   const endDrag = (event) => {
     if (dragging === null) return;
+    const moved = dragging.moved;
     dragging = null;
     if (view.hasPointerCapture(event.pointerId)) view.releasePointerCapture(event.pointerId);
+    if (!moved) return;
+    swallowNextClick = event.type === "pointerup";
     send(false);
   };
   view.addEventListener("pointerup", endDrag);
   view.addEventListener("pointercancel", endDrag);
+  view.addEventListener("pointerdown", () => (swallowNextClick = false), true);
+  view.addEventListener(
+    "click",
+    (event) => {
+      if (!swallowNextClick) return;
+      swallowNextClick = false;
+      event.stopImmediatePropagation();
+    },
+    true,
+  );
   view.addEventListener(
     "wheel",
     (event) => {
