@@ -31,7 +31,9 @@
 //! mipmapping" note from NVIDIA). Every source texel then carries the same total weight, so
 //! each level has exactly the mean of level 0 up to rounding. Alpha is filtered straight, not
 //! premultiplied: the renderer treats every surface as opaque, and premultiplying would darken
-//! the colour where alpha < 1 without anything to composite against.
+//! the colour where alpha < 1 without anything to composite against. Each pass of the filter
+//! runs over the rows of a large level in parallel; a texel's sum is the same on any thread, so
+//! the chain does not depend on the thread count.
 //!
 //! # Sampling
 //!
