@@ -31,7 +31,9 @@
 //! mipmapping" note from NVIDIA). Every source texel then carries the same total weight, so
 //! each level has exactly the mean of level 0 up to rounding. Alpha is filtered straight, not
 //! premultiplied: the renderer treats every surface as opaque, and premultiplying would darken
-//! the colour where alpha < 1 without anything to composite against.
+//! the colour where alpha < 1 without anything to composite against. Each pass of the filter
+//! runs over the rows of a large level in parallel; a texel's sum is the same on any thread, so
+//! the chain does not depend on the thread count.
 //!
 //! # Sampling
 //!
@@ -70,6 +72,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use glam::{Vec2, Vec4};
+use rayon::prelude::*;
 
 /// How texture coordinates outside [0, 1] are brought back (glTF sampler wrap modes).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
@@ -176,11 +179,11 @@ impl Texture {
             ImageLuma8(_) | ImageLumaA8(_) | ImageRgb8(_) | ImageRgba8(_)
         ) {
             let table = decode_table(color_space);
-            image
-                .to_rgba8()
-                .pixels()
-                .map(|pixel| {
-                    let [r, g, b, a] = pixel.0;
+            let rgba = image.to_rgba8();
+            let (pixels, _) = rgba.as_raw().as_chunks::<4>();
+            pixels
+                .par_iter()
+                .map(|&[r, g, b, a]| {
                     Vec4::new(
                         table[r as usize],
                         table[g as usize],
@@ -381,24 +384,48 @@ fn downsample(level: &MipLevel) -> MipLevel {
     let columns = box_taps(width, new_width);
     let rows = box_taps(height, new_height);
 
-    let mut narrowed = Vec::with_capacity(new_width * height);
-    for y in 0..height {
-        for taps in &columns {
-            narrowed.push(weighted_sum(taps, |x| level.texel(x, y)));
+    let mut narrowed = vec![Vec4::ZERO; new_width * height];
+    fill_rows(&mut narrowed, new_width, |y, row| {
+        for (texel, taps) in row.iter_mut().zip(&columns) {
+            *texel = weighted_sum(taps, |x| level.texel(x, y));
         }
-    }
-    let mut texels = Vec::with_capacity(new_width * new_height);
-    for taps in &rows {
-        for x in 0..new_width {
-            texels.push(weighted_sum(taps, |y| {
-                narrowed.get(y * new_width + x).copied().unwrap_or(Vec4::ZERO)
-            }));
+    });
+    let mut texels = vec![Vec4::ZERO; new_width * new_height];
+    fill_rows(&mut texels, new_width, |y, row| {
+        for (x, texel) in row.iter_mut().enumerate() {
+            *texel = weighted_sum(&rows[y], |source_y| {
+                narrowed
+                    .get(source_y * new_width + x)
+                    .copied()
+                    .unwrap_or(Vec4::ZERO)
+            });
         }
-    }
+    });
     MipLevel {
         width: new_width as u32,
         height: new_height as u32,
         texels,
+    }
+}
+
+/// Below this many texels a level's rows are filtered on the calling thread: rayon's tasks
+/// would cost more than the sums.
+const PARALLEL_TEXELS: usize = 16 * 1024;
+
+/// Calls `fill(y, row)` for each row of `width` texels of `texels`, in parallel on large
+/// levels. Every texel is computed the same way on any thread, so the result does not depend
+/// on how the rows are shared out.
+fn fill_rows(texels: &mut [Vec4], width: usize, fill: impl Fn(usize, &mut [Vec4]) + Sync) {
+    if texels.len() < PARALLEL_TEXELS {
+        texels
+            .chunks_mut(width)
+            .enumerate()
+            .for_each(|(y, row)| fill(y, row));
+    } else {
+        texels
+            .par_chunks_mut(width)
+            .enumerate()
+            .for_each(|(y, row)| fill(y, row));
     }
 }
 
@@ -615,6 +642,41 @@ mod tests {
             .collect();
         assert_eq!(sizes, vec![(16, 1), (8, 1), (4, 1), (2, 1), (1, 1)]);
         assert_eq!(texture(1, 1, |_, _| 0.0).levels.len(), 1);
+    }
+
+    /// Levels large enough to be filtered in parallel rows hold, texel for texel, the sums of
+    /// the separable filter taken one texel at a time (odd and even sizes).
+    #[test]
+    fn rows_filtered_in_parallel_equal_the_filter_texel_by_texel() {
+        let values = |x: u32, y: u32| ((x * 7919 + y * 104_729) % 1000) as f32 / 7.0;
+        let (width, height) = (515, 258);
+        const {
+            assert!(
+                515 / 2 * 258 >= PARALLEL_TEXELS,
+                "the first level must take the parallel path"
+            )
+        };
+        let large = texture(width, height, values);
+        for pair in large.levels.windows(2) {
+            let (source, level) = (&pair[0], &pair[1]);
+            let columns = box_taps(source.width as usize, level.width as usize);
+            let rows = box_taps(source.height as usize, level.height as usize);
+            for (y, row_taps) in rows.iter().enumerate() {
+                for (x, column_taps) in columns.iter().enumerate() {
+                    let narrowed = |source_y: usize| {
+                        weighted_sum(column_taps, |source_x| source.texel(source_x, source_y))
+                    };
+                    let expected = weighted_sum(row_taps, narrowed);
+                    assert_eq!(
+                        level.texel(x, y),
+                        expected,
+                        "{}×{} at ({x}, {y})",
+                        level.width,
+                        level.height
+                    );
+                }
+            }
+        }
     }
 
     #[test]
