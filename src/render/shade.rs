@@ -19,7 +19,7 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
-use crate::render::lanes::{LANES, Mask, Vec3s};
+use crate::render::lanes::{LANES, Mask, Vec3s, samples_showing};
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
     Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility, edge_steps_x,
@@ -610,12 +610,6 @@ fn find_points<const S: usize>(
     let pattern = visibility.pattern;
     let all_samples = (1u32 << S) - 1;
     let whole_pixel = pattern.subset(all_samples);
-    // Bit `i` set where sample `i` shows `id`.
-    let samples_showing = |ids: &[u32; S], id: u32| {
-        ids.iter().enumerate().fold(0u32, |mask, (sample, &other)| {
-            mask | (u32::from(other == id) << sample)
-        })
-    };
     let mut point_count = 0;
     let rows = visibility.triangle.chunks_exact(S * tile_width);
     for ((row, row_ids), row_starts) in rows.enumerate().zip(pixel_start.chunks_exact_mut(tile_width)) {
@@ -636,7 +630,7 @@ fn find_points<const S: usize>(
                 triangle_start[local as usize + 2] += 1;
             };
             let first = ids[0];
-            if ids.iter().all(|&id| id == first) {
+            if samples_showing(ids, first) == all_samples {
                 if first != NO_TRIANGLE {
                     push(first, whole_pixel);
                 }
