@@ -228,6 +228,14 @@ lane_operator!(Sub, sub);
 lane_operator!(Mul, mul);
 lane_operator!(Div, div);
 
+/// Which of a multisampled pixel's `S` samples show triangle `id`: bit `i` is set where
+/// `ids[i] == id` (the tile's triangle numbers of `raster::Visibility`). Compared four samples
+/// at a time where the backend has the instructions.
+#[inline(always)]
+pub fn samples_showing<const S: usize>(ids: &[u32; S], id: u32) -> u32 {
+    backend::samples_showing(ids, id)
+}
+
 #[cfg(target_arch = "x86_64")]
 use sse as backend;
 
@@ -354,6 +362,11 @@ mod portable {
     pub fn to_floats(a: Ints) -> Floats {
         Floats(a.0.map(|i| i as f32))
     }
+
+    #[inline(always)]
+    pub fn samples_showing<const S: usize>(ids: &[u32; S], id: u32) -> u32 {
+        (0..S).fold(0, |mask, sample| mask | (u32::from(ids[sample] == id) << sample))
+    }
 }
 
 /// The lane operations as SSE instructions on the two four-lane halves of the arrays. SSE and
@@ -365,10 +378,10 @@ mod portable {
 #[allow(unsafe_code)]
 mod sse {
     use std::arch::x86_64::{
-        __m128, __m128i, _mm_add_epi32, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps, _mm_cmpeq_ps,
-        _mm_cmpgt_epi32, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps, _mm_cvttps_epi32,
-        _mm_div_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps, _mm_sub_epi32,
-        _mm_sub_ps,
+        __m128, __m128i, _mm_add_epi32, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps,
+        _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmpeq_ps, _mm_cmpgt_epi32, _mm_cmpgt_ps, _mm_cmple_ps,
+        _mm_cmplt_epi32, _mm_cvtepi32_ps, _mm_cvttps_epi32, _mm_div_ps, _mm_movemask_ps, _mm_mul_ps,
+        _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps, _mm_sub_epi32, _mm_sub_ps,
     };
 
     use super::{Floats, Ints, LANES, Mask};
@@ -415,6 +428,24 @@ mod sse {
     #[inline(always)]
     pub fn gt_ints(a: Ints, b: Ints) -> Mask {
         Mask(int_halves!(_mm_cmpgt_epi32(a, b)))
+    }
+
+    /// Four samples per `pcmpeqd` and `movmskps`; patterns whose sample count is not a
+    /// multiple of four (two samples) take the portable loop.
+    #[inline(always)]
+    pub fn samples_showing<const S: usize>(ids: &[u32; S], id: u32) -> u32 {
+        if !S.is_multiple_of(4) {
+            return super::portable::samples_showing(ids, id);
+        }
+        let (quads, _) = ids.as_chunks::<4>();
+        // SAFETY: SSE and SSE2 are enabled on every x86-64 target (see the module).
+        let wanted = unsafe { _mm_set1_epi32(id as i32) };
+        quads.iter().enumerate().fold(0, |mask, (quad, ids)| {
+            let ids: __m128i = bytemuck::cast(*ids);
+            // SAFETY: as above.
+            let equal = unsafe { _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(ids, wanted))) };
+            mask | ((equal as u32) << (4 * quad))
+        })
     }
 
     /// `cvtdq2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's `as f32`.
@@ -1007,6 +1038,31 @@ mod tests {
             items.map(|n| n as i32 * 2)
         );
         assert_eq!(Floats::gather(&items, |&n| n as f32).0, items.map(|n| n as f32));
+    }
+
+    /// Which samples show a triangle, per backend, against a plain comparison: every pattern's
+    /// sample count, ids repeated in scattered samples, and the empty sample's `u32::MAX`.
+    #[test]
+    fn samples_showing_sets_the_bits_of_the_equal_ids() {
+        fn check<const S: usize>() {
+            let ids: [u32; S] =
+                std::array::from_fn(|i| [7, u32::MAX, 7, 3, 0, 3, 3, u32::MAX][(i * 5 + i / 3) % 8]);
+            for id in [7, u32::MAX, 3, 0, 12] {
+                let expected = (0..S)
+                    .filter(|&i| ids[i] == id)
+                    .fold(0, |mask, i| mask | (1 << i));
+                assert_eq!(samples_showing(&ids, id), expected, "{S} samples, id {id}");
+                assert_eq!(
+                    portable::samples_showing(&ids, id),
+                    expected,
+                    "{S} samples, id {id}"
+                );
+            }
+        }
+        check::<2>();
+        check::<4>();
+        check::<8>();
+        check::<16>();
     }
 
     /// The backend in use against the portable loops, operation by operation, on awkward

@@ -418,6 +418,63 @@ pub fn edge_steps_y(triangle: &RasterTriangle) -> [i64; 3] {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SamplePattern {
     offsets: &'static [(i32, i32)],
+    /// [`SamplePattern::subset`] of every mask, for patterns of up to eight samples (a table of
+    /// 2^16 entries for sixteen would not stay in cache); empty for sixteen.
+    subsets: &'static [SampleSubset],
+}
+
+/// Some of a pixel's samples: how many, and the mean of their offsets from the pixel's centre
+/// (1/256 pixel), each coordinate's sum over the count rounded down (`div_euclid`): where a
+/// triangle covering just those samples is shaded.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SampleSubset {
+    pub count: u32,
+    pub mean_x: i32,
+    pub mean_y: i32,
+}
+
+/// The [`SampleSubset`] of the samples of `offsets` whose bits are set in `mask` (bit `i` for
+/// sample `i`); the empty subset's mean is zero.
+const fn sample_subset(offsets: &[(i32, i32)], mask: u32) -> SampleSubset {
+    let (mut count, mut sum_x, mut sum_y) = (0i32, 0, 0);
+    let mut sample = 0;
+    while sample < offsets.len() {
+        if mask & (1 << sample) != 0 {
+            count += 1;
+            sum_x += offsets[sample].0;
+            sum_y += offsets[sample].1;
+        }
+        sample += 1;
+    }
+    if count == 0 {
+        return SampleSubset {
+            count: 0,
+            mean_x: 0,
+            mean_y: 0,
+        };
+    }
+    SampleSubset {
+        count: count as u32,
+        mean_x: sum_x.div_euclid(count),
+        mean_y: sum_y.div_euclid(count),
+    }
+}
+
+/// [`sample_subset`] of every mask of the `N` samples of `offsets` (`SUBSETS` = 2^N entries).
+const fn subset_table<const N: usize, const SUBSETS: usize>(
+    offsets: &[(i32, i32); N],
+) -> [SampleSubset; SUBSETS] {
+    let mut table = [SampleSubset {
+        count: 0,
+        mean_x: 0,
+        mean_y: 0,
+    }; SUBSETS];
+    let mut mask = 0;
+    while mask < SUBSETS {
+        table[mask] = sample_subset(offsets, mask as u32);
+        mask += 1;
+    }
+    table
 }
 
 const fn scaled<const N: usize>(sixteenths: [(i32, i32); N]) -> [(i32, i32); N] {
@@ -462,21 +519,39 @@ const PATTERN_16: [(i32, i32); 16] = scaled([
     (-7, -8),
 ]);
 
+const SUBSETS_1: [SampleSubset; 2] = subset_table(&PATTERN_1);
+const SUBSETS_2: [SampleSubset; 4] = subset_table(&PATTERN_2);
+const SUBSETS_4: [SampleSubset; 16] = subset_table(&PATTERN_4);
+const SUBSETS_8: [SampleSubset; 256] = subset_table(&PATTERN_8);
+
 impl SamplePattern {
     /// One sample at the pixel centre: no anti-aliasing.
-    pub const SINGLE: SamplePattern = SamplePattern { offsets: &PATTERN_1 };
+    pub const SINGLE: SamplePattern = SamplePattern {
+        offsets: &PATTERN_1,
+        subsets: &SUBSETS_1,
+    };
 
     /// The pattern with `samples` samples per pixel: 1, 2, 4, 8 or 16.
     pub fn new(samples: u32) -> Option<SamplePattern> {
-        let offsets: &'static [(i32, i32)] = match samples {
-            1 => &PATTERN_1,
-            2 => &PATTERN_2,
-            4 => &PATTERN_4,
-            8 => &PATTERN_8,
-            16 => &PATTERN_16,
+        let (offsets, subsets): (&'static [(i32, i32)], &'static [SampleSubset]) = match samples {
+            1 => (&PATTERN_1, &SUBSETS_1),
+            2 => (&PATTERN_2, &SUBSETS_2),
+            4 => (&PATTERN_4, &SUBSETS_4),
+            8 => (&PATTERN_8, &SUBSETS_8),
+            16 => (&PATTERN_16, &[]),
             _ => return None,
         };
-        Some(SamplePattern { offsets })
+        Some(SamplePattern { offsets, subsets })
+    }
+
+    /// The samples whose bits are set in `mask` (bit `i` for sample `i`): their count and mean
+    /// offset, looked up where the pattern has a table.
+    #[inline]
+    pub fn subset(&self, mask: u32) -> SampleSubset {
+        match self.subsets.get(mask as usize) {
+            Some(&subset) => subset,
+            None => sample_subset(self.offsets, mask),
+        }
     }
 
     pub fn len(&self) -> usize {
@@ -1151,6 +1226,43 @@ mod tests {
         for (weights, stored) in [Vec3::AXES, swapped, clipped, negative_zero].iter().zip(stored) {
             let bits = |w: &[Vec3; 3]| w.map(|v| v.to_array().map(f32::to_bits));
             assert_eq!(bits(&stored.resolve(&table).to_array()), bits(weights));
+        }
+    }
+
+    /// Each pattern's subsets (tabled up to eight samples, computed at sixteen) against the
+    /// mean of the chosen offsets in `i64`, rounded down, for every mask (every 257th at
+    /// sixteen samples).
+    #[test]
+    fn sample_subsets_are_the_counts_and_floored_means_of_their_samples() {
+        for samples in [1, 2, 4, 8, 16] {
+            let pattern = SamplePattern::new(samples).expect("a sample count");
+            let step = if samples == 16 { 257 } else { 1 };
+            for mask in (1..1u32 << samples).step_by(step).chain([(1 << samples) - 1]) {
+                let chosen: Vec<(i32, i32)> = (0..samples as usize)
+                    .filter(|&sample| mask & (1 << sample) != 0)
+                    .map(|sample| pattern.offsets()[sample])
+                    .collect();
+                let n = chosen.len() as i64;
+                let mean = |coordinate: fn(&(i32, i32)) -> i32| {
+                    chosen
+                        .iter()
+                        .map(|offset| i64::from(coordinate(offset)))
+                        .sum::<i64>()
+                        .div_euclid(n)
+                };
+                let subset = pattern.subset(mask);
+                assert_eq!(subset.count as i64, n, "{samples} samples, mask {mask:#x}");
+                assert_eq!(
+                    i64::from(subset.mean_x),
+                    mean(|o| o.0),
+                    "{samples} samples, mask {mask:#x}"
+                );
+                assert_eq!(
+                    i64::from(subset.mean_y),
+                    mean(|o| o.1),
+                    "{samples} samples, mask {mask:#x}"
+                );
+            }
         }
     }
 

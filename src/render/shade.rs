@@ -19,11 +19,11 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
-use crate::render::lanes::{LANES, Mask, Vec3s};
+use crate::render::lanes::{LANES, Mask, Vec3s, samples_showing};
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
-    Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, Visibility, edge_steps_x, edge_steps_y,
-    edge_values,
+    Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility, edge_steps_x,
+    edge_steps_y, edge_values,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong, LightingMemo, PhongBatch, SurfaceBatch};
 use crate::render::surface_lanes::{
@@ -250,15 +250,6 @@ pub(crate) fn pixel_shading_points(visibility: &Visibility, x: u32, y: u32) -> V
             vec![(local, 1, (pixel_centre(x), pixel_centre(y)))]
         };
     }
-    let offset_sum = visibility
-        .pattern
-        .offsets()
-        .iter()
-        .fold((0, 0), |(x, y), &(ox, oy)| (x + i64::from(ox), y + i64::from(oy)));
-    let whole_pixel = (
-        offset_sum.0.div_euclid(samples as i64),
-        offset_sum.1.div_euclid(samples as i64),
-    );
     let pixel_count = (rect.width() * rect.height()) as usize;
     let mut points = vec![ShadingPoint::default(); pixel_count * samples];
     let mut pixel_start = vec![0; pixel_count + 1];
@@ -270,13 +261,7 @@ pub(crate) fn pixel_shading_points(visibility: &Visibility, x: u32, y: u32) -> V
         16 => find_points::<16>,
         _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
     };
-    let point_count = find(
-        visibility,
-        whole_pixel,
-        &mut points,
-        &mut pixel_start,
-        &mut triangle_start,
-    );
+    let point_count = find(visibility, &mut points, &mut pixel_start, &mut triangle_start);
     pixel_start[pixel_count] = point_count as u32;
     points[pixel_start[pixel] as usize..pixel_start[pixel + 1] as usize]
         .iter()
@@ -459,17 +444,7 @@ fn shade_multisampled<'f>(
         colors,
     } = tile;
 
-    // Each pixel's points. Most pixels of a mesh lie inside one triangle: all their samples
-    // show it, shaded at the mean of the whole pattern, with no search.
-    let offset_sum = pattern
-        .offsets()
-        .iter()
-        .fold((0, 0), |(x, y), &(ox, oy)| (x + i64::from(ox), y + i64::from(oy)));
-    let whole_pixel = (
-        offset_sum.0.div_euclid(samples as i64),
-        offset_sum.1.div_euclid(samples as i64),
-    );
-    // The buffers only grow: every entry up to `point_count` is written below before it is
+    // Each pixel's points. The buffers only grow: every entry up to `point_count` is written below before it is
     // read, so they are not cleared (clearing showed as a memset per tile).
     if points.len() < pixel_count * samples {
         points.resize(pixel_count * samples, ShadingPoint::default());
@@ -484,7 +459,7 @@ fn shade_multisampled<'f>(
         16 => find_points::<16>,
         _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
     };
-    let point_count = find(visibility, whole_pixel, points, pixel_start, triangle_start);
+    let point_count = find(visibility, points, pixel_start, triangle_start);
     pixel_start[pixel_count] = point_count as u32;
     let points = &points[..point_count];
 
@@ -618,72 +593,55 @@ fn shade_multisampled<'f>(
 
 /// The first pass of [`shade_multisampled`] for `S` samples per pixel (a constant, so that the
 /// comparisons of a pixel's samples unroll): each pixel's points into `points` from its entry
-/// of `pixel_start` on, each triangle's count of points into `triangle_start[t + 2]`, and
-/// `whole_pixel` where a pixel's samples all show one triangle. Returns the number of points.
+/// of `pixel_start` on, and each triangle's count of points into `triangle_start[t + 2]`.
+/// Returns the number of points. Most pixels of a mesh lie inside one triangle: all their
+/// samples show it, shaded at the mean of the whole pattern, with no search. In the others each
+/// distinct triangle, taken in the order of its first sample, is compared with all samples at
+/// once into a mask of the samples it covers, and the mask names its count and shading point
+/// in the pattern's table ([`SamplePattern::subset`]).
 fn find_points<const S: usize>(
     visibility: &Visibility,
-    whole_pixel: (i64, i64),
     points: &mut [ShadingPoint],
     pixel_start: &mut [u32],
     triangle_start: &mut [u32],
 ) -> usize {
     let rect = visibility.rect;
     let tile_width = rect.width() as usize;
-    let offsets = visibility.pattern.offsets();
+    let pattern = visibility.pattern;
+    let all_samples = (1u32 << S) - 1;
+    let whole_pixel = pattern.subset(all_samples);
     let mut point_count = 0;
-    // Distinct triangles at the current pixel: triangle, samples covered, sum of their offsets.
-    let mut seen = [(0u32, 0u32, 0i64, 0i64); S];
     let rows = visibility.triangle.chunks_exact(S * tile_width);
     for ((row, row_ids), row_starts) in rows.enumerate().zip(pixel_start.chunks_exact_mut(tile_width)) {
         let centre_y = pixel_centre(rect.y0 + row as u32);
         for ((column, ids), start) in row_ids.as_chunks::<S>().0.iter().enumerate().zip(row_starts) {
             *start = point_count as u32;
-            let first = ids[0];
-            if ids.iter().all(|&id| id == first) {
-                if first != NO_TRIANGLE {
-                    points[point_count] = ShadingPoint {
-                        local: first,
-                        count: S as u32,
-                        at: (
-                            pixel_centre(rect.x0 + column as u32) + whole_pixel.0,
-                            centre_y + whole_pixel.1,
-                        ),
-                    };
-                    point_count += 1;
-                    triangle_start[first as usize + 2] += 1;
-                }
-                continue;
-            }
-            let mut distinct = 0;
-            for (&id, &(ox, oy)) in ids.iter().zip(offsets) {
-                if id == NO_TRIANGLE {
-                    continue;
-                }
-                match seen[..distinct].iter_mut().find(|entry| entry.0 == id) {
-                    Some(entry) => {
-                        entry.1 += 1;
-                        entry.2 += i64::from(ox);
-                        entry.3 += i64::from(oy);
-                    }
-                    None => {
-                        seen[distinct] = (id, 1, i64::from(ox), i64::from(oy));
-                        distinct += 1;
-                    }
-                }
-            }
             let centre_x = pixel_centre(rect.x0 + column as u32);
-            for &(local, covered, offset_x, offset_y) in &seen[..distinct] {
-                let n = i64::from(covered);
+            let mut push = |local: u32, subset: SampleSubset| {
                 points[point_count] = ShadingPoint {
                     local,
-                    count: covered,
+                    count: subset.count,
                     at: (
-                        centre_x + offset_x.div_euclid(n),
-                        centre_y + offset_y.div_euclid(n),
+                        centre_x + i64::from(subset.mean_x),
+                        centre_y + i64::from(subset.mean_y),
                     ),
                 };
                 point_count += 1;
                 triangle_start[local as usize + 2] += 1;
+            };
+            let first = ids[0];
+            if samples_showing(ids, first) == all_samples {
+                if first != NO_TRIANGLE {
+                    push(first, whole_pixel);
+                }
+                continue;
+            }
+            let mut remaining = all_samples & !samples_showing(ids, NO_TRIANGLE);
+            while remaining != 0 {
+                let local = ids[remaining.trailing_zeros() as usize];
+                let covered = samples_showing(ids, local);
+                remaining &= !covered;
+                push(local, pattern.subset(covered));
             }
         }
     }
