@@ -29,7 +29,7 @@ use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
 
 use crate::render::depth::render_depth;
 use crate::render::geometry::{CameraSetup, SpareBuffers};
-use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
+use crate::render::lanes::{Floats, Ints, LANES, Mask, Real, Vec3s};
 use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
 
 /// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
@@ -196,7 +196,7 @@ impl ShadowFace {
         wanted: Mask,
     ) -> Floats {
         let one = Floats::splat(1.0);
-        let (looked_up, texels, depth) = self.lookup_lanes(position, normal, settings, wanted);
+        let (looked_up, columns, rows, depth) = self.lookup_lanes(position, normal, settings, wanted);
         if !looked_up.any() {
             return one;
         }
@@ -206,15 +206,16 @@ impl ShadowFace {
             if !looked_up.lane(lane) {
                 return 0.0;
             }
-            let (x, y) = texels[lane];
+            let (x, y) = (i64::from(columns.0[lane]), i64::from(rows.0[lane]));
             lit_texels(&self.depth, i64::from(self.size), x, y, radius, depth.0[lane]) as f32
         }));
         looked_up.select(lit / Floats::splat((side * side) as u32 as f32), one)
     }
 
     /// [`ShadowFace::lookup`] of eight points, where `wanted` holds: the lanes looked up, their
-    /// texels (`(0, 0)` in the others) and depths. The same operations in the same order, glam's
-    /// `Mat4 * Vec4` being `((x_axis·x + y_axis·y) + z_axis·z) + w_axis·w`, each `None` a mask.
+    /// texels' columns and rows (meaningless in the other lanes) and depths. The same
+    /// operations in the same order, glam's `Mat4 * Vec4` being
+    /// `((x_axis·x + y_axis·y) + z_axis·z) + w_axis·w`, each `None` a mask.
     #[inline]
     fn lookup_lanes(
         &self,
@@ -222,7 +223,7 @@ impl ShadowFace {
         normal: Vec3s,
         settings: &ShadowSettings,
         wanted: Mask,
-    ) -> (Mask, [(i64, i64); LANES], Floats) {
+    ) -> (Mask, Ints, Ints, Floats) {
         let texel = if self.perspective {
             let along = (position - Vec3s::splat(self.origin)).dot(Vec3s::splat(self.forward));
             Floats::splat(self.texel_size) * along.max(Floats::splat(0.0))
@@ -269,19 +270,18 @@ impl ShadowFace {
         let (half, scale) = (Floats::splat(0.5), Floats::splat(self.size as f32));
         let columns = ((ndc.x + one) * half) * scale;
         let rows = ((one - ndc.y) * half) * scale;
-        // Every lane at once, without a branch: converted to `i32` rather than `i64` (both
-        // saturate, and clamping to the map leaves the same texel), so that it vectorises.
-        let last = self.size as i32 - 1;
-        let x = columns.0.map(|column| (column as i32).clamp(0, last));
-        let y = rows.0.map(|row| (row as i32).clamp(0, last));
-        let texels = std::array::from_fn(|lane| {
-            if looked_up.lane(lane) {
-                (i64::from(x[lane]), i64::from(y[lane]))
-            } else {
-                (0, 0)
-            }
-        });
-        (looked_up, texels, ndc.z)
+        // In a lane looked up, `columns` and `rows` lie in [0, size] (the point's `ndc` in
+        // [−1, 1]): limited to the last texel and truncated, they are the scalar lookup's
+        // conversion clamped to the map. Every lane at once: the truncated value, a whole
+        // number below 2²³ (maps are at most 8192 texels a side), plus 2²³ has the number in
+        // the low bits of its mantissa.
+        debug_assert!(self.size <= 1 << 23);
+        let last = Floats::splat((self.size - 1) as f32);
+        let texel = |coordinate: Floats| {
+            let mantissa = Floats::splat((1 << 23) as f32);
+            (coordinate.min(last).trunc() + mantissa).to_bits() - mantissa.to_bits()
+        };
+        (looked_up, texel(columns), texel(rows), ndc.z)
     }
 }
 
@@ -724,7 +724,7 @@ pub(crate) mod tests {
                     wanted,
                 );
                 if let [face] = map.faces.as_slice() {
-                    let (looked_up, texels, depths) = face.lookup_lanes(
+                    let (looked_up, columns, rows, depths) = face.lookup_lanes(
                         Vec3s::from_array(&positions),
                         Vec3s::from_array(&normals),
                         &map.settings,
@@ -732,7 +732,10 @@ pub(crate) mod tests {
                     );
                     for i in 0..LANES {
                         let one = face.lookup(positions[i], normals[i], &map.settings);
-                        let lane = looked_up.lane(i).then(|| (texels[i], depths.0[i].to_bits()));
+                        let lane = looked_up.lane(i).then(|| {
+                            let texel = (i64::from(columns.0[i]), i64::from(rows.0[i]));
+                            (texel, depths.0[i].to_bits())
+                        });
                         let expected = one
                             .filter(|_| wanted.lane(i))
                             .map(|(x, y, depth)| ((x, y), depth.to_bits()));
