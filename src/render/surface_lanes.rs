@@ -280,19 +280,39 @@ impl<'a> Gathered<'a> {
         self.attributes.get(vertices[k] as usize).unwrap_or(DEFAULT)
     }
 
+    /// `attribute` of each point's triangle's three vertices, one lane array per vertex. A
+    /// batch's points come in runs of one triangle: a lane of the previous lane's triangle
+    /// copies its values rather than looking its vertices up again.
+    #[inline(always)]
+    fn corners<V: Copy + Default>(&self, attribute: impl Fn(&VertexAttributes) -> V) -> [[V; LANES]; 3] {
+        let vertices = self.points.vertices;
+        let mut corners = [[V::default(); LANES]; 3];
+        for lane in 0..LANES {
+            let same_triangle = lane > 0 && vertices[lane] == vertices[lane - 1];
+            for (k, corner) in corners.iter_mut().enumerate() {
+                corner[lane] = if same_triangle {
+                    corner[lane - 1]
+                } else {
+                    attribute(self.vertex(&vertices[lane], k))
+                };
+            }
+        }
+        corners
+    }
+
     /// A `Vec3` attribute interpolated with `weights`: `a·w₀ + b·w₁ + c·w₂`, as `Vec3`s.
     #[inline(always)]
     fn interpolate3(&self, weights: &[Floats; 3], attribute: impl Fn(&VertexAttributes) -> Vec3) -> Vec3s {
-        let corner = |k: usize| Vec3s::gather(self.points.vertices, |v| attribute(self.vertex(v, k)));
-        corner(0).scale(weights[0]) + corner(1).scale(weights[1]) + corner(2).scale(weights[2])
+        let [a, b, c] = self.corners(attribute).map(|corner| Vec3s::from_array(&corner));
+        a.scale(weights[0]) + b.scale(weights[1]) + c.scale(weights[2])
     }
 
     /// The tangents' `w` (the bitangent's handedness) interpolated with `weights`, the fourth
     /// component of the general path's `Vec4` interpolation.
     #[inline(always)]
     fn interpolate_w(&self, weights: &[Floats; 3]) -> Floats {
-        let corner = |k: usize| Floats::gather(self.points.vertices, |v| self.vertex(v, k).tangent.w);
-        corner(0) * weights[0] + corner(1) * weights[1] + corner(2) * weights[2]
+        let [a, b, c] = self.corners(|vertex| vertex.tangent.w).map(Floats);
+        a * weights[0] + b * weights[1] + c * weights[2]
     }
 
     /// The coordinates of set `uv_set` and their footprint (the general path's `uv_at` at the
@@ -302,13 +322,9 @@ impl<'a> Gathered<'a> {
         if let Some(uv) = self.uvs[set] {
             return uv;
         }
-        let corner = |k: usize| {
-            Vec2s::gather(self.points.vertices, |v| {
-                let vertex = self.vertex(v, k);
-                if set == 1 { vertex.uv1 } else { vertex.uv }
-            })
-        };
-        let corners = [corner(0), corner(1), corner(2)];
+        let corners = self
+            .corners(|vertex| if set == 1 { vertex.uv1 } else { vertex.uv })
+            .map(|corner| Vec2s::from_array(&corner));
         let at = |w: &[Floats; 3]| corners[0].scale(w[0]) + corners[1].scale(w[1]) + corners[2].scale(w[2]);
         let weights = self.points.weights;
         let uv = at(&weights.at);

@@ -57,7 +57,10 @@ pub fn sample_lanes(
             y: d.y * size.y,
         }
     };
-    let footprint = scaled(uv_dx).length().max(scaled(uv_dy).length());
+    // `f32::max` of the two lengths: neither is NaN (the lengths of finite vectors are finite
+    // or +∞) nor −0, so the larger by `>` is the same value.
+    let (along_x, along_y) = (scaled(uv_dx).length(), scaled(uv_dy).length());
+    let footprint = along_x.gt(along_y).select(along_x, along_y);
     let last_level = texture.levels.len() - 1;
     // With a bias of at most 0, `λ + bias > 0` needs `ρ > 1`; a positive bias can make any
     // footprint above 0 minified.
@@ -95,16 +98,19 @@ pub fn sample_lanes(
         y: integral.select(at.y, zero),
     };
     let mut near = [Vec4::ZERO; LANES];
-    bilinear_lanes(texture, lower, at, sampler, &mut near);
+    bilinear_lanes(texture, lower, at, sampler, |lane, value| near[lane] = value);
     if blended.any() {
         let upper = blended.select_ints(lower + Ints::splat(1), lower);
-        let mut far = [Vec4::ZERO; LANES];
-        bilinear_lanes(texture, upper, at, sampler, &mut far);
-        for (lane, (near, far)) in near.iter_mut().zip(&far).enumerate() {
+        // Each far value blended into the near one as it is filtered.
+        bilinear_lanes(texture, upper, at, sampler, |lane, far| {
             if blended.lane(lane) {
-                *near = *near + (*far - *near) * fraction.0[lane];
+                let near = &mut near[lane];
+                *near = *near + (far - *near) * fraction.0[lane];
             }
-        }
+        });
+    }
+    if integral.all() {
+        return near;
     }
     for (lane, value) in near.iter_mut().enumerate() {
         if !integral.lane(lane) {
@@ -143,12 +149,18 @@ fn floor_lanes(x: Floats) -> (Floats, Ints) {
     (floor, integer)
 }
 
-/// `texture::bilinear` of each lane at `uv` in its level `levels.0[lane]` of `texture`, into
-/// `out`: the same texels, weights and filter, the texel pairs found lane-wise
+/// `texture::bilinear` of each lane at `uv` in its level `levels.0[lane]` of `texture`, handed
+/// to `put` with its lane: the same texels, weights and filter, the texel pairs found lane-wise
 /// ([`texel_pairs`]). Lanes with coordinates beyond [`INTEGER_RANGE`] get a value that is not
 /// used.
 #[inline(always)]
-fn bilinear_lanes(texture: &Texture, levels: Ints, uv: Vec2s, sampler: &Sampler, out: &mut [Vec4; LANES]) {
+fn bilinear_lanes(
+    texture: &Texture,
+    levels: Ints,
+    uv: Vec2s,
+    sampler: &Sampler,
+    mut put: impl FnMut(usize, Vec4),
+) {
     let level = |lane: usize| &texture.levels[levels.0[lane] as usize];
     let (mut widths, mut heights) = ([0; LANES], [0; LANES]);
     let same_level = levels.0.iter().all(|&l| l == levels.0[0]);
@@ -176,22 +188,22 @@ fn bilinear_lanes(texture: &Texture, levels: Ints, uv: Vec2s, sampler: &Sampler,
         let level = level(0);
         let (width, texels) = (level.width as usize, &level.texels[..]);
         let texel = |index: usize| texels.get(index).copied().unwrap_or(Vec4::ZERO);
-        for (lane, value) in out.iter_mut().enumerate() {
+        for lane in 0..LANES {
             let ((x0, x1, fx), (y0, y1, fy)) = (xs.exact_lane(lane), ys.exact_lane(lane));
             let (row0, row1) = (y0 * width, y1 * width);
             let top = lerp(texel(row0 + x0), texel(row0 + x1), fx);
             let bottom = lerp(texel(row1 + x0), texel(row1 + x1), fx);
-            *value = lerp(top, bottom, fy);
+            put(lane, lerp(top, bottom, fy));
         }
         return;
     }
-    for (lane, value) in out.iter_mut().enumerate() {
+    for lane in 0..LANES {
         let level = level(lane);
         let (x0, x1, fx) = xs.lane(lane, uv.x, &widths, sampler.wrap_s);
         let (y0, y1, fy) = ys.lane(lane, uv.y, &heights, sampler.wrap_t);
         let top = lerp(level.texel(x0, y0), level.texel(x1, y0), fx);
         let bottom = lerp(level.texel(x0, y1), level.texel(x1, y1), fx);
-        *value = lerp(top, bottom, fy);
+        put(lane, lerp(top, bottom, fy));
     }
 }
 
@@ -506,6 +518,35 @@ mod tests {
         // Biases that move magnified lanes into the chain and minified ones back to level 0.
         for mip_bias in [0.0, -0.75, -3.0, 0.5, 1.25, 8.0] {
             check(&texture, &sampler, mip_bias, &points, "levels");
+        }
+        // The footprint is the longer derivative: equal lengths (across and along one axis),
+        // zero and negative-zero ones, and lengths that overflow to +∞ on one side or both.
+        let texel = 1.0 / 64.0;
+        let mut footprints = Vec::new();
+        for texels in [0.0, 0.7, 1.0, 1.9, 2.0, 3.0, 5.5, 64.0, 1e3] {
+            let d = texels * texel;
+            footprints.extend([
+                (Vec2::new(d, 0.0), Vec2::new(0.0, 2.0 * d)),
+                (Vec2::new(d, 0.0), Vec2::new(d, 0.0)),
+                (Vec2::new(0.0, -d), Vec2::new(d, -0.0)),
+                (Vec2::new(-0.0, -0.0), Vec2::new(d * 0.6, d * 0.8)),
+                (Vec2::new(1e38, 0.0), Vec2::new(0.0, d)),
+                (Vec2::new(d, d), Vec2::new(-1e38, 1e38)),
+            ]);
+        }
+        let points: Vec<_> = footprints
+            .iter()
+            .enumerate()
+            .map(|(i, &(dx, dy))| {
+                (
+                    Vec2::new(0.13 + i as f32 * 0.071, 0.77 - i as f32 * 0.029),
+                    dx,
+                    dy,
+                )
+            })
+            .collect();
+        for mip_bias in [0.0, -0.75, 0.5, 8.0] {
+            check(&texture, &sampler, mip_bias, &points, "footprints");
         }
         let empty = Texture { levels: Vec::new() };
         let zero = Vec2s::from_array(&[Vec2::ZERO; LANES]);
