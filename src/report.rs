@@ -26,6 +26,7 @@
 
 pub mod knobs;
 pub mod maps;
+pub mod plot;
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -427,97 +428,51 @@ pub fn markdown(
     out
 }
 
-/// The plot of one shininess and sample count as SVG text.
+/// The plot of one shininess and sample count as SVG text: one colour per shading mode, each
+/// point labelled with its tessellation, the sweep's Pareto front as a line.
 pub fn plot_svg(points: &[SweepPoint], title: &str) -> Result<String, String> {
-    use plotters::prelude::*;
+    use plotters::style::RGBColor;
     let shown: Vec<&SweepPoint> = points.iter().filter(|p| p.segments > 0).collect();
-    if shown.is_empty() {
-        return Err("nothing to plot".to_string());
-    }
     // Zero errors cannot sit on a log axis: floor them at a thousandth of a level.
-    let error_of = |p: &SweepPoint| p.error.mean_abs_all().max(0.001);
-    let (mut t_lo, mut t_hi, mut e_lo, mut e_hi) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
-    for p in &shown {
-        t_lo = t_lo.min(milliseconds(p.time));
-        t_hi = t_hi.max(milliseconds(p.time));
-        e_lo = e_lo.min(error_of(p));
-        e_hi = e_hi.max(error_of(p));
-    }
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (900, 600)).into_drawing_area();
-        let failed = |e: &dyn std::fmt::Display| format!("plotting failed: {e}");
-        root.fill(&WHITE).map_err(|e| failed(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(60)
-            .build_cartesian_2d(
-                ((t_lo * 0.8)..(t_hi * 1.25)).log_scale(),
-                ((e_lo * 0.8)..(e_hi * 1.25)).log_scale(),
-            )
-            .map_err(|e| failed(&e))?;
-        chart
-            .configure_mesh()
-            .x_labels(8)
-            .y_labels(8)
-            .x_desc("render time, ms (median)")
-            .y_desc("mean absolute error, levels of 255")
-            .draw()
-            .map_err(|e| failed(&e))?;
-        let colours = [
-            RGBColor(90, 90, 90),
-            RGBColor(230, 120, 0),
-            RGBColor(0, 110, 200),
-            RGBColor(0, 160, 80),
-        ];
-        for (mode, colour) in Mode::ALL.iter().zip(colours) {
-            let series: Vec<(f64, f64, u32)> = shown
+    let at = |p: &SweepPoint| (milliseconds(p.time), p.error.mean_abs_all().max(0.001));
+    let colours = [
+        RGBColor(90, 90, 90),
+        RGBColor(230, 120, 0),
+        RGBColor(0, 110, 200),
+        RGBColor(0, 160, 80),
+    ];
+    let series = Mode::ALL
+        .iter()
+        .zip(colours)
+        .map(|(mode, colour)| plot::Series {
+            name: mode.name().to_string(),
+            colour,
+            points: shown
                 .iter()
                 .filter(|p| p.method == mode.name())
-                .map(|p| (milliseconds(p.time), error_of(p), p.segments))
-                .collect();
-            chart
-                .draw_series(
-                    series
-                        .iter()
-                        .map(|&(t, e, _)| Circle::new((t, e), 5, colour.filled())),
-                )
-                .map_err(|e| failed(&e))?
-                .label(mode.name())
-                .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
-            chart
-                .draw_series(series.iter().map(|&(t, e, n)| {
-                    Text::new(
-                        format!("{n}"),
-                        (t, e),
-                        ("sans-serif", 11).into_font().color(&colour),
-                    )
-                }))
-                .map_err(|e| failed(&e))?;
-        }
-        let mut front: Vec<(f64, f64)> = shown
-            .iter()
-            .filter(|p| p.pareto)
-            .map(|p| (milliseconds(p.time), error_of(p)))
-            .collect();
-        front.sort_by(|a, b| a.partial_cmp(b).expect("finite"));
-        chart
-            .draw_series(LineSeries::new(front, BLACK.stroke_width(2)))
-            .map_err(|e| failed(&e))?
-            .label("Pareto front")
-            .legend(|(x, y)| PathElement::new(vec![(x - 10, y), (x + 10, y)], BLACK.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| failed(&e))?;
-        root.present().map_err(|e| failed(&e))?;
+                .map(|p| {
+                    let (time_ms, error) = at(p);
+                    plot::PlotPoint {
+                        time_ms,
+                        error,
+                        ringed: false,
+                        label: Some(p.segments.to_string()),
+                    }
+                })
+                .collect(),
+        })
+        .collect();
+    let mut front: Vec<(f64, f64)> = shown.iter().filter(|p| p.pareto).map(|p| at(p)).collect();
+    front.sort_by(|a, b| a.partial_cmp(b).expect("finite"));
+    plot::TimeErrorChart {
+        title,
+        size: (900, 600),
+        error_axis: "mean absolute error, levels of 255",
+        series,
+        front,
+        front_legend: "Pareto front",
     }
-    Ok(svg)
+    .to_svg()
 }
 
 /// `lampshade report ...`: returns the exit code.

@@ -27,6 +27,7 @@ use std::time::{Duration, Instant};
 use image::RgbImage;
 
 use super::maps;
+use super::plot::{self, PlotPoint, Series, TimeErrorChart};
 use crate::mesh::primitives;
 use crate::metrics::regions::{RegionError, Regions, WhereItMatters};
 use crate::metrics::{ErrorMetrics, compare, flip_map};
@@ -578,97 +579,52 @@ impl PlotError {
 /// ringed, the Pareto front (by this error) drawn as a line. `None` when no point has this
 /// error (the region is empty).
 pub fn knobs_plot_svg(points: &[KnobPoint], axis: PlotError, title: &str) -> Option<Result<String, String>> {
-    use plotters::prelude::*;
-    let shown: Vec<(&KnobPoint, f64, f64)> = points
+    use plotters::style::{Color as _, Palette as _, Palette99, RGBColor};
+    // Zero errors cannot sit on a log axis: floor them at a ten-thousandth.
+    let shown: Vec<(&KnobPoint, PlotPoint)> = points
         .iter()
-        .filter_map(|p| axis.of(p).map(|e| (p, milliseconds(p.time), e.max(1e-4))))
+        .filter_map(|p| {
+            let error = axis.of(p)?.max(1e-4);
+            let time_ms = milliseconds(p.time);
+            Some((
+                p,
+                PlotPoint {
+                    time_ms,
+                    error,
+                    ringed: p.current,
+                    label: None,
+                },
+            ))
+        })
         .collect();
     if shown.is_empty() {
         return None;
     }
-    let (mut t_lo, mut t_hi, mut e_lo, mut e_hi) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
-    for &(_, t, e) in &shown {
-        (t_lo, t_hi, e_lo, e_hi) = (t_lo.min(t), t_hi.max(t), e_lo.min(e), e_hi.max(e));
-    }
-    let mut knobs: Vec<&str> = Vec::new();
-    for (p, _, _) in &shown {
-        if !knobs.contains(&p.knob.as_str()) {
-            knobs.push(&p.knob);
-        }
-    }
-    let mut svg = String::new();
-    let drawn = (|| -> Result<(), String> {
-        let failed = |e: &dyn std::fmt::Display| format!("plotting failed: {e}");
-        let root = SVGBackend::with_string(&mut svg, (960, 640)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| failed(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(70)
-            .build_cartesian_2d(
-                ((t_lo * 0.8)..(t_hi * 1.25)).log_scale(),
-                ((e_lo * 0.8)..(e_hi * 1.25)).log_scale(),
-            )
-            .map_err(|e| failed(&e))?;
-        chart
-            .configure_mesh()
-            .x_labels(8)
-            .y_labels(8)
-            .x_desc("render time, ms (median)")
-            .y_desc(axis.label())
-            .draw()
-            .map_err(|e| failed(&e))?;
-        for (index, knob) in knobs.iter().enumerate() {
-            let colour = Palette99::pick(index).to_rgba();
-            let series: Vec<(f64, f64, bool)> = shown
-                .iter()
-                .filter(|(p, _, _)| p.knob == *knob)
-                .map(|&(p, t, e)| (t, e, p.current))
-                .collect();
-            chart
-                .draw_series(
-                    series
-                        .iter()
-                        .map(|&(t, e, _)| Circle::new((t, e), 5, colour.filled())),
-                )
-                .map_err(|e| failed(&e))?
-                .label(*knob)
-                .legend(move |(x, y)| Circle::new((x, y), 5, colour.filled()));
-            chart
-                .draw_series(
-                    series
-                        .iter()
-                        .filter(|(_, _, current)| *current)
-                        .map(|&(t, e, _)| Circle::new((t, e), 9, BLACK.stroke_width(1))),
-                )
-                .map_err(|e| failed(&e))?;
-        }
-        let mut order: Vec<(f64, f64)> = shown.iter().map(|&(_, t, e)| (t, e)).collect();
-        order.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-        let mut front = Vec::new();
-        let mut best = f64::INFINITY;
-        for (t, e) in order {
-            if e < best {
-                front.push((t, e));
-                best = e;
+    let front = plot::pareto_front(shown.iter().map(|(_, q)| (q.time_ms, q.error)));
+    let mut series: Vec<Series> = Vec::new();
+    for (p, point) in shown {
+        match series.iter_mut().find(|s| s.name == p.knob) {
+            Some(existing) => existing.points.push(point),
+            None => {
+                let (r, g, b) = Palette99::pick(series.len()).rgb();
+                let colour = RGBColor(r, g, b);
+                series.push(Series {
+                    name: p.knob.clone(),
+                    colour,
+                    points: vec![point],
+                });
             }
         }
-        chart
-            .draw_series(LineSeries::new(front, BLACK.stroke_width(2)))
-            .map_err(|e| failed(&e))?
-            .label("Pareto front (ringed: the scene's own setting)")
-            .legend(|(x, y)| PathElement::new(vec![(x - 10, y), (x + 10, y)], BLACK.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| failed(&e))?;
-        root.present().map_err(|e| failed(&e))
-    })();
-    Some(drawn.map(|()| svg))
+    }
+    let chart = TimeErrorChart {
+        title,
+        size: (960, 640),
+        error_axis: axis.label(),
+        series,
+        front,
+        front_legend: "Pareto front (ringed: the scene's own setting)",
+    };
+    Some(chart.to_svg())
 }
 
 #[cfg(test)]

@@ -4,31 +4,10 @@
 //! Scenes are 32×24 so that a whole suite renders in milliseconds. Every run sets `CI` (plain
 //! lines, no progress bar) and `NO_COLOR`, as CI does.
 
+use crate::process::{everything, lampshade, stdout};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn lampshade(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lampshade"))
-        .args(args)
-        .current_dir(dir)
-        .env("NO_COLOR", "1")
-        .env("CI", "true")
-        .output()
-        .expect("the lampshade binary runs")
-}
-
-fn stdout(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
-pub(crate) fn everything(output: &Output) -> String {
-    format!(
-        "--- stdout\n{}--- stderr\n{}",
-        stdout(output),
-        String::from_utf8_lossy(&output.stderr)
-    )
-}
 
 /// A tiny lit sphere of the given colour.
 pub(crate) fn sphere(color: &str) -> String {

@@ -11,23 +11,8 @@
 //!
 //! Rendering never panics, whatever the input.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
+use crate::process::{lampshade, stderr};
 use crate::{repo, ron_files};
-
-fn lampshade(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lampshade"))
-        .args(args)
-        .current_dir(dir)
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("the lampshade binary runs")
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
 
 #[test]
 fn every_bad_scene_fails_with_its_expected_diagnostics_and_writes_nothing() {

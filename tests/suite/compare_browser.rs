@@ -8,7 +8,8 @@
 use serde_json::{Value, json};
 
 use crate::browser::{Browser, chromium_or_skip};
-use crate::check::{GREEN, everything, three_spheres};
+use crate::check::{GREEN, three_spheres};
+use crate::process::everything;
 use crate::watch::{SceneFolder, WatchProcess, http_get, preview_port, render_once, scene_text, wait_for};
 
 /// Colour management may move an untagged PNG's values by a step or two.

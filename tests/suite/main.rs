@@ -18,9 +18,10 @@
 //!   `browser` drives Chromium for them;
 //! - `pick`: the pixel inspector, `render --pick` and `GET /api/pick`; `pick_browser`: its panel,
 //!   source links and highlight in headless Chromium; `compare_browser`: the preview's compare
-//!   views and the `check --report` viewer there.
+//!   views and the `check --report` viewer there;
 //! - `view_browser`: the preview's camera, toggles and camera writeback in headless Chromium,
-//!   and the drag benchmark (ignored).
+//!   and the drag benchmark (ignored);
+//! - `process` runs the binary for them all.
 
 mod browser;
 mod check;
@@ -33,6 +34,7 @@ mod lsp;
 mod outputs;
 mod pick;
 mod pick_browser;
+mod process;
 mod render;
 mod robustness;
 mod turntable;

@@ -2,21 +2,13 @@
 //! pixel, coordinates outside the image, the overrides, `-o`) and `GET /api/pick` on
 //! `watch --serve` (the same JSON for the image shown; errors as JSON with 4xx statuses).
 
-use std::process::{Command, Output};
+use std::process::Output;
 
 use serde_json::Value;
 
+use crate::process::lampshade;
 use crate::repo;
 use crate::watch::{SceneFolder, WatchProcess, http_get, preview_port, wait_for};
-
-fn lampshade(args: &[&str], dir: &std::path::Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lampshade"))
-        .args(args)
-        .current_dir(dir)
-        .env("NO_COLOR", "1")
-        .output()
-        .expect("the lampshade binary runs")
-}
 
 fn json(output: &Output) -> Value {
     assert!(

@@ -3,32 +3,15 @@
 //! every frame once; and the arguments it refuses.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
+use crate::process::{everything, lampshade};
 use glam::DVec3;
 use lampshade::scene::{Camera, Projection};
 use lampshade::turntable::orbit_camera;
 
 const EYE: DVec3 = DVec3::new(1.5, 1.2, 4.0);
 const TARGET: DVec3 = DVec3::new(0.2, 0.0, 0.0);
-
-fn lampshade(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lampshade"))
-        .args(args)
-        .current_dir(dir)
-        .env("NO_COLOR", "1")
-        .env("CI", "true")
-        .output()
-        .expect("the lampshade binary runs")
-}
-
-fn everything(output: &Output) -> String {
-    format!(
-        "--- stdout\n{}--- stderr\n{}",
-        String::from_utf8_lossy(&output.stdout),
-        String::from_utf8_lossy(&output.stderr)
-    )
-}
 
 /// A small scene that looks different from every side (a cube and a sphere off the axis),
 /// seen from `eye` (printed with every bit, as Rust's `{:?}` round-trips an `f64`).
@@ -55,6 +38,32 @@ fn scene_camera() -> Camera {
             far: 100.0,
         },
     }
+}
+
+/// `lampshade render scene.ron --turntable FRAMES --axis y -o OUTPUT EXTRA…` in `folder`.
+fn turntable(folder: &Path, frames: &str, output: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "render",
+        "scene.ron",
+        "--turntable",
+        frames,
+        "--axis",
+        "y",
+        "-o",
+        output,
+    ];
+    args.extend_from_slice(extra);
+    lampshade(&args, folder)
+}
+
+/// The names of the files in `folder`, sorted.
+fn file_names(folder: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(folder)
+        .unwrap()
+        .map(|entry| entry.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
 }
 
 /// Every frame of an APNG, as RGB bytes.
@@ -89,19 +98,7 @@ fn rendered(folder: &Path, scene_text: &str) -> Vec<u8> {
 fn an_apng_holds_every_frame_as_render_draws_its_camera() {
     let folder = tempfile::tempdir().unwrap();
     std::fs::write(folder.path().join("scene.ron"), scene(EYE, DVec3::Y)).unwrap();
-    let output = lampshade(
-        &[
-            "render",
-            "scene.ron",
-            "--turntable",
-            "6",
-            "--axis",
-            "y",
-            "-o",
-            "spin.png",
-        ],
-        folder.path(),
-    );
+    let output = turntable(folder.path(), "6", "spin.png", &[]);
     assert!(output.status.success(), "{}", everything(&output));
     assert!(
         String::from_utf8_lossy(&output.stdout).contains("6 frames"),
@@ -121,77 +118,30 @@ fn an_apng_holds_every_frame_as_render_draws_its_camera() {
     }
     assert_ne!(frames[0], frames[3], "the camera moved");
     // Nothing but the outputs: no temporary file left behind.
-    let mut names: Vec<String> = std::fs::read_dir(folder.path())
-        .unwrap()
-        .map(|entry| entry.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    assert_eq!(names, ["scene.ron", "single.png", "single.ron", "spin.png"]);
+    assert_eq!(
+        file_names(folder.path()),
+        ["scene.ron", "single.png", "single.ron", "spin.png"]
+    );
 }
 
 #[test]
 fn numbered_frames_and_shards_cover_every_frame_once() {
     let folder = tempfile::tempdir().unwrap();
     std::fs::write(folder.path().join("scene.ron"), scene(EYE, DVec3::Y)).unwrap();
-    let output = lampshade(
-        &[
-            "render",
-            "scene.ron",
-            "--turntable",
-            "5",
-            "--axis",
-            "y",
-            "-o",
-            "all/f-%03d.png",
-        ],
-        folder.path(),
-    );
+    let output = turntable(folder.path(), "5", "all/f-%03d.png", &[]);
     // The folder must exist, as for any output.
     assert!(!output.status.success(), "{}", everything(&output));
     std::fs::create_dir(folder.path().join("all")).unwrap();
     std::fs::create_dir(folder.path().join("shards")).unwrap();
-    let output = lampshade(
-        &[
-            "render",
-            "scene.ron",
-            "--turntable",
-            "5",
-            "--axis",
-            "y",
-            "-o",
-            "all/f-%03d.png",
-        ],
-        folder.path(),
-    );
+    let output = turntable(folder.path(), "5", "all/f-%03d.png", &[]);
     assert!(output.status.success(), "{}", everything(&output));
-    let listing = |sub: &str| -> Vec<String> {
-        let mut names: Vec<String> = std::fs::read_dir(folder.path().join(sub))
-            .unwrap()
-            .map(|entry| entry.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        names.sort();
-        names
-    };
+    let listing = |sub: &str| file_names(&folder.path().join(sub));
     let expected: Vec<String> = (0..5).map(|frame| format!("f-{frame:03}.png")).collect();
     assert_eq!(listing("all"), expected);
     let mut written_by_shards = Vec::new();
     for shard in ["1/2", "2/2"] {
         let before = listing("shards");
-        let output = lampshade(
-            &[
-                "render",
-                "scene.ron",
-                "--turntable",
-                "5",
-                "--axis",
-                "y",
-                "-o",
-                "shards/f-%03d.png",
-                "--shard",
-                shard,
-            ],
-            folder.path(),
-        );
+        let output = turntable(folder.path(), "5", "shards/f-%03d.png", &["--shard", shard]);
         assert!(output.status.success(), "{}", everything(&output));
         let new: Vec<String> = listing("shards")
             .into_iter()
