@@ -27,6 +27,7 @@ use crate::scene::locate::{PathSegment, locate};
 use crate::scene::{
     Light, LightingComponent, LightingModel, Material, MicrofacetDistribution, Scene, Shading,
 };
+use crate::texture::MipChoice;
 
 /// What made an image, kept beside it so that its pixels can be inspected later: the scene as
 /// loaded (overrides applied), the texts the loader read, and the settings of the render. The
@@ -150,9 +151,16 @@ pub struct TexelReport {
     pub role: &'static str,
     /// Index into the textures of the material's owner (scene or mesh file).
     pub texture: u32,
+    /// The image file the texture was read from; `null` for an image embedded in a glTF file.
+    pub file: Option<PathBuf>,
     pub uv: [f32; 2],
+    /// `log₂` of the pixel's footprint in texels of level 0, before the bias.
     pub level_of_detail: f32,
+    /// The scene's `image.mip_bias`, added to `level_of_detail` to choose the level.
+    pub mip_bias: f32,
+    /// The level read, blended towards the next one by `level_fraction`.
     pub level: usize,
+    pub level_fraction: f32,
     pub level_size: [u32; 2],
     pub texel: [f32; 2],
     pub value: [f32; 4],
@@ -408,14 +416,14 @@ fn texel_report(
     };
     let texture = textures.get(texel.binding.texture as usize);
     let level_of_detail = texture.map_or(0.0, |t| t.level_of_detail(texel.uv_dx, texel.uv_dy));
-    let level = texture.map_or(0, |t| {
-        let last = t.levels.len().saturating_sub(1);
-        if level_of_detail.is_nan() || level_of_detail <= 0.0 {
-            0
-        } else {
-            (level_of_detail.min(last as f32).floor() as usize).min(last)
-        }
-    });
+    // The frame's own choice of levels (`Texture::sample_biased`), bias included.
+    let mip_bias = scene.image.mip_bias;
+    let MipChoice { level, fraction } = texture
+        .and_then(|t| t.mip_choice(texel.uv_dx, texel.uv_dy, mip_bias))
+        .unwrap_or(MipChoice {
+            level: 0,
+            fraction: 0.0,
+        });
     let size = texture
         .and_then(|t| t.levels.get(level))
         .map_or([0, 0], |l| [l.width, l.height]);
@@ -423,9 +431,12 @@ fn texel_report(
     TexelReport {
         role,
         texture: texel.binding.texture,
+        file: texture.and_then(|t| t.file.clone()),
         uv: texel.uv.to_array(),
         level_of_detail,
+        mip_bias,
         level,
+        level_fraction: fraction,
         level_size: size,
         texel: texel_at.to_array(),
         value: Vec4::to_array(&texel.value),
@@ -726,5 +737,62 @@ Materials(
         ] {
             assert!(!light[field].is_null(), "{field}: {light}");
         }
+    }
+
+    #[test]
+    fn texels_name_their_file_and_the_level_the_mip_bias_chose() {
+        let folder = tempfile::tempdir().unwrap();
+        let texture = folder.path().join("checker.png");
+        image::RgbImage::from_fn(256, 128, |x, y| image::Rgb([((x ^ y) & 8) as u8 * 30, 90, 40]))
+            .save(&texture)
+            .unwrap();
+        // A plane far away: the texture is minified, several levels down.
+        let levels_at = |mip_bias: f32| {
+            let text = format!(
+                "(image: (width: 32, height: 24, mip_bias: {mip_bias}),
+                  camera: Perspective(eye: (0, 6, 9), target: (0, 0, 0), up: (0, 1, 0), fov: 30),
+                  objects: [(mesh: Plane, scale: 4, material: (texture: \"checker.png\"))])"
+            );
+            std::fs::write(folder.path().join("scene.ron"), text).unwrap();
+            let loaded = load_scene(&folder.path().join("scene.ron"), &LoadOptions::default()).unwrap();
+            let origin = ImageOrigin {
+                scene: Arc::new(loaded.scene),
+                sources: Arc::new(loaded.sources),
+                load_options: LoadOptions::default(),
+                render_options: RenderOptions::default(),
+                encoding: Encoding::Linear,
+            };
+            let texel = origin.pick(16, 12).unwrap().surfaces[0].texels[0].clone();
+            assert_eq!(texel.role, "diffuse");
+            assert_eq!(
+                texel.file.as_deref().map(std::path::absolute).map(Result::unwrap),
+                Some(std::path::absolute(&texture).unwrap())
+            );
+            assert_eq!(texel.mip_bias, mip_bias);
+            // The level the frame's sampler reads, counted here: ⌊λ + bias⌋ in [0, 8] (the
+            // chain of a 256-texel-wide texture has 9 levels).
+            let lod = texel.level_of_detail + mip_bias;
+            let expected = if lod <= 0.0 {
+                0
+            } else {
+                lod.min(8.0).floor() as usize
+            };
+            assert_eq!(texel.level, expected, "{texel:?}");
+            assert_eq!(
+                texel.level_size,
+                [(256 >> expected).max(1), (128 >> expected).max(1)]
+            );
+            texel
+        };
+        let unbiased = levels_at(0.0);
+        assert!(unbiased.level_of_detail > 1.0, "minified: {unbiased:?}");
+        let biased = levels_at(2.5);
+        assert_eq!(biased.level_of_detail, unbiased.level_of_detail);
+        assert!(
+            biased.level >= unbiased.level + 2,
+            "{biased:?} against {unbiased:?}"
+        );
+        let sharpened = levels_at(-1.0);
+        assert!(sharpened.level < unbiased.level, "{sharpened:?}");
     }
 }

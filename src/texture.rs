@@ -69,7 +69,7 @@
 
 use std::io::Cursor;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec4};
 use rayon::prelude::*;
@@ -132,6 +132,14 @@ impl MipLevel {
     }
 }
 
+/// The mipmap levels a lookup reads: `level`, blended towards the next one by `fraction`
+/// (0: `level` alone).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MipChoice {
+    pub level: usize,
+    pub fraction: f32,
+}
+
 /// A decoded texture: level 0 is the image, each next level half the size.
 ///
 /// Invariant (kept by every constructor here): at least one level, each a valid
@@ -139,6 +147,9 @@ impl MipLevel {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Texture {
     pub levels: Vec<MipLevel>,
+    /// The image file it was read from (for the pixel inspector); `None` for texels made in
+    /// memory or an image embedded in a glTF file.
+    pub file: Option<PathBuf>,
 }
 
 impl Texture {
@@ -254,7 +265,15 @@ impl Texture {
             let next = downsample(last);
             levels.push(next);
         }
-        Texture { levels }
+        Texture { levels, file: None }
+    }
+
+    /// The texture, noting that it was read from `file`.
+    pub fn read_from(self, file: &Path) -> Texture {
+        Texture {
+            file: Some(file.to_path_buf()),
+            ..self
+        }
     }
 
     /// Width of level 0 in texels.
@@ -301,23 +320,35 @@ impl Texture {
         sampler: &Sampler,
         mip_bias: f32,
     ) -> Vec4 {
-        let Some(base) = self.levels.first() else {
+        let Some(MipChoice { level, fraction }) = self.mip_choice(uv_dx, uv_dy, mip_bias) else {
             return Vec4::ZERO;
         };
         let uv = finite_or_zero(uv);
-        let lod = self.level_of_detail(uv_dx, uv_dy) + mip_bias;
-        let last_level = self.levels.len() - 1;
-        if lod.is_nan() || lod <= 0.0 || last_level == 0 {
-            return bilinear(base, uv, sampler);
-        }
-        let lod = lod.min(last_level as f32);
-        let lower = (lod.floor() as usize).min(last_level);
-        let fraction = lod - lower as f32;
-        let near = bilinear(&self.levels[lower], uv, sampler);
-        match self.levels.get(lower + 1) {
+        let near = bilinear(&self.levels[level], uv, sampler);
+        match self.levels.get(level + 1) {
             Some(upper) if fraction > 0.0 => near + (bilinear(upper, uv, sampler) - near) * fraction,
             _ => near,
         }
+    }
+
+    /// The levels [`Texture::sample_biased`] reads for a footprint spanning `uv_dx` and
+    /// `uv_dy` with `mip_bias` added: `None` for a texture without levels.
+    pub fn mip_choice(&self, uv_dx: Vec2, uv_dy: Vec2, mip_bias: f32) -> Option<MipChoice> {
+        self.levels.first()?;
+        let lod = self.level_of_detail(uv_dx, uv_dy) + mip_bias;
+        let last_level = self.levels.len() - 1;
+        if lod.is_nan() || lod <= 0.0 || last_level == 0 {
+            return Some(MipChoice {
+                level: 0,
+                fraction: 0.0,
+            });
+        }
+        let lod = lod.min(last_level as f32);
+        let level = (lod.floor() as usize).min(last_level);
+        Some(MipChoice {
+            level,
+            fraction: lod - level as f32,
+        })
     }
 }
 
@@ -844,7 +875,10 @@ mod tests {
             magnified(&board, f32::NAN, f32::INFINITY, REPEAT),
             magnified(&board, 0.0, 0.0, REPEAT)
         );
-        let empty = Texture { levels: Vec::new() };
+        let empty = Texture {
+            levels: Vec::new(),
+            file: None,
+        };
         assert_eq!(
             empty.sample(Vec2::ZERO, Vec2::ZERO, Vec2::ZERO, &REPEAT),
             Vec4::ZERO

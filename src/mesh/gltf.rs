@@ -1448,7 +1448,9 @@ impl ImageLoader<'_> {
                     self.files_read.push(file.clone());
                 }
                 return match self.access.read(&file) {
-                    Ok(bytes) => Texture::from_encoded(&bytes, color_space),
+                    Ok(bytes) => {
+                        Texture::from_encoded(&bytes, color_space).map(|texture| texture.read_from(&file))
+                    }
                     Err(error @ ReadError::OutsideSandbox { .. }) => {
                         let problem = format!("{label} `{uri}`: refused: {error}");
                         self.refused.get_or_insert_with(|| problem.clone());

@@ -592,7 +592,9 @@ impl TextureFiles {
         }
         self.files_read.push(path.to_path_buf());
         let loaded = match self.access.read(path) {
-            Ok(bytes) => Texture::from_encoded(&bytes, ColorSpace::Srgb),
+            Ok(bytes) => {
+                Texture::from_encoded(&bytes, ColorSpace::Srgb).map(|texture| texture.read_from(path))
+            }
             Err(error) if error.is_sandbox() => {
                 self.refused.get_or_insert_with(|| {
                     format!(

@@ -663,6 +663,82 @@ mod tests {
         }
     }
 
+    /// Gouraud on a mesh whose triangles alternate between two materials, so that every inner
+    /// vertex is shared by triangles of both: each triangle's vertices are lit with its own
+    /// material, and the parts still sum to the frame's pixel bit for bit.
+    #[test]
+    #[ignore = "fails: the frame's Gouraud colour of a triangle whose vertices are shared with \
+                triangles of another material differs from this breakdown, which lights every \
+                vertex with the triangle's own material (issue 23, open)"]
+    fn gouraud_vertices_shared_by_triangles_of_different_materials_sum_to_the_pixel() {
+        let folder = tempfile::tempdir().unwrap();
+        let mut obj = String::from("mtllib two.mtl\n");
+        // A 5×5 grid of vertices on a bump, 32 triangles, materials alternating.
+        for row in 0..5 {
+            for column in 0..5 {
+                let (x, y) = (column as f32 * 0.5 - 1.0, row as f32 * 0.5 - 1.0);
+                let z = 0.6 * (1.0 - (x * x + y * y) / 2.0);
+                obj.push_str(&format!("v {x} {y} {z}\n"));
+            }
+        }
+        for row in 0..4 {
+            for column in 0..4 {
+                let corner = row * 5 + column + 1;
+                let (a, b, c, d) = (corner, corner + 1, corner + 6, corner + 5);
+                for (k, (p, q, r)) in [(a, b, c), (a, c, d)].into_iter().enumerate() {
+                    let material = if (row + column + k) % 2 == 0 {
+                        "red"
+                    } else {
+                        "blue"
+                    };
+                    obj.push_str(&format!("usemtl {material}\nf {p} {q} {r}\n"));
+                }
+            }
+        }
+        std::fs::write(folder.path().join("bump.obj"), obj).unwrap();
+        std::fs::write(
+            folder.path().join("two.mtl"),
+            "newmtl red\nKa 0.3 0.1 0.1\nKd 0.9 0.2 0.1\nKs 0.6 0.6 0.6\nNs 30\n\
+             newmtl blue\nKa 0.1 0.1 0.3\nKd 0.1 0.3 0.9\nKs 0.2 0.2 0.2\nNs 5\nKe 0.05 0 0.1\n",
+        )
+        .unwrap();
+        let text = SPHERE.replace(
+            "objects: [(name: \"ball\", mesh: Sphere(segments: 96),",
+            "objects: [(name: \"bump\", mesh: Obj(\"bump.obj\"), shading: Gouraud, scale: 1.4),
+                       (name: \"ball\", mesh: Sphere(segments: 8), translate: (0, 0, -9),",
+        );
+        let path = folder.path().join("scene.ron");
+        std::fs::write(&path, &text).unwrap();
+        let scene = match crate::scene::load::load_scene(&path, &LoadOptions::default()) {
+            Ok(loaded) => loaded.scene,
+            Err(error) => panic!("{:?}", error.diagnostics),
+        };
+        let materials = &scene.objects[0].mesh.triangle_materials;
+        assert!(
+            materials.iter().any(|&m| m != materials[0]),
+            "two materials: {materials:?}"
+        );
+        let (frame, _) = render(&scene, &RenderOptions::default());
+        let mut checked = 0;
+        for y in (0..48).step_by(2) {
+            for x in (0..48).step_by(2) {
+                let pick = inspect_pixel(&scene, &RenderOptions::default(), x, y).unwrap();
+                let pixel = frame.color[(y * 48 + x) as usize];
+                assert_eq!(pick.color, pixel, "({x}, {y})");
+                let Some(surface) = pick.surfaces.first().filter(|s| s.object == 0) else {
+                    continue;
+                };
+                assert_eq!(surface.color, pixel, "({x}, {y})");
+                let SurfaceLighting::Vertices(vertices) = &surface.lighting else {
+                    panic!("Gouraud lights the vertices");
+                };
+                vertices.iter().for_each(assert_parts_sum_to_the_pixel);
+                checked += 1;
+            }
+        }
+        assert!(checked > 100, "{checked} pixels of the bump");
+    }
+
     /// With multisampling, each distinct triangle of a pixel is reported with its samples, and
     /// their colours resolve to the frame's pixel as the frame resolves them.
     #[test]

@@ -548,7 +548,10 @@ mod tests {
         for mip_bias in [0.0, -0.75, 0.5, 8.0] {
             check(&texture, &sampler, mip_bias, &points, "footprints");
         }
-        let empty = Texture { levels: Vec::new() };
+        let empty = Texture {
+            levels: Vec::new(),
+            file: None,
+        };
         let zero = Vec2s::from_array(&[Vec2::ZERO; LANES]);
         assert_eq!(
             sample_lanes(&empty, zero, zero, zero, &sampler, 0.0),

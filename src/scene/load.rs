@@ -125,6 +125,10 @@ pub struct LoadError {
 #[derive(Debug, Default)]
 pub struct MeshCache {
     entries: HashMap<MeshKey, CachedMesh>,
+    /// Generated spheres by segment count and whether they carry texture coordinates: a
+    /// `Sphere(segments: 180)` takes longer to build than the rest of its scene's load, which
+    /// the preview repeats for every frame of a moving camera.
+    spheres: HashMap<(u32, bool), Arc<Mesh>>,
     /// Mesh files parsed through this cache, over its life.
     files_parsed: usize,
 }
@@ -1195,7 +1199,7 @@ impl Loader<'_> {
         }
         self.files_read.push(path.clone());
         let loaded = match self.access.read(&path) {
-            Ok(bytes) => Texture::from_encoded(&bytes, color_space),
+            Ok(bytes) => Texture::from_encoded(&bytes, color_space).map(|texture| texture.read_from(&path)),
             Err(error @ ReadError::OutsideSandbox { .. }) => Err(format!("refused: {error}")),
             Err(error) => Err(format!("cannot read it: {error}")),
         };
@@ -1547,11 +1551,14 @@ impl Loader<'_> {
                 // Texture coordinates and tangents only for a material that reads them: an
                 // untextured object is the plain mesh, which the renderer draws without a
                 // per-vertex attribute pass.
-                let sphere = match needs.uvs() {
-                    true => primitives::textured_sphere(segments),
-                    false => primitives::sphere(segments),
-                };
-                Some((Arc::new(sphere), nothing_placed()))
+                let textured = needs.uvs();
+                let sphere = self.cache.spheres.entry((segments, textured)).or_insert_with(|| {
+                    Arc::new(match textured {
+                        true => primitives::textured_sphere(segments),
+                        false => primitives::sphere(segments),
+                    })
+                });
+                Some((Arc::clone(sphere), nothing_placed()))
             }
             MeshFile::Plane => {
                 let plane = if needs.uvs() {
@@ -2878,5 +2885,40 @@ mod tests {
         assert_eq!(first.scene.lights, second.scene.lights);
         assert_eq!(second.scene.lights.len(), 3);
         assert_eq!(first.scene.camera, second.scene.camera);
+    }
+
+    #[test]
+    fn generated_spheres_are_cached_by_segments_and_texture_coordinates() {
+        let text = r#"(objects: [
+            (mesh: Sphere(segments: 40)),
+            (mesh: Sphere(segments: 40), translate: (2, 0, 0)),
+            (mesh: Sphere(segments: 40), material: (texture: "t.png")),
+            (mesh: Sphere(segments: 41)),
+        ])"#;
+        let folder = tempfile::tempdir().unwrap();
+        image::RgbImage::new(2, 2)
+            .save(folder.path().join("t.png"))
+            .unwrap();
+        let path = folder.path().join("s.ron");
+        let mut cache = MeshCache::default();
+        let first = load_scene_from_str_cached(&path, text, &LoadOptions::default(), &mut cache).unwrap();
+        let second = load_scene_from_str_cached(&path, text, &LoadOptions::default(), &mut cache).unwrap();
+        let mesh = |loaded: &LoadedScene, index: usize| Arc::clone(&loaded.scene.objects[index].mesh);
+        assert!(
+            Arc::ptr_eq(&mesh(&first, 0), &mesh(&second, 0)),
+            "kept between loads"
+        );
+        assert!(
+            Arc::ptr_eq(&mesh(&first, 0), &mesh(&first, 1)),
+            "shared within a scene"
+        );
+        assert!(!Arc::ptr_eq(&mesh(&first, 0), &mesh(&first, 2)), "textured apart");
+        assert!(!mesh(&first, 2).uvs.is_empty());
+        assert!(!Arc::ptr_eq(&mesh(&first, 0), &mesh(&first, 3)), "by segments");
+        assert_eq!(
+            *mesh(&first, 0),
+            primitives::sphere(40),
+            "the generated sphere itself"
+        );
     }
 }

@@ -15,8 +15,11 @@
 //!   preview camera, exactly as [`write_camera`] would write it, loaded through the mesh cache.
 //!   So what the page shows at full resolution is bit for bit what the file renders once the
 //!   camera is written into it, including everything that follows the camera (default `near`
-//!   and `far`, default lights at the eye). Loading a scene whose meshes are cached costs a few
-//!   milliseconds (2 ms for `matlab-shiny`), small against the render.
+//!   and `far`, default lights at the eye). Loading a scene whose meshes are cached (files and
+//!   generated spheres alike) costs a fraction of a millisecond (0.3 ms for `matlab-shiny`,
+//!   whose two 180-segment spheres took longer to generate than to draw at half size), small
+//!   against the render. Each frame's server time, split into load, render and encode, goes to
+//!   the page with it (`timings`).
 //! - While the page drags (`moving`), frames are rendered at a reduced size (half to an eighth,
 //!   adapted so a frame stays under [`MOVING_BUDGET`]) with one sample per pixel; once the
 //!   moves stop the page asks once more without `moving` and gets the full image.
@@ -62,9 +65,10 @@ use crate::scene::{Camera, Projection};
 
 use super::debounce::Signal;
 
-/// How long a frame rendered while moving may take (render and encode) before the next ones are
-/// made smaller: 20 updates a second.
-pub const MOVING_BUDGET: Duration = Duration::from_millis(50);
+/// How long a frame rendered while moving may take (load, render and encode) before the next
+/// ones are made smaller: 40 ms leaves 10 ms of each 50 (20 updates a second) for the page to
+/// fetch and decode the image.
+pub const MOVING_BUDGET: Duration = Duration::from_millis(40);
 
 /// The largest body a request may send (an editor's buffer included).
 const MAX_BODY: u64 = 16 << 20;
@@ -274,6 +278,18 @@ pub struct ViewSummary {
     pub height: u32,
     /// Whether this frame is a reduced one, made while moving.
     pub moving: bool,
+    /// Where the frame's time went on the server.
+    pub timings: FrameTimings,
+}
+
+/// The server's part of a preview frame's time, in milliseconds: reading and loading the scene
+/// text (meshes come from the cache), rendering, and encoding the PNG. The page adds its own
+/// part (fetching and decoding the image) to `lampshadeView.frames`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct FrameTimings {
+    pub load_ms: f64,
+    pub render_ms: f64,
+    pub encode_ms: f64,
 }
 
 /// Names a value the way the command line does (`blinn-phong`).
@@ -460,6 +476,7 @@ impl View {
             width,
             height,
             moving,
+            timings: FrameTimings::default(),
         }
     }
 
@@ -501,6 +518,7 @@ impl View {
         };
         let mut loaded = load_scene_from_str_cached(scene, text, &options, &mut cache.meshes)
             .map_err(PreviewError::Load)?;
+        let loaded_at = Instant::now();
         let (width, height) = (loaded.scene.image.width, loaded.scene.image.height);
         let scale = if moving { self.moving_scale.max(2) } else { 1 };
         if moving {
@@ -518,6 +536,7 @@ impl View {
             ..*render_options
         };
         cache.renderer.render(&loaded.scene, &render_options);
+        let rendered_at = Instant::now();
         let framebuffer = cache.renderer.take_framebuffer();
         let size = (framebuffer.width, framebuffer.height);
         let png = output::encode_png_to_vec(&output::to_rgb8(&framebuffer), PngCompression::Fast);
@@ -526,7 +545,15 @@ impl View {
         if moving {
             self.moving_scale = next_moving_scale(scale, time);
         }
-        let summary = self.summary(&loaded.scene.camera, width, height, moving);
+        let milliseconds = |duration: Duration| duration.as_secs_f64() * 1000.0;
+        let summary = ViewSummary {
+            timings: FrameTimings {
+                load_ms: milliseconds(loaded_at - started),
+                render_ms: milliseconds(rendered_at - loaded_at),
+                encode_ms: milliseconds(rendered_at.elapsed()),
+            },
+            ..self.summary(&loaded.scene.camera, width, height, moving)
+        };
         Ok(PreviewFrame {
             png: png.map_err(PreviewError::Encode)?,
             summary,
@@ -749,6 +776,10 @@ mod tests {
             .unwrap();
         assert_eq!((moving.summary.width, moving.summary.height), (40, 30));
         assert!(moving.summary.moving);
+        let timings = moving.summary.timings;
+        assert!(timings.render_ms > 0.0 && timings.encode_ms > 0.0, "{timings:?}");
+        let state = serde_json::to_value(&moving.summary).unwrap();
+        assert!(state["timings"]["load_ms"].is_number(), "{state}");
         let small = image::load_from_memory(&moving.png).unwrap();
         assert_eq!((small.width(), small.height()), (20, 15));
 

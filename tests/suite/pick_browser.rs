@@ -113,3 +113,77 @@ fn clicking_a_pixel_shows_its_object_with_a_link_to_its_line_and_highlights_it()
         state["panelShown"] == false
     });
 }
+
+/// Where the panel and the image are, and what the lighting table's last rows say.
+const LAYOUT: &str = r#"(() => {
+  const rect = (element) => { const r = element.getBoundingClientRect();
+    return { left: r.left, top: r.top, right: r.right, bottom: r.bottom }; };
+  const panel = document.getElementById("pick-panel");
+  return {
+    pick: document.body.dataset.pick ?? null,
+    window: [window.innerWidth, window.innerHeight],
+    page: document.documentElement.scrollWidth,
+    image: rect(document.getElementById("view")),
+    panel: rect(panel),
+    sumRow: panel.querySelector("tr.sum td")?.textContent ?? null,
+    shownRow: panel.querySelector("tr.shown td")?.textContent ?? null,
+    pixelSum: panel.querySelector("p.pixel-sum")?.textContent ?? null,
+  };
+})()"#;
+
+#[test]
+fn the_panel_fits_small_windows_beside_or_below_the_image_and_says_what_its_sums_are() {
+    let Some(chromium) = chromium_or_skip("pick_browser") else {
+        return;
+    };
+    let folder = SceneFolder::new();
+    folder.write("scene.ron", SCENE);
+    let watch = WatchProcess::start(
+        &folder.path,
+        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
+    );
+    let port = preview_port(&watch);
+    wait_for("the first image", || watch.output(), || folder.image());
+    let mut browser = Browser::open(&chromium, &format!("http://127.0.0.1:{port}/"));
+    for (width, height) in [(640, 420), (1024, 768)] {
+        browser.call(
+            "Emulation.setDeviceMetricsOverride",
+            json!({ "width": width, "height": height, "deviceScaleFactor": 1, "mobile": false }),
+        );
+        let state = browser.wait_for_page(PROBE, "the image", &watch, |state| state["state"] == "ok");
+        click(&mut browser, &state, (105, 120));
+        browser.wait_for_page(PROBE, "the inspector panel", &watch, |state| {
+            state["pick"] == "shown" && state["maskShown"] == true
+        });
+        browser.save_screenshot(&format!("pick-panel-{width}x{height}.png"));
+        let layout = browser.evaluate(LAYOUT);
+        let get = |path: &str| layout.pointer(path).and_then(Value::as_f64).unwrap();
+        assert!(
+            get("/panel/right") <= f64::from(width),
+            "wider than the window: {layout}"
+        );
+        assert!(
+            get("/page") <= f64::from(width),
+            "the page scrolls sideways: {layout}"
+        );
+        let beside = get("/panel/left") >= get("/image/right");
+        let below = get("/panel/top") >= get("/image/bottom");
+        assert!(beside || below, "the panel covers the image: {layout}");
+        assert!(
+            get("/panel/bottom") - get("/panel/top") <= f64::from(height),
+            "{layout}"
+        );
+        assert_eq!(layout["sumRow"], "sum of the lights", "{layout}");
+        assert!(
+            layout["pixelSum"].as_str().unwrap().contains("before clamping"),
+            "{layout}"
+        );
+        browser.call(
+            "Input.dispatchKeyEvent",
+            json!({ "type": "keyDown", "key": "Escape", "code": "Escape", "windowsVirtualKeyCode": 27 }),
+        );
+        browser.wait_for_page(PROBE, "the panel to close", &watch, |state| {
+            state["panelShown"] == false
+        });
+    }
+}

@@ -126,6 +126,25 @@ fn orbiting_copying_writing_the_camera_toggles_and_reset() {
         orbited["movingFrames"].as_u64() > Some(0),
         "no reduced frame painted: {orbited}"
     );
+    // Each painted frame says where its time went: the server's parts and the page's.
+    let frames = browser.evaluate("window.lampshadeView.frames");
+    for frame in frames.as_array().unwrap() {
+        for part in [
+            "/request",
+            "/image",
+            "/server/load_ms",
+            "/server/render_ms",
+            "/server/encode_ms",
+        ] {
+            assert!(
+                frame
+                    .pointer(part)
+                    .and_then(Value::as_f64)
+                    .is_some_and(|ms| ms >= 0.0),
+                "{part} of {frame}"
+            );
+        }
+    }
     assert_eq!(
         orbited["pick"],
         Value::Null,
@@ -348,10 +367,27 @@ fn preview_orbit_speed() {
             .copied()
             .unwrap_or(f64::NAN);
         let width = frames.last().map_or(0, |f| f["width"].as_u64().unwrap_or(0));
+        // The median of each part of a moving frame's time (see `paint` in view.js).
+        let part = |pointer: &str| {
+            let mut values: Vec<f64> = frames
+                .iter()
+                .filter_map(|f| f.pointer(pointer)?.as_f64())
+                .collect();
+            values.sort_by(f64::total_cmp);
+            values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+        };
         let _ = writeln_stderr(&format!(
-            "run {run}: {rate:.1} updates/s over {dragged:.2} s, input to paint median {median:.1} ms, \
-             moving frames {width} px wide; still frame {}×{}",
-            state["view"]["width"], state["view"]["height"]
+            "run {run}: {rate:.1} updates/s over {dragged:.2} s, input to paint median {median:.1} ms \
+             (waited {:.1}, request {:.1} = load {:.1} + render {:.1} + encode {:.1} + the rest, \
+             image fetch and decode {:.1}), moving frames {width} px wide; still frame {}×{}",
+            part("/waited"),
+            part("/request"),
+            part("/server/load_ms"),
+            part("/server/render_ms"),
+            part("/server/encode_ms"),
+            part("/image"),
+            state["view"]["width"],
+            state["view"]["height"]
         ));
         rates.push(rate);
         latencies.push(median);

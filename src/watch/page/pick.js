@@ -18,6 +18,7 @@
     /* Beside the image when the window is wide enough, below it otherwise: never over it. */
     #pick-panel { display: inline-block; vertical-align: top; margin: 12px 12px 12px 0;
       width: min(500px, calc(100vw - 24px)); box-sizing: border-box; padding: 10px 12px;
+      max-height: calc(100vh - 24px); overflow: auto;
       background: #252526; color: #ddd; border: 1px solid #444; border-radius: 4px;
       font: 12px/1.4 system-ui, sans-serif; }
     #pick-panel h2 { margin: 0 0 6px; font-size: 14px; }
@@ -33,6 +34,7 @@
     #pick-panel dl { display: grid; grid-template-columns: max-content 1fr; gap: 1px 8px; margin: 0; }
     #pick-panel dt { color: #aaa; }
     #pick-panel dd { margin: 0; overflow-wrap: anywhere; }
+    #pick-panel p.pixel-sum { margin: 4px 0 0; color: #bbb; }
     #pick-panel .close { float: right; cursor: pointer; background: none; border: 0; color: #aaa; font-size: 16px; }
   `;
   document.head.appendChild(style);
@@ -112,9 +114,12 @@
       row([name, number(light.n_dot_l), number(light.attenuation), number(light.spot), number(light.shadow),
         triple(light.diffuse), triple(light.specular)], light.reaches ? "" : "dark");
     }
-    row(["sum", "", "", "", "", triple(point.diffuse), triple(point.specular)], "sum");
-    row([`shown ${swatch(point.color)}`, "", "", "", "", triple(point.shown_ambient_diffuse), triple(point.shown_specular_emission)]);
-    return `<table class="lighting">${rows.join("")}</table>`;
+    row(["sum of the lights", "", "", "", "", triple(point.diffuse), triple(point.specular)], "sum");
+    row(["+ ambient | + emission", "", "", "", "", triple(point.shown_ambient_diffuse), triple(point.shown_specular_emission)], "shown");
+    // The two columns of the last row add up to the colour, which is clamped only when drawn.
+    const total = `<p class="pixel-sum">pixel = the two columns' sum = ${triple(point.color)} before clamping `
+      + `→ ${swatch(point.color)} clamped to [0, 1]</p>`;
+    return `<table class="lighting">${rows.join("")}</table>${total}`;
   }
 
   function show(answer) {
@@ -155,7 +160,12 @@
       parts.push(`<dt>position</dt><dd>${triple(surface.position)} · depth ${number(surface.depth, 6)} · distance ${number(surface.view_distance)}</dd>`);
       parts.push(`<dt>normal</dt><dd>${triple(surface.normal)} (face ${triple(surface.geometric_normal)})</dd>`);
       for (const texel of surface.texels) {
-        parts.push(`<dt>${texel.role} texture</dt><dd>#${texel.texture} uv ${triple(texel.uv)} · level ${texel.level} (lod ${number(texel.level_of_detail)}, ${texel.level_size.join("×")}) · texel ${triple(texel.texel)} = ${triple(texel.value)}</dd>`);
+        const file = texel.file
+          ? `<span class="texture-file" title="${escape(texel.file)}">${escape(texel.file.split("/").pop())}</span>`
+          : `<span class="texture-file">texture #${texel.texture} of the mesh</span>`;
+        const bias = texel.mip_bias ? ` ${texel.mip_bias > 0 ? "+" : "−"} bias ${number(Math.abs(texel.mip_bias))}` : "";
+        const blend = texel.level_fraction > 0 ? `, ${number(texel.level_fraction, 2)} of the way to ${texel.level + 1}` : "";
+        parts.push(`<dt>${texel.role} texture</dt><dd class="texel">${file} · uv ${triple(texel.uv)} · level ${texel.level}${blend} (lod ${number(texel.level_of_detail)}${bias}, ${texel.level_size.join("×")}) · texel ${triple(texel.texel)} = ${triple(texel.value)}</dd>`);
       }
       parts.push(`<dt>colour</dt><dd>${swatch(surface.color)}${triple(surface.color)}</dd></dl>`);
       const lighting = surface.lighting;

@@ -97,13 +97,16 @@
     firstUnsentInput = null;
     inFlight = true;
     try {
+      const sentAt = performance.now();
       const response = await fetch("/api/view", {
         method: "POST",
         headers: { "Content-Type": "application/json" },
         body: JSON.stringify(body),
       });
       const state = await response.json();
-      if (state.image) paint(state, inputAt);
+      // Answered: the next request goes out now (finally below) while this image is fetched
+      // and decoded.
+      if (state.image) paint(state, inputAt, { sentAt, answeredAt: performance.now() });
       else if (state.error) showProblem(state.error);
     } catch (error) {
       showProblem(String(error));
@@ -113,8 +116,11 @@
     }
   }
 
-  // Swaps the image in once decoded, then notes when it was painted.
-  async function paint(state, inputAt) {
+  // Swaps the image in once decoded, then notes when it was painted and where the time went:
+  // `waited` from the input to the request (a request was in flight), `request` until the
+  // answer (the server's `timings` of it: load, render, encode), `image` to fetch and decode
+  // the PNG, and the rest until the next paint.
+  async function paint(state, inputAt, sent = null) {
     const url = "/image.png?v=" + encodeURIComponent(state.image);
     const next = new Image();
     next.src = url;
@@ -123,6 +129,7 @@
     } catch {
       return;
     }
+    const decodedAt = performance.now();
     if (typeof wantedImage !== "undefined") {
       if (wantedImage !== null && newer(wantedImage, state.image)) return;
       wantedImage = state.image;
@@ -133,7 +140,16 @@
     requestAnimationFrame(() => {
       const at = performance.now();
       if (inputAt !== null) {
-        frames.push({ latency: at - inputAt, at, moving: state.view?.moving ?? false, width: next.naturalWidth });
+        frames.push({
+          latency: at - inputAt,
+          at,
+          moving: state.view?.moving ?? false,
+          width: next.naturalWidth,
+          waited: sent ? sent.sentAt - inputAt : null,
+          request: sent ? sent.answeredAt - sent.sentAt : null,
+          image: sent ? decodedAt - sent.answeredAt : null,
+          server: state.view?.timings ?? null,
+        });
       }
     });
   }
@@ -360,5 +376,8 @@
     lastCopied: () => lastCopied,
     state: () => lastState,
     busy: () => dragging !== null || inFlight || wanted !== null || stillTimer !== null,
+    // While a request of this page is in flight the images published are its answers, which
+    // `paint` shows (preview.html leaves them alone).
+    paintsItself: () => inFlight,
   };
 })();
