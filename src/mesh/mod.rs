@@ -80,6 +80,49 @@ impl Mesh {
         self.triangles.len()
     }
 
+    /// Gives every vertex one material: a vertex that triangles of several materials share
+    /// is copied, with all its attributes, for each material after the first one to use it,
+    /// and those triangles are pointed at the copy. Per-vertex lighting (Gouraud) then lights
+    /// each triangle's corners with the triangle's own material, as renderers that draw a
+    /// file's material groups as separate meshes do, instead of letting one material's colour
+    /// bleed across the boundary. Copies change nothing else: positions, normals and UVs are
+    /// the same values, so every other mode interpolates the same bits.
+    pub fn split_vertices_shared_by_materials(&mut self) {
+        if self.triangle_materials.is_empty() {
+            return;
+        }
+        const UNUSED: u32 = u32::MAX;
+        // The material each vertex keeps (the first to use it), and the copies made so far.
+        let mut owner = vec![UNUSED; self.positions.len()];
+        let mut copies: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+        for (triangle, &material) in self.triangles.iter_mut().zip(&self.triangle_materials) {
+            for corner in triangle.iter_mut() {
+                let vertex = *corner as usize;
+                if owner[vertex] == UNUSED {
+                    owner[vertex] = material;
+                } else if owner[vertex] != material {
+                    *corner = *copies.entry((*corner, material)).or_insert_with(|| {
+                        let copy = self.positions.len() as u32;
+                        self.positions.push(self.positions[vertex]);
+                        self.normals.push(self.normals[vertex]);
+                        for uvs in [&mut self.uvs, &mut self.uvs1] {
+                            if !uvs.is_empty() {
+                                uvs.push(uvs[vertex]);
+                            }
+                        }
+                        if !self.colors.is_empty() {
+                            self.colors.push(self.colors[vertex]);
+                        }
+                        if !self.tangents.is_empty() {
+                            self.tangents.push(self.tangents[vertex]);
+                        }
+                        copy
+                    });
+                }
+            }
+        }
+    }
+
     /// Checks the module's invariant, naming the first thing that breaks it. Loaders' tests
     /// run it on everything they load; the loaders themselves establish it by construction.
     pub fn check_invariant(&self) -> Result<(), String> {
@@ -651,6 +694,54 @@ mod tests {
         );
         let e = f64::from(exponent);
         ((1.0 - co.powf(e + 1.0)) / (e + 1.0), (1.0 - ci) + (ci - co) / 3.0)
+    }
+
+    /// Two quads side by side, the left red (material 0), the right blue (1), sharing the
+    /// middle edge; the blue quad's second triangle also red, sharing a blue corner.
+    #[test]
+    fn vertices_shared_by_materials_are_copied_once_per_extra_material() {
+        let positions: Vec<Vec3> = (0..6)
+            .map(|i| Vec3::new((i % 3) as f32, (i / 3) as f32, 0.0))
+            .collect();
+        let mut mesh = Mesh {
+            normals: vec![Vec3::Z; 6],
+            uvs: positions.iter().map(|p| p.truncate() * 0.5).collect(),
+            positions,
+            triangles: vec![[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]],
+            triangle_materials: vec![0, 0, 1, 0],
+            materials: vec![obj::default_material(); 2],
+            ..Mesh::default()
+        };
+        let before = mesh.clone();
+        mesh.split_vertices_shared_by_materials();
+        mesh.check_invariant().unwrap();
+        // Vertex 1 is red's first, so the blue triangle [1, 2, 5] gets a copy of it; 2 and 5
+        // are blue's own; the red [1, 5, 4] then shares 1 and 4 with red, and gets a copy of 5.
+        assert_eq!(mesh.triangles, vec![[0, 1, 4], [0, 4, 3], [6, 2, 5], [1, 7, 4]]);
+        assert_eq!(mesh.positions.len(), 8);
+        for (split, original) in mesh.triangles.iter().zip(&before.triangles) {
+            for (&s, &o) in split.iter().zip(original) {
+                let (s, o) = (s as usize, o as usize);
+                assert_eq!(
+                    (mesh.positions[s], mesh.normals[s], mesh.uvs[s]),
+                    (before.positions[o], before.normals[o], before.uvs[o])
+                );
+            }
+        }
+        // Every vertex now belongs to one material.
+        let mut owner = vec![None; mesh.positions.len()];
+        for (triangle, &material) in mesh.triangles.iter().zip(&mesh.triangle_materials) {
+            for &v in triangle {
+                assert_eq!(*owner[v as usize].get_or_insert(material), material, "vertex {v}");
+            }
+        }
+        // Without materials nothing changes.
+        let mut plain = Mesh {
+            triangle_materials: Vec::new(),
+            ..before.clone()
+        };
+        plain.split_vertices_shared_by_materials();
+        assert_eq!(plain.triangles, before.triangles);
     }
 
     #[test]

@@ -200,6 +200,7 @@ impl ParsedObj {
         };
         mesh.materials.clone_from(&self.materials);
         mesh.triangle_materials.clone_from(&self.triangle_materials);
+        mesh.split_vertices_shared_by_materials();
         mesh.textures.clone_from(&self.textures);
         warnings.extend(self.material_warnings.iter().cloned());
         LoadedMesh {

@@ -195,7 +195,9 @@ fn build(
 }
 
 /// Lights the vertices of Gouraud objects that `seen` marks, each once, with the material of
-/// the first triangle that uses it; the other vertices get a zero colour nothing reads. One
+/// the triangles that use it (loaders give every vertex one material:
+/// [`Mesh::split_vertices_shared_by_materials`](crate::mesh::Mesh::split_vertices_shared_by_materials));
+/// the other vertices get a zero colour nothing reads. One
 /// parallel pass over the whole vertex array, so many small objects still fill every core.
 fn light_gouraud_vertices(frame: &mut Frame, scene: &Scene, placed: &[PlacedObject], seen: &[AtomicBool]) {
     // Per object whose triangles carry the mesh's materials: each vertex's material.

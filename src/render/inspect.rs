@@ -667,9 +667,6 @@ mod tests {
     /// vertex is shared by triangles of both: each triangle's vertices are lit with its own
     /// material, and the parts still sum to the frame's pixel bit for bit.
     #[test]
-    #[ignore = "fails: the frame's Gouraud colour of a triangle whose vertices are shared with \
-                triangles of another material differs from this breakdown, which lights every \
-                vertex with the triangle's own material (issue 23, open)"]
     fn gouraud_vertices_shared_by_triangles_of_different_materials_sum_to_the_pixel() {
         let folder = tempfile::tempdir().unwrap();
         let mut obj = String::from("mtllib two.mtl\n");
