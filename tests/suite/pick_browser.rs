@@ -53,11 +53,9 @@ fn click(browser: &mut Browser, state: &Value, (x, y): (u32, u32)) {
     }
 }
 
-#[test]
-fn clicking_a_pixel_shows_its_object_with_a_link_to_its_line_and_highlights_it() {
-    let Some(chromium) = chromium_or_skip("pick_browser") else {
-        return;
-    };
+/// `watch --serve` on [`SCENE`] in a new folder, its first image written, and Chromium on its
+/// preview page.
+fn open_preview_of_the_scene(chromium: &std::path::Path) -> (SceneFolder, WatchProcess, Browser) {
     let folder = SceneFolder::new();
     folder.write("scene.ron", SCENE);
     let watch = WatchProcess::start(
@@ -66,7 +64,16 @@ fn clicking_a_pixel_shows_its_object_with_a_link_to_its_line_and_highlights_it()
     );
     let port = preview_port(&watch);
     wait_for("the first image", || watch.output(), || folder.image());
-    let mut browser = Browser::open(&chromium, &format!("http://127.0.0.1:{port}/"));
+    let browser = Browser::open(chromium, &format!("http://127.0.0.1:{port}/"));
+    (folder, watch, browser)
+}
+
+#[test]
+fn clicking_a_pixel_shows_its_object_with_a_link_to_its_line_and_highlights_it() {
+    let Some(chromium) = chromium_or_skip("pick_browser") else {
+        return;
+    };
+    let (folder, watch, mut browser) = open_preview_of_the_scene(&chromium);
     let state = browser.wait_for_page(PROBE, "the image", &watch, |state| state["state"] == "ok");
 
     // The ball's centre: one unit left of the image's centre, 6 units away with a 40° field of view.
@@ -125,6 +132,7 @@ const LAYOUT: &str = r#"(() => {
     page: document.documentElement.scrollWidth,
     image: rect(document.getElementById("view")),
     panel: rect(panel),
+    clipped: panel.scrollWidth > panel.clientWidth,
     sumRow: panel.querySelector("tr.sum td")?.textContent ?? null,
     shownRow: panel.querySelector("tr.shown td")?.textContent ?? null,
     pixelSum: panel.querySelector("p.pixel-sum")?.textContent ?? null,
@@ -136,15 +144,7 @@ fn the_panel_fits_small_windows_beside_or_below_the_image_and_says_what_its_sums
     let Some(chromium) = chromium_or_skip("pick_browser") else {
         return;
     };
-    let folder = SceneFolder::new();
-    folder.write("scene.ron", SCENE);
-    let watch = WatchProcess::start(
-        &folder.path,
-        &["scene.ron", "-o", "out.png", "--serve", "--port", "0"],
-    );
-    let port = preview_port(&watch);
-    wait_for("the first image", || watch.output(), || folder.image());
-    let mut browser = Browser::open(&chromium, &format!("http://127.0.0.1:{port}/"));
+    let (_folder, watch, mut browser) = open_preview_of_the_scene(&chromium);
     for (width, height) in [(640, 420), (1024, 768)] {
         browser.call(
             "Emulation.setDeviceMetricsOverride",
@@ -173,6 +173,10 @@ fn the_panel_fits_small_windows_beside_or_below_the_image_and_says_what_its_sums
             get("/panel/bottom") - get("/panel/top") <= f64::from(height),
             "{layout}"
         );
+        if width >= 1024 {
+            // Room for the whole lighting table beside the image: none of it hidden.
+            assert_eq!(layout["clipped"], false, "{layout}");
+        }
         assert_eq!(layout["sumRow"], "sum of the lights", "{layout}");
         assert!(
             layout["pixelSum"].as_str().unwrap().contains("before clamping"),

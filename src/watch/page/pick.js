@@ -15,9 +15,10 @@
     #pick-mask[hidden], #pick-marker[hidden], #pick-panel[hidden] { display: none; }
     #pick-marker { position: absolute; width: 9px; height: 9px; margin: -5px 0 0 -5px; pointer-events: none;
       border: 1px solid #fff; outline: 1px solid #000; }
-    /* Beside the image when the window is wide enough, below it otherwise: never over it. */
+    /* Beside the image when the window is wide enough, below it otherwise: never over it. As
+       wide as its lighting table where the window allows, scrolling inside where it does not. */
     #pick-panel { display: inline-block; vertical-align: top; margin: 12px 12px 12px 0;
-      width: min(500px, calc(100vw - 24px)); box-sizing: border-box; padding: 10px 12px;
+      width: max-content; max-width: min(820px, calc(100vw - 24px)); box-sizing: border-box; padding: 10px 12px;
       max-height: calc(100vh - 24px); overflow: auto;
       background: #252526; color: #ddd; border: 1px solid #444; border-radius: 4px;
       font: 12px/1.4 system-ui, sans-serif; }
