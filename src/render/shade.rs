@@ -254,14 +254,13 @@ pub(crate) fn pixel_shading_points(visibility: &Visibility, x: u32, y: u32) -> V
     let mut points = vec![ShadingPoint::default(); pixel_count * samples];
     let mut pixel_start = vec![0; pixel_count + 1];
     let mut triangle_start = vec![0; visibility.raster_ids.len() + 2];
-    let find = match samples {
-        2 => find_points::<2>,
-        4 => find_points::<4>,
-        8 => find_points::<8>,
-        16 => find_points::<16>,
-        _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
-    };
-    let point_count = find(visibility, &mut points, &mut pixel_start, &mut triangle_start);
+    let point_count = find_points_of_pattern(
+        samples,
+        visibility,
+        &mut points,
+        &mut pixel_start,
+        &mut triangle_start,
+    );
     pixel_start[pixel_count] = point_count as u32;
     points[pixel_start[pixel] as usize..pixel_start[pixel + 1] as usize]
         .iter()
@@ -452,14 +451,7 @@ fn shade_multisampled<'f>(
     pixel_start.resize(pixel_count + 1, 0);
     triangle_start.clear();
     triangle_start.resize(count + 2, 0);
-    let find = match samples {
-        2 => find_points::<2>,
-        4 => find_points::<4>,
-        8 => find_points::<8>,
-        16 => find_points::<16>,
-        _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
-    };
-    let point_count = find(visibility, points, pixel_start, triangle_start);
+    let point_count = find_points_of_pattern(samples, visibility, points, pixel_start, triangle_start);
     pixel_start[pixel_count] = point_count as u32;
     let points = &points[..point_count];
 
@@ -589,6 +581,24 @@ fn shade_multisampled<'f>(
         }
     }
     points.len()
+}
+
+/// [`find_points`] for the tile's pattern of `samples` samples a pixel.
+fn find_points_of_pattern(
+    samples: usize,
+    visibility: &Visibility,
+    points: &mut [ShadingPoint],
+    pixel_start: &mut [u32],
+    triangle_start: &mut [u32],
+) -> usize {
+    let find = match samples {
+        2 => find_points::<2>,
+        4 => find_points::<4>,
+        8 => find_points::<8>,
+        16 => find_points::<16>,
+        _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
+    };
+    find(visibility, points, pixel_start, triangle_start)
 }
 
 /// The first pass of [`shade_multisampled`] for `S` samples per pixel (a constant, so that the
