@@ -345,9 +345,9 @@ pub fn render_scene(data: &[u8]) {
         debug_view,
     };
     let (framebuffer, _) = render(&loaded.scene, &options);
-    let pixels = framebuffer.width as usize * framebuffer.height as usize;
-    assert_eq!(framebuffer.color.len(), pixels);
-    for (i, color) in framebuffer.color.iter().enumerate() {
+    let pixels = framebuffer.width() as usize * framebuffer.height() as usize;
+    assert_eq!(framebuffer.to_colors().len(), pixels);
+    for (i, color) in framebuffer.to_colors().iter().enumerate() {
         assert!(
             color.is_finite() && color.min_element() >= 0.0,
             "pixel {i} is {color} in the scene\n{scene}"

@@ -84,7 +84,7 @@ pub fn compare(reference: &FrameBuffer, test: &FrameBuffer) -> Option<ErrorMetri
 
 /// [`compare`] over the pixels `compared` selects.
 pub fn compare_over(reference: &FrameBuffer, test: &FrameBuffer, compared: Compared) -> Option<ErrorMetrics> {
-    if (reference.width, reference.height) != (test.width, test.height) {
+    if (reference.width(), reference.height()) != (test.width(), test.height()) {
         return None;
     }
     let quantize = |c: glam::Vec3| {
@@ -101,23 +101,21 @@ pub fn compare_over(reference: &FrameBuffer, test: &FrameBuffer, compared: Compa
     let (mut over_2, mut over_8) = (0usize, 0usize);
     let (mut expected_peak, mut actual_peak) = (0u32, 0u32);
     let mask: Vec<bool> = reference
-        .covered
-        .iter()
-        .zip(&test.covered)
-        .map(|(&a, &b)| match compared {
+        .coverage()
+        .zip(test.coverage())
+        .map(|(a, b)| match compared {
             Compared::EitherCovered => a || b,
             Compared::BothCovered => a && b,
         })
         .collect();
     for ((expected, actual), _) in reference
-        .color
-        .iter()
-        .zip(&test.color)
+        .colors()
+        .zip(test.colors())
         .zip(&mask)
         .filter(|(_, compared)| **compared)
     {
         pixels += 1;
-        let (expected, actual) = (quantize(*expected), quantize(*actual));
+        let (expected, actual) = (quantize(expected), quantize(actual));
         let brightness = |c: [u8; 3]| c.iter().map(|&v| u32::from(v)).sum::<u32>();
         expected_peak = expected_peak.max(brightness(expected));
         actual_peak = actual_peak.max(brightness(actual));
@@ -155,8 +153,8 @@ pub fn compare_over(reference: &FrameBuffer, test: &FrameBuffer, compared: Compa
 /// as written), when the `flip` feature is built and the sizes agree.
 #[cfg(feature = "flip")]
 pub fn flip_map(reference: &FrameBuffer, test: &FrameBuffer) -> Option<Vec<f32>> {
-    let (width, height) = (reference.width, reference.height);
-    if (width, height) != (test.width, test.height) || width == 0 || height == 0 {
+    let (width, height) = (reference.width(), reference.height());
+    if (width, height) != (test.width(), test.height()) || width == 0 || height == 0 {
         return None;
     }
     let expected = crate::output::to_rgb8(reference);
@@ -208,12 +206,14 @@ mod tests {
 
     fn image(width: u32, height: u32, color: Vec3, covered: bool) -> FrameBuffer {
         let n = (width * height) as usize;
-        FrameBuffer {
-            width,
-            height,
-            color: vec![color; n],
-            covered: vec![covered; n],
-        }
+        FrameBuffer::from_pixels(width, height, vec![color; n], vec![covered; n])
+    }
+
+    /// `frame` with its pixels changed by `edit` (colours, coverage).
+    fn edited(frame: &FrameBuffer, edit: impl FnOnce(&mut [Vec3], &mut [bool])) -> FrameBuffer {
+        let (mut colors, mut coverage) = (frame.to_colors(), frame.to_coverage());
+        edit(&mut colors, &mut coverage);
+        FrameBuffer::from_pixels(frame.width(), frame.height(), colors, coverage)
     }
 
     #[test]
@@ -236,8 +236,7 @@ mod tests {
     #[test]
     fn one_wrong_pixel_by_hand() {
         let reference = image(4, 4, Vec3::ZERO, true);
-        let mut test = reference.clone();
-        test.color[5] = Vec3::new(0.2, 0.0, 0.0); // 0.2·255 = 51
+        let test = edited(&reference, |colors, _| colors[5] = Vec3::new(0.2, 0.0, 0.0)); // 0.2·255 = 51
         let m = compare(&reference, &test).unwrap();
         assert_eq!(m.max_abs, [51, 0, 0]);
         assert!((m.mean_abs[0] - 51.0 / 16.0).abs() < 1e-12);
@@ -256,20 +255,21 @@ mod tests {
     /// compared, and uncovered pixels do not dilute the mean.
     #[test]
     fn only_covered_pixels_count() {
-        let mut reference = image(4, 1, Vec3::ZERO, false);
-        let mut test = reference.clone();
-        reference.covered[0] = true; // geometry in the reference only
-        test.color[0] = Vec3::splat(10.0 / 255.0);
-        test.covered[1] = true; // geometry in the test only, same colour
-        test.color[3] = Vec3::ONE; // background differs, but nobody covers it
+        let background = image(4, 1, Vec3::ZERO, false);
+        let reference = edited(&background, |_, covered| covered[0] = true); // geometry in the reference only
+        let test = edited(&background, |colors, covered| {
+            colors[0] = Vec3::splat(10.0 / 255.0);
+            covered[1] = true; // geometry in the test only, same colour
+            colors[3] = Vec3::ONE; // background differs, but nobody covers it
+        });
         let m = compare(&reference, &test).unwrap();
         assert_eq!(m.pixels, 2);
         assert_eq!(m.max_abs, [10; 3]);
         assert_eq!(m.mean_abs, [5.0; 3]);
         assert_eq!((m.share_over_2, m.share_over_8), (0.5, 0.5));
         // Covered in both: pixel 2 only, where the two agree.
-        reference.covered[2] = true;
-        test.covered[2] = true;
+        let reference = edited(&reference, |_, covered| covered[2] = true);
+        let test = edited(&test, |_, covered| covered[2] = true);
         let both = compare_over(&reference, &test, Compared::BothCovered).unwrap();
         assert_eq!((both.pixels, both.max_abs), (1, [0; 3]));
     }
@@ -302,15 +302,11 @@ mod tests {
         let large = compare(&reference, &very).unwrap().flip.unwrap();
         assert!(small.mean > 0.0 && small.mean < large.mean, "{small:?} {large:?}");
         assert!(large.percentile_99 >= large.mean);
-        let mut half = reference.clone();
-        for i in 0..512 {
-            half.covered[i] = false;
-        }
-        let mut half_test = very.clone();
-        half_test.covered = half.covered.clone();
-        for i in 512..1024 {
-            half_test.color[i] = Vec3::splat(0.5);
-        }
+        let half = edited(&reference, |_, covered| covered[..512].fill(false));
+        let half_test = edited(&very, |colors, covered| {
+            covered[..512].fill(false);
+            colors[512..].fill(Vec3::splat(0.5));
+        });
         // The covered half is identical, so, away from the boundary, FLIP is low there.
         let pooled = compare(&half, &half_test).unwrap().flip.unwrap();
         assert!(pooled.mean < large.mean / 2.0, "{pooled:?} against {large:?}");

@@ -25,7 +25,7 @@ use image::{ImageEncoder, RgbImage};
 
 use rayon::prelude::*;
 
-use crate::render::FrameBuffer;
+use crate::render::{FrameBuffer, RowSpan};
 
 /// A problem writing an output file (not the user's scene: the file system's).
 #[derive(Debug, thiserror::Error)]
@@ -109,28 +109,74 @@ pub fn to_rgb8(framebuffer: &FrameBuffer) -> RgbImage {
 }
 
 pub fn to_rgb8_encoded(framebuffer: &FrameBuffer, encoding: Encoding) -> RgbImage {
-    let mut bytes = vec![0u8; framebuffer.color.len() * 3];
+    let (width, height) = (framebuffer.width(), framebuffer.height());
+    let mut bytes = vec![0u8; width as usize * height as usize * 3];
+    let quantize = |channel: f32| match encoding {
+        Encoding::Linear => quantize_channel(channel),
+        Encoding::Srgb => quantize_channel(linear_to_srgb(channel.clamp(0.0, 1.0))),
+    };
+    let background = framebuffer.background().to_array().map(quantize);
     // Rows in parallel: each writes its own bytes, so the result does not depend on threads.
-    // The channels are one flat run of `f32`s, so the linear loop runs in SIMD lanes.
-    let row_channels = framebuffer.width.max(1) as usize * 3;
-    let channels: &[f32] = bytemuck::cast_slice(&framebuffer.color);
+    // A blank span is the background's three levels over and over; a drawn span's channels are
+    // one flat run of `f32`s, so the linear loop runs in SIMD lanes.
     bytes
-        .par_chunks_mut(row_channels)
-        .zip(channels.par_chunks(row_channels))
-        .for_each(|(levels, channels)| match encoding {
-            Encoding::Linear => {
-                for (level, &channel) in levels.iter_mut().zip(channels) {
-                    *level = quantize_channel(channel);
-                }
-            }
-            Encoding::Srgb => {
-                for (level, &channel) in levels.iter_mut().zip(channels) {
-                    *level = quantize_channel(linear_to_srgb(channel.clamp(0.0, 1.0)));
+        .par_chunks_mut(width.max(1) as usize * 3)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let mut levels = row;
+            for span in framebuffer.row_spans(y as u32) {
+                let (span_levels, rest) = std::mem::take(&mut levels).split_at_mut(span_channels(span));
+                levels = rest;
+                match span {
+                    RowSpan::Blank(_) => {
+                        for pixel in span_levels.as_chunks_mut::<3>().0 {
+                            *pixel = background;
+                        }
+                    }
+                    RowSpan::Drawn { color, .. } => {
+                        let channels: &[f32] = bytemuck::cast_slice(color);
+                        match encoding {
+                            Encoding::Linear => {
+                                for (level, &channel) in span_levels.iter_mut().zip(channels) {
+                                    *level = quantize_channel(channel);
+                                }
+                            }
+                            Encoding::Srgb => {
+                                for (level, &channel) in span_levels.iter_mut().zip(channels) {
+                                    *level = quantize_channel(linear_to_srgb(channel.clamp(0.0, 1.0)));
+                                }
+                            }
+                        }
+                    }
                 }
             }
         });
-    RgbImage::from_raw(framebuffer.width, framebuffer.height, bytes)
-        .expect("a frame buffer holds width × height pixels")
+    RgbImage::from_raw(width, height, bytes).expect("a frame buffer holds width × height pixels")
+}
+
+/// The number of channels (three a pixel) of `span`.
+fn span_channels(span: RowSpan) -> usize {
+    3 * match span {
+        RowSpan::Blank(pixels) => pixels,
+        RowSpan::Drawn { color, .. } => color.len(),
+    }
+}
+
+/// The frame's linear channels, RGB a pixel, row-major: what the float formats store.
+fn linear_channels(framebuffer: &FrameBuffer) -> Vec<f32> {
+    let mut channels = Vec::with_capacity(framebuffer.width() as usize * framebuffer.height() as usize * 3);
+    let background = framebuffer.background().to_array();
+    for y in 0..framebuffer.height() {
+        for span in framebuffer.row_spans(y) {
+            match span {
+                RowSpan::Blank(pixels) => {
+                    channels.extend(std::iter::repeat_n(background, pixels).flatten());
+                }
+                RowSpan::Drawn { color, .. } => channels.extend_from_slice(bytemuck::cast_slice(color)),
+            }
+        }
+    }
+    channels
 }
 
 /// The file formats lampshade writes.
@@ -326,9 +372,12 @@ fn encode_image<W: Write + std::io::Seek>(
     match format {
         OutputFormat::Png => encode_png(writer, path, &to_rgb8_encoded(framebuffer, encoding), compression),
         OutputFormat::Exr | OutputFormat::Hdr => {
-            let floats: Vec<f32> = framebuffer.color.iter().flat_map(|c| c.to_array()).collect();
-            let image = image::Rgb32FImage::from_raw(framebuffer.width, framebuffer.height, floats)
-                .expect("a frame buffer holds width × height pixels");
+            let image = image::Rgb32FImage::from_raw(
+                framebuffer.width(),
+                framebuffer.height(),
+                linear_channels(framebuffer),
+            )
+            .expect("a frame buffer holds width × height pixels");
             let image_format = if format == OutputFormat::Exr {
                 image::ImageFormat::OpenExr
             } else {
@@ -478,12 +527,8 @@ mod tests {
     #[test]
     fn float_formats_keep_values_above_one() {
         let folder = tempfile::tempdir().unwrap();
-        let framebuffer = FrameBuffer {
-            width: 2,
-            height: 1,
-            color: vec![Vec3::new(4.0, 0.5, 0.0), Vec3::new(0.25, 1.5, 100.0)],
-            covered: vec![true, true],
-        };
+        let colors = vec![Vec3::new(4.0, 0.5, 0.0), Vec3::new(0.25, 1.5, 100.0)];
+        let framebuffer = FrameBuffer::from_pixels(2, 1, colors.clone(), vec![true, true]);
         for format in [OutputFormat::Exr, OutputFormat::Hdr] {
             let path = folder.path().join(format!("out.{}", format.extension()));
             write_image(
@@ -495,7 +540,7 @@ mod tests {
             )
             .unwrap();
             let read = image::open(&path).unwrap().to_rgb32f();
-            for (got, expected) in read.as_raw().chunks(3).zip(&framebuffer.color) {
+            for (got, expected) in read.as_raw().chunks(3).zip(&colors) {
                 // RGBE shares one exponent per pixel: 8 bits of mantissa relative to the largest
                 // channel. EXR stores f32 exactly.
                 let tolerance = expected.max_element() / 128.0;
@@ -562,12 +607,9 @@ mod tests {
         let width = 7;
         values.truncate(values.len() / (3 * width) * (3 * width));
         let color: Vec<Vec3> = values.chunks_exact(3).map(Vec3::from_slice).collect();
-        let framebuffer = FrameBuffer {
-            width: width as u32,
-            height: (color.len() / width) as u32,
-            covered: vec![true; color.len()],
-            color,
-        };
+        let height = (color.len() / width) as u32;
+        let framebuffer =
+            FrameBuffer::from_pixels(width as u32, height, color.clone(), vec![true; color.len()]);
         let image = to_rgb8(&framebuffer);
         for (value, level) in values.iter().zip(image.as_raw()) {
             assert_eq!(
@@ -601,14 +643,41 @@ mod tests {
     fn png_round_trip() {
         let folder = tempfile::tempdir().unwrap();
         let path = folder.path().join("out.png");
-        let framebuffer = FrameBuffer {
-            width: 2,
-            height: 1,
-            color: vec![Vec3::new(1.0, 0.5, 0.0), Vec3::new(2.0, -1.0, 0.25)],
-            covered: vec![true, true],
-        };
+        let colors = vec![Vec3::new(1.0, 0.5, 0.0), Vec3::new(2.0, -1.0, 0.25)];
+        let framebuffer = FrameBuffer::from_pixels(2, 1, colors, vec![true, true]);
         write_png(&path, &to_rgb8(&framebuffer), PngCompression::Fast).unwrap();
         let read = image::open(&path).unwrap().to_rgb8();
         assert_eq!(read.as_raw(), &[255, 128, 0, 255, 0, 64]);
+    }
+
+    /// A frame with blank tiles, over stale pixels, quantises (linear and sRGB) and goes to the
+    /// float formats exactly as the same image stored pixel by pixel.
+    #[test]
+    fn blank_spans_give_what_the_dense_frame_gives() {
+        // 200×130: partial tiles at the right and the bottom; the background rounds at a
+        // level boundary's neighbour and is above 1 in one channel.
+        let background = Vec3::new(0.501 / 255.0, 0.3, 1.5);
+        let framebuffer = crate::render::framebuffer::tests::frame_with_blank_tiles(200, 130, background);
+        assert!(framebuffer.blank_tiles() > 0 && framebuffer.blank_tiles() < 12);
+        let dense = FrameBuffer::from_pixels(200, 130, framebuffer.to_colors(), framebuffer.to_coverage());
+        for encoding in [Encoding::Linear, Encoding::Srgb] {
+            let image = to_rgb8_encoded(&framebuffer, encoding);
+            assert_eq!(image, to_rgb8_encoded(&dense, encoding), "{encoding:?}");
+            let quantize = |channel: f32| match encoding {
+                Encoding::Linear => quantize_channel(channel),
+                Encoding::Srgb => quantize_channel(linear_to_srgb(channel.clamp(0.0, 1.0))),
+            };
+            for (x, y, pixel) in image.enumerate_pixels() {
+                assert_eq!(
+                    pixel.0,
+                    framebuffer.pixel(x, y).to_array().map(quantize),
+                    "({x}, {y})"
+                );
+            }
+        }
+        let channels = linear_channels(&framebuffer);
+        assert_eq!(channels, linear_channels(&dense));
+        let expected: Vec<f32> = framebuffer.colors().flat_map(|c| c.to_array()).collect();
+        assert_eq!(channels, expected);
     }
 }

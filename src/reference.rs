@@ -766,12 +766,8 @@ fn render_in_current_pool(scene: &Scene, options: &ReferenceOptions) -> Referenc
             pixels
         })
         .collect();
-    let mut framebuffer = FrameBuffer {
-        width,
-        height,
-        color: vec![Vec3::ZERO; (width * height) as usize],
-        covered: vec![false; (width * height) as usize],
-    };
+    let mut colors = vec![Vec3::ZERO; (width * height) as usize];
+    let mut coverage = vec![false; (width * height) as usize];
     let mut features = if options.features {
         vec![PixelFeatures::default(); (width * height) as usize]
     } else {
@@ -784,15 +780,15 @@ fn render_in_current_pool(scene: &Scene, options: &ReferenceOptions) -> Referenc
         for (offset, (color, covered, seen)) in pixels.into_iter().enumerate() {
             let (x, y) = (x0 + offset as u32 % tile_width, y0 + offset as u32 / tile_width);
             let index = (y * width + x) as usize;
-            framebuffer.color[index] = color;
-            framebuffer.covered[index] = covered;
+            colors[index] = color;
+            coverage[index] = covered;
             if let Some(slot) = features.get_mut(index) {
                 *slot = seen;
             }
         }
     }
     Reference {
-        framebuffer,
+        framebuffer: FrameBuffer::from_pixels(width, height, colors, coverage),
         notes,
         build_time,
         cast_time: started.elapsed(),
@@ -930,11 +926,7 @@ mod tests {
                 let x = (f64::from(px) + 0.5) * 0.04 - 1.28;
                 let y = 1.28 - (f64::from(py) + 0.5) * 0.04;
                 let inside = x * x + y * y <= 1.0;
-                assert_eq!(
-                    frame.covered[(py * 64 + px) as usize],
-                    inside,
-                    "pixel ({px}, {py})"
-                );
+                assert_eq!(frame.is_covered(px, py), inside, "pixel ({px}, {py})");
             }
         }
     }
@@ -1000,12 +992,12 @@ mod tests {
         // column 3 those left of (or on) it.
         let offsets = SamplePattern::new(16).unwrap().offsets();
         let share = |keep: fn(i32) -> bool| offsets.iter().filter(|&&(x, _)| keep(x)).count() as f32 / 16.0;
-        let row = &frame.color[4..8];
+        let row = &frame.to_colors()[4..8];
         assert_eq!(row[0], Vec3::ZERO);
         assert_eq!(row[1], Vec3::splat(share(|x| x >= 0)), "{row:?}");
         assert_eq!(row[2], Vec3::ONE);
         assert_eq!(row[3], Vec3::splat(share(|x| x <= 0)), "{row:?}");
-        assert_eq!(frame.covered[4..8], [false, true, true, true]);
+        assert_eq!(frame.to_coverage()[4..8], [false, true, true, true]);
     }
 
     /// Back faces follow the object's mode: from inside a sphere every hit is a back face.
@@ -1024,12 +1016,16 @@ mod tests {
         let centre = 4 * 8 + 4;
         // ReverseLit: the inside is lit by the light at the eye (normal flipped towards it).
         let reverse = frame_for("ReverseLit");
-        assert!(reverse.color[centre].x > 0.1 + 0.4, "{:?}", reverse.color[centre]);
+        assert!(
+            reverse.to_colors()[centre].x > 0.1 + 0.4,
+            "{:?}",
+            reverse.to_colors()[centre]
+        );
         // Lit: the outward normal faces away from the light: ambient only. Unlit: ambient only.
-        assert!((frame_for("Lit").color[centre].x - 0.1).abs() < 1e-6);
-        assert!((frame_for("Unlit").color[centre].x - 0.1).abs() < 1e-6);
+        assert!((frame_for("Lit").to_colors()[centre].x - 0.1).abs() < 1e-6);
+        assert!((frame_for("Unlit").to_colors()[centre].x - 0.1).abs() < 1e-6);
         let culled = frame_for("Cull");
-        assert!(culled.covered.iter().all(|&c| !c));
+        assert!(culled.to_coverage().iter().all(|&c| !c));
     }
 
     fn options(geometry: ReferenceGeometry) -> ReferenceOptions {
@@ -1042,10 +1038,8 @@ mod tests {
 
     /// Whether the pixel and its eight neighbours are all covered: away from a silhouette.
     fn inside(frame: &FrameBuffer, x: u32, y: u32) -> bool {
-        (y.saturating_sub(1)..=(y + 1).min(frame.height - 1)).all(|y| {
-            (x.saturating_sub(1)..=(x + 1).min(frame.width - 1))
-                .all(|x| frame.covered[(y * frame.width + x) as usize])
-        })
+        (y.saturating_sub(1)..=(y + 1).min(frame.height() - 1))
+            .all(|y| (x.saturating_sub(1)..=(x + 1).min(frame.width() - 1)).all(|x| frame.is_covered(x, y)))
     }
 
     /// The ray-cast tessellation of `Sphere(512)` (`--reference=mesh`) agrees with the exact
@@ -1065,11 +1059,10 @@ mod tests {
         assert!(exact.notes.is_empty() && mesh.notes.is_empty());
         let (exact, mesh) = (exact.framebuffer, mesh.framebuffer);
         let (mut worst, mut compared) = (0.0f32, 0);
-        for y in 0..exact.height {
-            for x in 0..exact.width {
+        for y in 0..exact.height() {
+            for x in 0..exact.width() {
                 if inside(&exact, x, y) && inside(&mesh, x, y) {
-                    let index = (y * exact.width + x) as usize;
-                    worst = worst.max((exact.color[index] - mesh.color[index]).abs().max_element());
+                    worst = worst.max((exact.pixel(x, y) - mesh.pixel(x, y)).abs().max_element());
                     compared += 1;
                 }
             }
@@ -1115,7 +1108,7 @@ mod tests {
                     for px in 0..80 {
                         let x = (f64::from(px) + 0.5) * 0.05 - 2.0;
                         let z = (f64::from(py) + 0.5) * 0.05 - 2.0;
-                        let color = frame.color[(py * 80 + px) as usize];
+                        let color = frame.pixel(px, py);
                         let what = format!("{light}, {geometry:?}, pixel ({px}, {py})");
                         if x.abs() < 0.5 && z.abs() < 0.5 {
                             assert_eq!(color, Vec3::new(0.0, 1.0, 0.0), "{what}");
@@ -1160,8 +1153,12 @@ mod tests {
             let reference = render_reference_with(&scene, options);
             assert_eq!(reference.notes.len(), 1, "{:?}", reference.notes);
             let frame = reference.framebuffer;
-            assert!(frame.covered.iter().all(|&c| c));
-            frame.color.iter().map(|c| (c.x - 0.5).abs()).fold(0.0, f32::max)
+            assert!(frame.to_coverage().iter().all(|&c| c));
+            frame
+                .to_colors()
+                .iter()
+                .map(|c| (c.x - 0.5).abs())
+                .fold(0.0, f32::max)
         };
         let footprint = worst(&ReferenceOptions::default());
         assert!(footprint < 1e-3, "{footprint}");
@@ -1216,11 +1213,11 @@ mod tests {
         // inside the plane's z ∈ [−1, 1]).
         for row in 1..3 {
             assert!(
-                (frame.color[row * 4 + 1].x - 0.5).abs() <= 1.0 / 16.0,
+                (frame.pixel(1, row).x - 0.5).abs() <= 1.0 / 16.0,
                 "{:?}",
-                frame.color
+                frame.to_colors()
             );
-            assert_eq!(frame.color[row * 4 + 2], Vec3::ONE);
+            assert_eq!(frame.pixel(2, row), Vec3::ONE);
         }
         let again = render_reference_with(
             &scene,
@@ -1230,7 +1227,11 @@ mod tests {
                 ..ReferenceOptions::default()
             },
         );
-        assert_eq!(again.framebuffer.color, frame.color, "the same on every run");
+        assert_eq!(
+            again.framebuffer.to_colors(),
+            frame.to_colors(),
+            "the same on every run"
+        );
     }
 
     /// A mesh object (a single triangle, not a primitive) is ray-cast as itself, its front
@@ -1264,8 +1265,8 @@ mod tests {
             scene.objects[0].mesh = Arc::new(triangle);
             let frame = render_reference(&scene, Some(1));
             let (raster, _) = render(&scene, &RenderOptions::default());
-            assert_eq!(frame.covered[4 * 8 + 4], front, "{transform}");
-            assert_eq!(frame.covered, raster.covered, "{transform}");
+            assert_eq!(frame.to_coverage()[4 * 8 + 4], front, "{transform}");
+            assert_eq!(frame.to_coverage(), raster.to_coverage(), "{transform}");
         }
     }
 }

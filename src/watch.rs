@@ -452,8 +452,8 @@ impl WatchSession {
             trigger.describe(),
             self.output.display(),
             thousands(stats.triangles),
-            framebuffer.width,
-            framebuffer.height,
+            framebuffer.width(),
+            framebuffer.height(),
             milliseconds(*load_time),
             shadow_maps_part(stats),
             milliseconds(stats.geometry),
@@ -475,8 +475,8 @@ impl WatchSession {
                         "#{} · {} triangles · {}×{} px · rendered in {} · {since} to image {}",
                         self.builds,
                         thousands(stats.triangles),
-                        framebuffer.width,
-                        framebuffer.height,
+                        framebuffer.width(),
+                        framebuffer.height(),
                         milliseconds(render_time),
                         milliseconds(latency),
                     );
@@ -489,8 +489,8 @@ impl WatchSession {
                     };
                     let view = self.view.summary(
                         &written.rendered.camera,
-                        framebuffer.width,
-                        framebuffer.height,
+                        framebuffer.width(),
+                        framebuffer.height(),
                         false,
                     );
                     preview.publish_image(png, summary, view, Arc::new(origin));

@@ -65,9 +65,10 @@ fn luma(color: glam::Vec3) -> u8 {
 impl Regions {
     /// The regions of `reference`, whose samples saw `features` (one per pixel).
     pub fn find(reference: &FrameBuffer, features: &[PixelFeatures]) -> Regions {
-        let (width, height) = (reference.width, reference.height);
+        let (width, height) = (reference.width(), reference.height());
         let pixel_count = (width * height) as usize;
         assert_eq!(features.len(), pixel_count, "one PixelFeatures per pixel");
+        let covered = reference.to_coverage();
         let neighbours = |index: usize| {
             let (x, y) = ((index as u32 % width) as i64, (index as u32 / width) as i64);
             (-1..=1i64)
@@ -82,20 +83,20 @@ impl Regions {
                 let (shadowed, lit) = neighbours(index).fold((0u64, 0u64), |(s, l), n| {
                     (s | features[n].shadowed, l | features[n].lit)
                 });
-                reference.covered[index] && shadowed & lit != 0
+                covered[index] && shadowed & lit != 0
             })
             .collect();
         let brightest = features.iter().map(|f| f.specular).fold(0.0f32, f32::max);
         let highlight = features
             .iter()
-            .zip(&reference.covered)
+            .zip(&covered)
             .map(|(f, &covered)| {
                 covered
                     && brightest > 0.0
                     && f64::from(f.specular) >= (1.0 - HIGHLIGHT_SHARE) * f64::from(brightest)
             })
             .collect();
-        let lumas: Vec<u8> = reference.color.iter().map(|&c| luma(c)).collect();
+        let lumas: Vec<u8> = reference.colors().map(luma).collect();
         let texture_detail = (0..pixel_count)
             .map(|index| {
                 if shadow_boundary[index] {
@@ -104,7 +105,7 @@ impl Regions {
                 let mut count = 0;
                 let (mut low, mut high) = (u8::MAX, u8::MIN);
                 for n in neighbours(index) {
-                    if !(reference.covered[n] && features[n].textured) {
+                    if !(covered[n] && features[n].textured) {
                         return false;
                     }
                     count += 1;
@@ -131,13 +132,14 @@ impl Regions {
         test: &FrameBuffer,
         flip: Option<&[f32]>,
     ) -> WhereItMatters {
+        let (expected_colors, actual_colors) = (reference.to_colors(), test.to_colors());
         let error_over = |mask: &[bool]| {
             let mut region = RegionError::default();
             let mut sum_abs = 0u64;
             let mut sum_flip = 0.0f64;
             for (index, _) in mask.iter().enumerate().filter(|(_, inside)| **inside) {
                 region.pixels += 1;
-                let (expected, actual) = (reference.color[index], test.color[index]);
+                let (expected, actual) = (expected_colors[index], actual_colors[index]);
                 for channel in 0..3 {
                     sum_abs += u64::from(
                         quantize_channel(expected[channel]).abs_diff(quantize_channel(actual[channel])),
@@ -240,12 +242,18 @@ mod tests {
         assert!(!regions.highlight.contains(&true));
         assert!(!regions.texture_detail.contains(&true));
         // The error there: an image dark on the boundary only errs on the boundary.
-        let mut test = reference.clone();
+        let mut colors = reference.to_colors();
         for (index, &edge) in regions.shadow_boundary.iter().enumerate() {
             if edge {
-                test.color[index] = glam::Vec3::ZERO;
+                colors[index] = glam::Vec3::ZERO;
             }
         }
+        let test = FrameBuffer::from_pixels(
+            reference.width(),
+            reference.height(),
+            colors,
+            reference.to_coverage(),
+        );
         let errors = regions.errors(&reference, &test, None);
         assert_eq!(errors.shadow_boundary.pixels, boundary_pixels);
         assert!(errors.shadow_boundary.mean_abs > 20.0, "{errors:?}");

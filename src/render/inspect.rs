@@ -637,7 +637,7 @@ mod tests {
             for y in (1..48).step_by(5) {
                 for x in (2..48).step_by(5) {
                     let pick = inspect_pixel(&scene, &RenderOptions::default(), x, y).unwrap();
-                    let pixel = frame.color[(y * 48 + x) as usize];
+                    let pixel = frame.pixel(x, y);
                     assert_eq!(pick.color, pixel, "{shading} ({x}, {y})");
                     let Some(surface) = pick.surfaces.first() else {
                         assert_eq!(pixel, scene.image.background);
@@ -720,7 +720,7 @@ mod tests {
         for y in (0..48).step_by(2) {
             for x in (0..48).step_by(2) {
                 let pick = inspect_pixel(&scene, &RenderOptions::default(), x, y).unwrap();
-                let pixel = frame.color[(y * 48 + x) as usize];
+                let pixel = frame.pixel(x, y);
                 assert_eq!(pick.color, pixel, "({x}, {y})");
                 let Some(surface) = pick.surfaces.first().filter(|s| s.object == 0) else {
                     continue;
@@ -756,7 +756,7 @@ mod tests {
                     sum += surface.color * surface.sample_count as f32;
                 }
                 let resolved = (sum + pick.background * pick.background_samples as f32) / 4.0;
-                let pixel = frame.color[(y * 48 + x) as usize];
+                let pixel = frame.pixel(x, y);
                 assert_eq!(pick.color, pixel, "({x}, {y})");
                 if !pick.surfaces.is_empty() {
                     assert_eq!(resolved, pixel, "({x}, {y})");
@@ -791,6 +791,9 @@ mod tests {
     fn the_object_mask_is_the_pixels_the_object_shows_in() {
         let scene = scene(SPHERE);
         let (frame, _) = render(&scene, &RenderOptions::default());
-        assert_eq!(object_mask(&scene, &RenderOptions::default(), 0), frame.covered);
+        assert_eq!(
+            object_mask(&scene, &RenderOptions::default(), 0),
+            frame.to_coverage()
+        );
     }
 }

@@ -23,6 +23,7 @@ pub mod bin;
 pub mod clip;
 pub mod depth;
 pub mod frame;
+pub mod framebuffer;
 pub mod geometry;
 pub mod inspect;
 pub mod lanes;
@@ -39,9 +40,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use glam::Vec3;
-
 use crate::scene::Scene;
+
+pub use framebuffer::{FrameBuffer, RowSpan};
 
 /// Tiles are square; 64×64 pixels keep a tile's depth, id and colour buffers (80 KiB) in L2.
 pub const TILE_SIZE: u32 = 64;
@@ -72,16 +73,6 @@ pub struct RenderOptions {
     /// Worker threads; `None` uses rayon's global pool (one per core).
     pub threads: Option<usize>,
     pub debug_view: Option<DebugView>,
-}
-
-/// The rendered image in linear RGB, not clamped, row-major from the top-left pixel.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct FrameBuffer {
-    pub width: u32,
-    pub height: u32,
-    pub color: Vec<Vec3>,
-    /// Whether any geometry covers the pixel (used by error metrics and the depth view).
-    pub covered: Vec<bool>,
 }
 
 /// What a render did and where its time went.
@@ -230,28 +221,15 @@ fn render_frame(
     // Each band of tile rows is rendered straight into its own slice of the frame, tile after
     // tile. No tile image is kept and nothing is copied afterwards.
     let started = Instant::now();
-    let (width, height) = (tiles.width, tiles.height);
-    let pixel_count = width as usize * height as usize;
-    // The tiles write every pixel, so a buffer of the right size is reused as it is.
-    if (framebuffer.width, framebuffer.height) != (width, height) || framebuffer.color.len() != pixel_count {
-        *framebuffer = FrameBuffer {
-            width,
-            height,
-            color: vec![Vec3::ZERO; pixel_count],
-            covered: vec![false; pixel_count],
-        };
-    }
-    let band = TILE_SIZE as usize * width as usize;
+    framebuffer.start_frame(tiles.width, tiles.height, scene.image.background);
     progress.start_tiles(tiles.columns as usize * tiles.rows as usize);
     // Debug builds only: a seam that makes the worker threads panic, for the end-to-end test of
     // how a bug is reported (exit code 101, nothing written; tests/suite/robustness.rs).
     #[cfg(debug_assertions)]
     let simulate_panic = std::env::var_os("LAMPSHADE_SIMULATE_PANIC").is_some();
-    let bands: Vec<Mutex<Option<BandTarget>>> = framebuffer
-        .color
-        .chunks_mut(band)
-        .zip(framebuffer.covered.chunks_mut(band))
-        .map(|(color, covered)| Mutex::new(Some((color, covered))))
+    let bands: Vec<Mutex<Option<framebuffer::Band>>> = framebuffer
+        .bands_mut()
+        .map(|band| Mutex::new(Some(band)))
         .collect();
     let queue = BandQueue::new(&frame, bands.len());
     let band_results: Vec<Mutex<BandTimes>> = bands.iter().map(|_| Mutex::default()).collect();
@@ -266,21 +244,22 @@ fn render_frame(
             if simulate_panic {
                 panic!("simulated bug in band {tile_row} (LAMPSHADE_SIMULATE_PANIC)");
             }
-            let Some((color, covered)) = lock(&bands[tile_row]).take() else {
+            let Some(band) = lock(&bands[tile_row]).take() else {
                 continue; // the queue hands out each band once
             };
             let mut target = shade::TileTarget {
-                color,
-                covered,
-                stride: width as usize,
+                color: band.color,
+                covered: band.covered,
+                stride: tiles.width as usize,
             };
             let mut times = BandTimes::default();
             for column in 0..tiles.columns as usize {
                 let index = tile_row * tiles.columns as usize + column;
                 let rect = tiles.rect(index);
                 let raster_started = Instant::now();
-                // A tile no triangle reaches is background: its visibility buffers (128 KiB at
-                // four samples) are neither cleared nor read.
+                // A tile no triangle reaches stays blank (the frame buffer's flag, set for every
+                // tile when the frame starts): none of its pixels is written, and its visibility
+                // buffers (128 KiB at four samples) are neither cleared nor read.
                 let empty = frame
                     .raster
                     .iter()
@@ -289,9 +268,8 @@ fn render_frame(
                     visibility.rasterize(rect, pattern, &frame.raster, index);
                 }
                 let shade_started = Instant::now();
-                if empty {
-                    shade::fill_background(rect, scene.image.background, &mut target);
-                } else {
+                if !empty {
+                    band.blank[column] = false;
                     times.shaded += shade::shade_tile(
                         &frame,
                         &visibility,
@@ -331,7 +309,7 @@ fn render_frame(
     let shade_thread_time = band_results.iter().map(|band| band.shade).sum();
     let shaded_pixels = band_results.iter().map(|band| band.shaded).sum();
     if options.debug_view == Some(DebugView::Depth) {
-        normalize_depth(framebuffer);
+        framebuffer.normalize_depth();
     }
     let stats = RenderStats {
         triangles: scene.triangle_count(),
@@ -348,9 +326,6 @@ fn render_frame(
     };
     (stats, frame)
 }
-
-/// One band of tile rows of the frame: its colour and coverage rows.
-type BandTarget<'a> = (&'a mut [Vec3], &'a mut [bool]);
 
 /// What rendering one band took, summed over its tiles.
 #[derive(Debug, Default, Clone, Copy)]
@@ -404,29 +379,4 @@ impl BandQueue {
 /// re-raised by the scope anyway).
 fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
-}
-
-/// The depth view's shader wrote view distances; map them so the nearest covered pixel is white
-/// and the farthest black (a fixed range would show most scenes as one flat grey).
-fn normalize_depth(framebuffer: &mut FrameBuffer) {
-    let distances = framebuffer
-        .color
-        .iter()
-        .zip(&framebuffer.covered)
-        .filter(|&(_, &covered)| covered)
-        .map(|(color, _)| color.x);
-    let (nearest, farthest) = distances.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| {
-        (lo.min(d), hi.max(d))
-    });
-    let range = farthest - nearest;
-    for (color, &covered) in framebuffer.color.iter_mut().zip(&framebuffer.covered) {
-        if covered {
-            let shade = if range > 0.0 {
-                1.0 - (color.x - nearest) / range
-            } else {
-                1.0
-            };
-            *color = Vec3::splat(shade);
-        }
-    }
 }

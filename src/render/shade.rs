@@ -395,8 +395,9 @@ pub fn shade_tile<'f>(
 }
 
 /// Writes the pixels `rect` of `target` as a tile no triangle reaches: the background,
-/// uncovered (what [`shade_tile`] writes for such a tile, without its buffers).
-pub fn fill_background(rect: PixelRect, background: Vec3, target: &mut TileTarget) {
+/// uncovered. Only a lone tile's shading (the inspector's) writes such a tile: the frame leaves
+/// it blank in the frame buffer, unwritten.
+fn fill_background(rect: PixelRect, background: Vec3, target: &mut TileTarget) {
     let tile_width = rect.width() as usize;
     for row in 0..rect.height() as usize {
         let row_start = row * target.stride + rect.x0 as usize;

@@ -1951,6 +1951,6 @@ pub(crate) mod tests {
         }
         let tinted = scene;
         let (image, _) = render(&tinted, &RenderOptions::default());
-        assert!(image.covered.iter().any(|&c| c));
+        assert!(image.to_coverage().iter().any(|&c| c));
     }
 }

@@ -835,8 +835,8 @@ pub(crate) mod tests {
             let (image, _) = crate::render::render(&scene, &Default::default());
             let frame = crate::render::geometry::build_frame(&scene, SamplePattern::SINGLE, None, every);
             let width = scene.image.width as usize;
-            let mut color = vec![Vec3::NAN; image.color.len()];
-            let mut covered = vec![false; image.color.len()];
+            let mut color = vec![Vec3::NAN; image.to_colors().len()];
+            let mut covered = vec![false; image.to_colors().len()];
             let mut scratch = TileScratch::default();
             for tile in 0..frame.tiles.count() {
                 let rect = frame.tiles.rect(tile);
@@ -863,7 +863,7 @@ pub(crate) mod tests {
                     .collect::<Vec<_>>()
             };
             assert!(
-                bits(&color) == bits(&image.color),
+                bits(&color) == bits(&image.to_colors()),
                 "{shading:?}: the images differ"
             );
             assert!(covered.iter().filter(|&&c| c).count() > 1000);

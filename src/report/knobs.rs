@@ -303,7 +303,7 @@ pub fn sweep_knobs(
         let flip = flip_map(&reference, &image);
         let heat_map = plan.maps.then(|| {
             let (values, scale) = maps::error_values(&reference, &image, flip.as_deref());
-            maps::heat_map(&values, image.width, image.height, scale)
+            maps::heat_map(&values, image.width(), image.height(), scale)
         });
         points.push(KnobPoint {
             knob,

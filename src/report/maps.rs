@@ -45,9 +45,8 @@ pub fn error_values(
         Some(flip) => (flip.to_vec(), "FLIP"),
         None => {
             let values = reference
-                .color
-                .iter()
-                .zip(&test.color)
+                .colors()
+                .zip(test.colors())
                 .map(|(a, b)| {
                     (0..3)
                         .map(|c| quantize_channel(a[c]).abs_diff(quantize_channel(b[c])))

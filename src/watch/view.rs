@@ -538,7 +538,7 @@ impl View {
         cache.renderer.render(&loaded.scene, &render_options);
         let rendered_at = Instant::now();
         let framebuffer = cache.renderer.take_framebuffer();
-        let size = (framebuffer.width, framebuffer.height);
+        let size = (framebuffer.width(), framebuffer.height());
         let png = output::encode_png_to_vec(&output::to_rgb8(&framebuffer), PngCompression::Fast);
         cache.renderer.reuse_framebuffer(framebuffer);
         let time = started.elapsed();

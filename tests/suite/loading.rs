@@ -92,8 +92,8 @@ fn the_default_camera_frames_every_object() {
         ])",
     );
     let image = draw(&load(&scene));
-    let (w, h) = (image.width as usize, image.height as usize);
-    let covered = image.covered.iter().filter(|&&c| c).count();
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    let covered = image.to_coverage().iter().filter(|&&c| c).count();
     assert!(
         covered > w * h / 50,
         "the objects should fill a good part of the frame: {covered}"
@@ -102,7 +102,7 @@ fn the_default_camera_frames_every_object() {
         for x in 0..w {
             if x == 0 || y == 0 || x == w - 1 || y == h - 1 {
                 assert!(
-                    !image.covered[y * w + x],
+                    !image.is_covered(x as u32, y as u32),
                     "({x}, {y}) touches the border: the framing cuts an object"
                 );
             }
@@ -124,7 +124,7 @@ fn nine_lights_all_contribute() {
               objects: [(mesh: Cube, material: (diffuse: (1, 1, 1), model: Lambert))])",
             lights.join(", ")
         );
-        draw(&load(&write(folder.path(), &format!("l{n}.ron"), &text))).color[8 * 16 + 8].x
+        draw(&load(&write(folder.path(), &format!("l{n}.ron"), &text))).to_colors()[8 * 16 + 8].x
     };
     let brightness: Vec<f32> = (1..=9).map(scene_with).collect();
     for (n, pair) in brightness.windows(2).enumerate() {
@@ -150,9 +150,9 @@ fn a_mirrored_object_keeps_its_front_faces() {
         draw(&load(&write(folder.path(), "m.ron", &text)))
     };
     let plain = scene("(1, 1, 1)");
-    assert!(plain.covered.iter().any(|&c| c));
+    assert!(plain.to_coverage().iter().any(|&c| c));
     for mirror in ["(-1, 1, 1)", "(1, -1, 1)", "(-1, -1, -1)"] {
-        assert_eq!(scene(mirror).color, plain.color, "scale {mirror}");
+        assert_eq!(scene(mirror).to_colors(), plain.to_colors(), "scale {mirror}");
     }
 }
 
@@ -349,14 +349,14 @@ fn closed_mesh_files_are_found_and_culling_their_back_faces_changes_no_pixel() {
         whole_stats.raster_triangles
     );
     assert!(
-        culled.covered.iter().filter(|&&c| c).count() > 20_000,
+        culled.to_coverage().iter().filter(|&&c| c).count() > 20_000,
         "spot fills the frame"
     );
-    assert_eq!(culled.covered, whole.covered);
+    assert_eq!(culled.to_coverage(), whole.to_coverage());
     let differing = culled
-        .color
+        .to_colors()
         .iter()
-        .zip(&whole.color)
+        .zip(&whole.to_colors())
         .filter(|(a, b)| a != b)
         .count();
     assert_eq!(differing, 0, "pixels changed by culling");

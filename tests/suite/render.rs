@@ -199,7 +199,7 @@ fn multisampling_averages_partly_covered_pixels() {
     scene.image.samples = 16;
     let (image, _) = render(&scene, &RenderOptions::default());
     for y in 0..16 {
-        let row = |x: usize| image.color[y * 20 + x].x;
+        let row = |x: u32| image.pixel(x, y).x;
         assert_eq!(row(9), 1.0);
         assert_eq!(row(11), 0.0);
         // 8 of the 16 samples lie left of the centre, 1 on it, 7 right of it.
@@ -207,7 +207,7 @@ fn multisampling_averages_partly_covered_pixels() {
     }
     scene.image.samples = 1;
     let (aliased, _) = render(&scene, &RenderOptions::default());
-    assert!(aliased.color.iter().all(|c| c.x == 0.0 || c.x == 1.0));
+    assert!(aliased.to_colors().iter().all(|c| c.x == 0.0 || c.x == 1.0));
 }
 
 #[test]
@@ -290,11 +290,11 @@ fn a_floor_passing_behind_the_camera_renders_only_its_visible_part() {
     // The far edge (z = −50) projects to y_ndc = −1/50: 0.64 px below the centre line.
     for y in 0..height {
         for x in 0..width {
-            let covered = image.covered[(y * width + x) as usize];
+            let covered = image.is_covered(x, y);
             assert_eq!(covered, y >= 33, "pixel ({x}, {y})");
         }
     }
-    assert!(image.color.iter().all(|c| c.is_finite()));
+    assert!(image.to_colors().iter().all(|c| c.is_finite()));
 }
 
 #[test]
@@ -343,8 +343,7 @@ fn attributes_are_interpolated_perspective_correctly() {
     let x = width / 2;
     let mut checked = 0;
     for y in 34..height - 1 {
-        let pixel = (y * width + x) as usize;
-        if !image.covered[pixel] {
+        if !image.is_covered(x, y) {
             continue;
         }
         // The row's centre sees the floor at y_ndc = 1 − 2(y + ½)/height = −1/d, d its depth.
@@ -352,7 +351,7 @@ fn attributes_are_interpolated_perspective_correctly() {
         let depth = -1.0 / y_ndc;
         let perspective = (depth - 1.0) / 8.0;
         let screen_linear = (y_ndc + 1.0) / (1.0 - 1.0 / 9.0);
-        let got = image.color[pixel].x;
+        let got = image.pixel(x, y).x;
         assert!(
             (got - perspective).abs() < 0.01,
             "row {y}: got {got}, perspective-correct {perspective}"
@@ -463,8 +462,74 @@ fn reused_buffers_change_no_pixel() {
         let stats = renderer.render(scene, &options);
         assert_eq!(renderer.framebuffer(), &fresh);
         assert_eq!(stats.raster_triangles, fresh_stats.raster_triangles);
-        assert!(fresh.covered.iter().filter(|&&c| c).count() > 1000);
+        assert!(fresh.to_coverage().iter().filter(|&&c| c).count() > 1000);
     }
+}
+
+/// Where no triangle reaches, a frame reads its own background, uncovered, whatever an earlier
+/// frame drew into the reused buffer there: after a busy scene, the same view with nothing in
+/// it, then with one small sphere, each on another background; through every accessor and the
+/// 8-bit output.
+#[test]
+fn a_reused_frame_buffer_shows_no_stale_pixel_where_nothing_is_drawn() {
+    // A sphere around the view's whole cone (43° seen from the eye; the corners are 40° off axis).
+    let mut busy = busy_scene();
+    busy.objects.truncate(1);
+    busy.objects[0].transform = DMat4::from_scale(DVec3::splat(3.5));
+    let mut empty = busy_scene();
+    empty.objects.clear();
+    empty.image.background = Vec3::new(0.25, 0.5, 0.75);
+    let mut small = busy_scene();
+    small.objects.truncate(1);
+    small.objects[0].transform = DMat4::from_scale(DVec3::splat(0.2));
+    small.image.background = Vec3::new(0.9, 0.0, 0.3);
+    let mut renderer = lampshade::render::Renderer::default();
+    let options = RenderOptions::default();
+    renderer.render(&busy, &options);
+    let busy_frame = renderer.framebuffer().clone();
+    assert!(
+        busy_frame.coverage().all(|covered| covered),
+        "the first scene covers every pixel"
+    );
+    for scene in [&empty, &small] {
+        renderer.render(scene, &options);
+        let frame = renderer.framebuffer();
+        assert!(frame.blank_tiles() > 0);
+        assert_eq!(frame, &render(scene, &options).0);
+        let image = lampshade::output::to_rgb8(frame);
+        let background = scene
+            .image
+            .background
+            .to_array()
+            .map(lampshade::output::quantize_channel);
+        for y in 0..frame.height() {
+            for x in 0..frame.width() {
+                if !frame.is_covered(x, y) {
+                    assert_eq!(frame.pixel(x, y), scene.image.background, "({x}, {y})");
+                    assert_eq!(image.get_pixel(x, y).0, background, "({x}, {y})");
+                }
+            }
+        }
+        let dense = FrameBuffer::from_pixels(
+            frame.width(),
+            frame.height(),
+            frame.to_colors(),
+            frame.to_coverage(),
+        );
+        assert_eq!(image, lampshade::output::to_rgb8(&dense));
+    }
+    let frame = renderer.framebuffer();
+    let covered = frame.coverage().filter(|&covered| covered).count();
+    assert!(covered > 100 && covered < busy_frame.coverage().filter(|&c| c).count() / 4);
+    assert!(frame.coverage().eq(render(&small, &options).0.coverage()));
+    renderer.render(&empty, &options);
+    assert!(renderer.framebuffer().coverage().all(|covered| !covered));
+    assert!(
+        renderer
+            .framebuffer()
+            .colors()
+            .all(|color| color == empty.image.background)
+    );
 }
 
 fn check_thread_independence(scene: &Scene) {
@@ -476,7 +541,7 @@ fn check_thread_independence(scene: &Scene) {
         },
     );
     assert!(
-        reference.covered.iter().filter(|&&c| c).count() > 1000,
+        reference.to_coverage().iter().filter(|&&c| c).count() > 1000,
         "the scene must cover pixels"
     );
     for threads in [2, 3, 8] {
@@ -489,7 +554,7 @@ fn check_thread_independence(scene: &Scene) {
         );
         assert_eq!(stats.threads, threads);
         let bits = |fb: &lampshade::render::FrameBuffer| {
-            fb.color
+            fb.to_colors()
                 .iter()
                 .flat_map(|c| c.to_array().map(f32::to_bits))
                 .collect::<Vec<_>>()
@@ -559,7 +624,7 @@ fn square_seen_from_behind(style: impl Fn(&mut Object)) -> FrameBuffer {
 
 #[test]
 fn back_face_modes_light_the_back_side_as_documented() {
-    let center = |mode: BackFaces| square_seen_from_behind(|o| o.back_faces = mode).color[4 * 8 + 4];
+    let center = |mode: BackFaces| square_seen_from_behind(|o| o.back_faces = mode).to_colors()[4 * 8 + 4];
     let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 1e-4;
     // Two-sided: the normal turns towards the viewer, so the red light on the viewer's side lights it.
     assert!(
@@ -632,9 +697,9 @@ fn constant_shading_gives_one_colour_per_object_and_components_select_terms() {
     )
     .0;
     let covered: Vec<Vec3> = constant
-        .color
+        .to_colors()
         .iter()
-        .zip(&constant.covered)
+        .zip(&constant.to_coverage())
         .filter(|(_, c)| **c)
         .map(|(c, _)| *c)
         .collect();
@@ -654,7 +719,7 @@ fn constant_shading_gives_one_colour_per_object_and_components_select_terms() {
             &RenderOptions::default(),
         )
         .0;
-        let total: Vec3 = image.color.iter().copied().sum();
+        let total: Vec3 = image.to_colors().iter().copied().sum();
         for other in 0..3 {
             if other == channel {
                 assert!(total[other] > 1.0, "{component:?} shows nothing");
@@ -720,7 +785,6 @@ fn shadows_fall_where_the_geometry_says_and_nowhere_else() {
     let mut in_shadow = 0;
     for y in 0..64u32 {
         for x in 0..64u32 {
-            let i = (y * 64 + x) as usize;
             // World coordinates of the pixel centre on the floor.
             let (wx, wz) = ((x as f32 + 0.5) / 8.0 - 4.0, (y as f32 + 0.5) / 8.0 - 4.0);
             let under_cube = wx.abs() < 0.55 && wz.abs() < 0.55;
@@ -732,15 +796,15 @@ fn shadows_fall_where_the_geometry_says_and_nowhere_else() {
             if shadow_core {
                 // Ambient only: the light is blocked.
                 assert!(
-                    (shadowed.color[i].x - 0.2).abs() < 1e-5,
+                    (shadowed.pixel(x, y).x - 0.2).abs() < 1e-5,
                     "({wx}, {wz}) should be in shadow: {}",
-                    shadowed.color[i]
+                    shadowed.pixel(x, y)
                 );
                 in_shadow += 1;
             } else if !shadow_band {
                 // No acne: everywhere else exactly as without shadows.
-                assert_eq!(shadowed.color[i], lit.color[i], "({wx}, {wz}) is darkened");
-                assert!((lit.color[i].x - floor_lit).abs() < 1e-5);
+                assert_eq!(shadowed.pixel(x, y), lit.pixel(x, y), "({wx}, {wz}) is darkened");
+                assert!((lit.pixel(x, y).x - floor_lit).abs() < 1e-5);
             }
         }
     }
@@ -790,7 +854,7 @@ fn a_texture_modulates_the_diffuse_colour_through_perspective_correct_uvs() {
         let mut scene = pixel_aligned_scene(64, 64, vec![object(quad.clone(), material, shading)]);
         scene.textures = vec![texture.clone()];
         let (image, _) = render(&scene, &RenderOptions::default());
-        let at = |x: usize, y: usize| image.color[y * 64 + x];
+        let at = |x: u32, y: u32| image.pixel(x, y);
         // Pixel centres at texel centres read the texel exactly, times k_d = 0.5.
         let close = |a: Vec3, b: Vec3| (a - b).abs().max_element() < 0.02;
         assert!(

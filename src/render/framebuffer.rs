@@ -1,0 +1,460 @@
+//! The frame buffer: the rendered image, in which a tile no triangle reaches is a flag rather
+//! than pixels.
+//!
+//! Most of a frame is often background: a model in the middle of a 1080p image leaves most of
+//! its 510 tiles empty. Filling them pixel by pixel (13 bytes a pixel of colour and coverage)
+//! cost 2 ms of a 2-thread frame, more than many small models take to draw. So the renderer only
+//! records that such a tile is blank, and whoever reads the image gets the background there
+//! through the accessors. Consumers that care for speed read it a row at a time in spans
+//! ([`FrameBuffer::row_spans`]): a blank span is one value for many pixels (the 8-bit
+//! quantiser writes the background's three bytes for the whole span).
+//!
+//! Invariant: a tile is either **blank** — every pixel of it is the background, uncovered, and
+//! the stored colour and coverage there are whatever an earlier frame left, never read — or
+//! **drawn**, and then every one of its stored pixels was written by this frame. Every read goes
+//! through the methods below, which give the background for blank tiles, so no reader can see
+//! what an earlier frame left (a `Renderer` reuses its frame buffer from frame to frame).
+
+use std::fmt;
+use std::iter;
+
+use glam::Vec3;
+
+use crate::render::TILE_SIZE;
+
+/// The rendered image in linear RGB, not clamped, row-major from the top-left pixel, and which
+/// pixels geometry covers (used by error metrics and the depth view). See the module
+/// documentation for the blank tiles and the invariant that keeps them.
+#[derive(Clone, Default)]
+pub struct FrameBuffer {
+    width: u32,
+    height: u32,
+    /// What a blank tile's pixels read as.
+    background: Vec3,
+    /// Per pixel; meaningful in drawn tiles only.
+    color: Vec<Vec3>,
+    /// Per pixel; meaningful in drawn tiles only.
+    covered: Vec<bool>,
+    /// Per tile of the `TILE_SIZE` grid (row-major, `width.div_ceil(TILE_SIZE)` a row): whether
+    /// it is blank.
+    blank: Vec<bool>,
+}
+
+/// A run of pixels of one row, from [`FrameBuffer::row_spans`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RowSpan<'a> {
+    /// This many pixels of blank tiles: the background, uncovered.
+    Blank(usize),
+    /// Pixels of drawn tiles, as stored.
+    Drawn { color: &'a [Vec3], covered: &'a [bool] },
+}
+
+impl<'a> RowSpan<'a> {
+    /// The span's colours, one a pixel.
+    fn colors(self, background: Vec3) -> impl Iterator<Item = Vec3> + 'a {
+        let (blank, drawn) = match self {
+            RowSpan::Blank(count) => (count, &[][..]),
+            RowSpan::Drawn { color, .. } => (0, color),
+        };
+        iter::repeat_n(background, blank).chain(drawn.iter().copied())
+    }
+
+    /// The span's coverage, one a pixel.
+    fn coverage(self) -> impl Iterator<Item = bool> + 'a {
+        let (blank, drawn) = match self {
+            RowSpan::Blank(count) => (count, &[][..]),
+            RowSpan::Drawn { covered, .. } => (0, covered),
+        };
+        iter::repeat_n(false, blank).chain(drawn.iter().copied())
+    }
+}
+
+/// One band of tile rows of a frame under way, for one worker to render: its pixel rows and its
+/// tiles' blank flags (one per column).
+pub(crate) struct Band<'a> {
+    pub color: &'a mut [Vec3],
+    pub covered: &'a mut [bool],
+    pub blank: &'a mut [bool],
+}
+
+impl FrameBuffer {
+    /// A frame with every pixel given (no blank tiles): the reference renderer's, and tests'.
+    ///
+    /// Panics unless `color` and `covered` hold `width × height` pixels.
+    pub fn from_pixels(width: u32, height: u32, color: Vec<Vec3>, covered: Vec<bool>) -> Self {
+        let pixels = width as usize * height as usize;
+        assert!(
+            color.len() == pixels && covered.len() == pixels,
+            "a {width}×{height} frame holds {pixels} pixels, not {} colours and {} coverage flags",
+            color.len(),
+            covered.len()
+        );
+        FrameBuffer {
+            width,
+            height,
+            background: Vec3::ZERO,
+            color,
+            covered,
+            blank: vec![false; tile_count(width, height)],
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The colour of the pixels no geometry covers in blank tiles.
+    pub fn background(&self) -> Vec3 {
+        self.background
+    }
+
+    /// The colour of pixel (`x`, `y`). Panics outside the image.
+    pub fn pixel(&self, x: u32, y: u32) -> Vec3 {
+        let index = self.index(x, y);
+        if self.is_in_blank_tile(x, y) {
+            self.background
+        } else {
+            self.color[index]
+        }
+    }
+
+    /// Whether geometry covers pixel (`x`, `y`). Panics outside the image.
+    pub fn is_covered(&self, x: u32, y: u32) -> bool {
+        let index = self.index(x, y);
+        !self.is_in_blank_tile(x, y) && self.covered[index]
+    }
+
+    /// How many tiles are blank (none in a frame made [`FrameBuffer::from_pixels`]).
+    pub fn blank_tiles(&self) -> usize {
+        self.blank.iter().filter(|&&blank| blank).count()
+    }
+
+    /// Row `y` as runs of blank and drawn pixels, left to right, covering the row once; runs of
+    /// one kind are merged, so a row of blank tiles is one span. Panics below the image.
+    pub fn row_spans(&self, y: u32) -> impl Iterator<Item = RowSpan<'_>> + '_ {
+        assert!(y < self.height, "row {y} of a frame {} rows high", self.height);
+        let width = self.width as usize;
+        let columns = tile_columns(self.width);
+        let tile_row = (y / TILE_SIZE) as usize;
+        let flags = &self.blank[tile_row * columns..(tile_row + 1) * columns];
+        let row_start = y as usize * width;
+        let tile = TILE_SIZE as usize;
+        let mut column = 0;
+        iter::from_fn(move || {
+            let &blank = flags.get(column)?;
+            let run = flags[column..]
+                .iter()
+                .take_while(|&&other| other == blank)
+                .count();
+            let (x0, x1) = (column * tile, ((column + run) * tile).min(width));
+            column += run;
+            Some(if blank {
+                RowSpan::Blank(x1 - x0)
+            } else {
+                let pixels = row_start + x0..row_start + x1;
+                RowSpan::Drawn {
+                    color: &self.color[pixels.clone()],
+                    covered: &self.covered[pixels],
+                }
+            })
+        })
+    }
+
+    /// Every pixel's colour, row-major.
+    pub fn colors(&self) -> impl Iterator<Item = Vec3> + '_ {
+        (0..self.height)
+            .flat_map(|y| self.row_spans(y))
+            .flat_map(|span| span.colors(self.background))
+    }
+
+    /// Every pixel's coverage, row-major.
+    pub fn coverage(&self) -> impl Iterator<Item = bool> + '_ {
+        (0..self.height)
+            .flat_map(|y| self.row_spans(y))
+            .flat_map(RowSpan::coverage)
+    }
+
+    /// Every pixel's colour, row-major, in one dense array.
+    pub fn to_colors(&self) -> Vec<Vec3> {
+        self.colors().collect()
+    }
+
+    /// Every pixel's coverage, row-major, in one dense array.
+    pub fn to_coverage(&self) -> Vec<bool> {
+        self.coverage().collect()
+    }
+
+    /// Makes this the frame buffer of a `width × height` frame on `background` with every tile
+    /// blank, for the renderer to draw tiles into ([`FrameBuffer::bands_mut`]). The pixel
+    /// arrays are reused as they are when the size fits: drawn tiles overwrite every pixel, and
+    /// nothing reads a blank tile's.
+    pub(crate) fn start_frame(&mut self, width: u32, height: u32, background: Vec3) {
+        let pixels = width as usize * height as usize;
+        if (self.width, self.height) != (width, height) || self.color.len() != pixels {
+            self.color = vec![Vec3::ZERO; pixels];
+            self.covered = vec![false; pixels];
+        }
+        (self.width, self.height, self.background) = (width, height, background);
+        self.blank.clear();
+        self.blank.resize(tile_count(width, height), true);
+    }
+
+    /// The frame's bands of one tile row each, top to bottom. A worker that draws a tile writes
+    /// all its pixels and clears its blank flag.
+    pub(crate) fn bands_mut(&mut self) -> impl Iterator<Item = Band<'_>> {
+        let band_pixels = TILE_SIZE as usize * (self.width as usize).max(1);
+        let columns = tile_columns(self.width).max(1);
+        self.color
+            .chunks_mut(band_pixels)
+            .zip(self.covered.chunks_mut(band_pixels))
+            .zip(self.blank.chunks_mut(columns))
+            .map(|((color, covered), blank)| Band {
+                color,
+                covered,
+                blank,
+            })
+    }
+
+    /// The depth view's shader wrote view distances; maps them so the nearest covered pixel is
+    /// white and the farthest black (a fixed range would show most scenes as one flat grey).
+    /// Covered pixels lie in drawn tiles only.
+    pub(crate) fn normalize_depth(&mut self) {
+        let (nearest, farthest) = self.drawn_rows().fold(
+            (f32::INFINITY, f32::NEG_INFINITY),
+            |(mut nearest, mut farthest), pixels| {
+                for (color, &covered) in self.color[pixels.clone()].iter().zip(&self.covered[pixels]) {
+                    if covered {
+                        (nearest, farthest) = (nearest.min(color.x), farthest.max(color.x));
+                    }
+                }
+                (nearest, farthest)
+            },
+        );
+        let range = farthest - nearest;
+        let drawn: Vec<_> = self.drawn_rows().collect();
+        for pixels in drawn {
+            for (color, &covered) in self.color[pixels.clone()].iter_mut().zip(&self.covered[pixels]) {
+                if covered {
+                    let shade = if range > 0.0 {
+                        1.0 - (color.x - nearest) / range
+                    } else {
+                        1.0
+                    };
+                    *color = Vec3::splat(shade);
+                }
+            }
+        }
+    }
+
+    /// The index ranges of the stored pixels of drawn tiles, a tile's row at a time.
+    fn drawn_rows(&self) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let width = self.width as usize;
+        (0..self.height).flat_map(move |y| {
+            let row_start = y as usize * width;
+            let mut x = 0;
+            self.row_spans(y).filter_map(move |span| {
+                let start = row_start + x;
+                match span {
+                    RowSpan::Blank(count) => {
+                        x += count;
+                        None
+                    }
+                    RowSpan::Drawn { color, .. } => {
+                        x += color.len();
+                        Some(start..start + color.len())
+                    }
+                }
+            })
+        })
+    }
+
+    fn index(&self, x: u32, y: u32) -> usize {
+        assert!(
+            x < self.width && y < self.height,
+            "pixel ({x}, {y}) of a {}×{} frame",
+            self.width,
+            self.height
+        );
+        y as usize * self.width as usize + x as usize
+    }
+
+    fn is_in_blank_tile(&self, x: u32, y: u32) -> bool {
+        let tile = (y / TILE_SIZE) as usize * tile_columns(self.width) + (x / TILE_SIZE) as usize;
+        self.blank[tile]
+    }
+}
+
+/// Two frames are equal when every pixel reads the same (colour and coverage), whatever they
+/// store in blank tiles.
+impl PartialEq for FrameBuffer {
+    fn eq(&self, other: &Self) -> bool {
+        (self.width, self.height) == (other.width, other.height)
+            && self.coverage().eq(other.coverage())
+            && self.colors().eq(other.colors())
+    }
+}
+
+/// The size and the blank tiles, not millions of pixels.
+impl fmt::Debug for FrameBuffer {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("FrameBuffer")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("background", &self.background)
+            .field("blank_tiles", &self.blank_tiles())
+            .finish_non_exhaustive()
+    }
+}
+
+fn tile_columns(width: u32) -> usize {
+    width.div_ceil(TILE_SIZE) as usize
+}
+
+fn tile_count(width: u32, height: u32) -> usize {
+    tile_columns(width) * height.div_ceil(TILE_SIZE) as usize
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// The colour a drawn pixel of [`frame_with_blank_tiles`] gets.
+    fn drawn_color(x: u32, y: u32) -> Vec3 {
+        Vec3::new(x as f32 / 97.0, y as f32 / 61.0, (x * y) as f32 / 5000.0)
+    }
+
+    /// Whether [`frame_with_blank_tiles`] draws tile (`column`, `row`): a checkerboard.
+    fn is_drawn(column: usize, row: usize) -> bool {
+        (column + row) % 2 == 0
+    }
+
+    /// A `width × height` frame on `background` whose tiles are drawn in a checkerboard (their
+    /// pixels [`drawn_color`], every other one covered), the others blank, drawn as the renderer
+    /// draws into a reused buffer: over an earlier frame that drew every tile, covered, in
+    /// another colour.
+    pub(crate) fn frame_with_blank_tiles(width: u32, height: u32, background: Vec3) -> FrameBuffer {
+        let mut frame = FrameBuffer::default();
+        frame.start_frame(width, height, Vec3::ONE);
+        draw_tiles(&mut frame, |_, _| true, |_, _| (Vec3::new(9.0, -9.0, 0.5), true));
+        frame.start_frame(width, height, background);
+        draw_tiles(&mut frame, is_drawn, |x, y| (drawn_color(x, y), (x + y) % 2 == 0));
+        frame
+    }
+
+    /// Draws the tiles `drawn` picks as the renderer does: every pixel of them written, the
+    /// blank flag cleared.
+    fn draw_tiles(
+        frame: &mut FrameBuffer,
+        drawn: impl Fn(usize, usize) -> bool,
+        pixel: impl Fn(u32, u32) -> (Vec3, bool),
+    ) {
+        let width = frame.width;
+        let tile = TILE_SIZE as usize;
+        for (row, band) in frame.bands_mut().enumerate() {
+            for (column, blank) in band.blank.iter_mut().enumerate() {
+                if !drawn(column, row) {
+                    continue;
+                }
+                *blank = false;
+                let x_range = column * tile..((column + 1) * tile).min(width as usize);
+                for local_y in 0..band.color.len() / width as usize {
+                    for x in x_range.clone() {
+                        let index = local_y * width as usize + x;
+                        let (color, covered) = pixel(x as u32, (row * tile + local_y) as u32);
+                        (band.color[index], band.covered[index]) = (color, covered);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn blank_tiles_read_as_the_background_through_every_accessor() {
+        let background = Vec3::new(0.1, 0.2, 0.3);
+        let (width, height) = (200, 130);
+        let frame = frame_with_blank_tiles(width, height, background);
+        // 4 × 3 tiles, the last column 8 pixels wide and the last row 2 pixels high.
+        assert_eq!(frame.blank_tiles(), 6);
+        let colors = frame.to_colors();
+        let coverage = frame.to_coverage();
+        assert_eq!(colors.len(), (width * height) as usize);
+        assert!(frame.colors().eq(colors.iter().copied()));
+        assert!(frame.coverage().eq(coverage.iter().copied()));
+        for y in 0..height {
+            let mut x = 0;
+            for span in frame.row_spans(y) {
+                match span {
+                    RowSpan::Blank(count) => x += count as u32,
+                    RowSpan::Drawn { color, covered } => {
+                        assert_eq!(color.len(), covered.len());
+                        for (offset, (&color, &covered)) in color.iter().zip(covered).enumerate() {
+                            let at = x + offset as u32;
+                            assert_eq!((color, covered), (frame.pixel(at, y), frame.is_covered(at, y)));
+                        }
+                        x += color.len() as u32;
+                    }
+                }
+            }
+            assert_eq!(x, width, "row {y}'s spans cover it once");
+            for x in 0..width {
+                let index = (y * width + x) as usize;
+                let drawn = is_drawn((x / TILE_SIZE) as usize, (y / TILE_SIZE) as usize);
+                let (expected_color, expected_covered) = if drawn {
+                    (drawn_color(x, y), (x + y) % 2 == 0)
+                } else {
+                    (background, false)
+                };
+                assert_eq!(frame.pixel(x, y), expected_color, "({x}, {y})");
+                assert_eq!(frame.is_covered(x, y), expected_covered, "({x}, {y})");
+                assert_eq!(
+                    (colors[index], coverage[index]),
+                    (expected_color, expected_covered)
+                );
+            }
+        }
+        // Spans of one kind are merged: a row of tile row 1 is blank, drawn, blank, drawn.
+        let kinds: Vec<bool> = frame
+            .row_spans(70)
+            .map(|span| matches!(span, RowSpan::Blank(_)))
+            .collect();
+        assert_eq!(kinds, [true, false, true, false]);
+    }
+
+    #[test]
+    fn frames_are_equal_by_what_they_read_not_what_they_store() {
+        let background = Vec3::new(0.1, 0.2, 0.3);
+        let frame = frame_with_blank_tiles(130, 70, background);
+        let dense = FrameBuffer::from_pixels(130, 70, frame.to_colors(), frame.to_coverage());
+        assert_eq!(frame, dense);
+        let mut colors = frame.to_colors();
+        colors[129] += Vec3::X; // in a blank tile
+        assert_ne!(
+            frame,
+            FrameBuffer::from_pixels(130, 70, colors, frame.to_coverage())
+        );
+    }
+
+    #[test]
+    fn the_depth_view_is_normalised_over_covered_pixels_of_drawn_tiles_only() {
+        let mut frame = FrameBuffer::default();
+        // An earlier frame left covered distances of 100 everywhere.
+        frame.start_frame(130, 70, Vec3::ZERO);
+        draw_tiles(&mut frame, |_, _| true, |_, _| (Vec3::splat(100.0), true));
+        frame.start_frame(130, 70, Vec3::ZERO);
+        draw_tiles(
+            &mut frame,
+            |column, row| (column, row) == (1, 0),
+            |x, _| (Vec3::splat(x as f32), x % 2 == 0),
+        );
+        frame.normalize_depth();
+        // Covered distances 64..=126 (even x) map to 1..=0; nothing stale counts.
+        assert_eq!(frame.pixel(64, 3), Vec3::ONE);
+        assert_eq!(frame.pixel(126, 3), Vec3::ZERO);
+        assert_eq!(frame.pixel(65, 3), Vec3::splat(65.0));
+        assert_eq!(frame.pixel(0, 0), Vec3::ZERO);
+    }
+}
