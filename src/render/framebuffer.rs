@@ -195,7 +195,10 @@ impl FrameBuffer {
     pub(crate) fn start_frame(&mut self, width: u32, height: u32, background: Vec3) {
         let pixels = width as usize * height as usize;
         if (self.width, self.height) != (width, height) || self.color.len() != pixels {
-            self.color = vec![Vec3::ZERO; pixels];
+            // Zeroed allocations (`calloc`): fresh pages stay unmapped until a drawn tile
+            // writes them, so a one-shot render never touches its blank tiles' memory
+            // (`vec![Vec3::ZERO; n]` would write all of it first).
+            self.color = bytemuck::zeroed_vec(pixels);
             self.covered = vec![false; pixels];
         }
         (self.width, self.height, self.background) = (width, height, background);
@@ -329,7 +332,7 @@ pub(crate) mod tests {
 
     /// Whether [`frame_with_blank_tiles`] draws tile (`column`, `row`): a checkerboard.
     fn is_drawn(column: usize, row: usize) -> bool {
-        (column + row) % 2 == 0
+        (column + row).is_multiple_of(2)
     }
 
     /// A `width × height` frame on `background` whose tiles are drawn in a checkerboard (their
@@ -341,7 +344,9 @@ pub(crate) mod tests {
         frame.start_frame(width, height, Vec3::ONE);
         draw_tiles(&mut frame, |_, _| true, |_, _| (Vec3::new(9.0, -9.0, 0.5), true));
         frame.start_frame(width, height, background);
-        draw_tiles(&mut frame, is_drawn, |x, y| (drawn_color(x, y), (x + y) % 2 == 0));
+        draw_tiles(&mut frame, is_drawn, |x, y| {
+            (drawn_color(x, y), (x + y).is_multiple_of(2))
+        });
         frame
     }
 
@@ -404,7 +409,7 @@ pub(crate) mod tests {
                 let index = (y * width + x) as usize;
                 let drawn = is_drawn((x / TILE_SIZE) as usize, (y / TILE_SIZE) as usize);
                 let (expected_color, expected_covered) = if drawn {
-                    (drawn_color(x, y), (x + y) % 2 == 0)
+                    (drawn_color(x, y), (x + y).is_multiple_of(2))
                 } else {
                     (background, false)
                 };
@@ -448,7 +453,7 @@ pub(crate) mod tests {
         draw_tiles(
             &mut frame,
             |column, row| (column, row) == (1, 0),
-            |x, _| (Vec3::splat(x as f32), x % 2 == 0),
+            |x, _| (Vec3::splat(x as f32), x.is_multiple_of(2)),
         );
         frame.normalize_depth();
         // Covered distances 64..=126 (even x) map to 1..=0; nothing stale counts.
