@@ -196,8 +196,8 @@ impl FrameBuffer {
         let pixels = width as usize * height as usize;
         if (self.width, self.height) != (width, height) || self.color.len() != pixels {
             // Zeroed allocations (`calloc`): fresh pages stay unmapped until a drawn tile
-            // writes them, so a one-shot render never touches its blank tiles' memory
-            // (`vec![Vec3::ZERO; n]` would write all of it first).
+            // writes them, so a one-shot render never touches the pages that lie wholly in
+            // blank tiles (`vec![Vec3::ZERO; n]` would write all of them first).
             self.color = bytemuck::zeroed_vec(pixels);
             self.covered = vec![false; pixels];
         }
@@ -226,20 +226,16 @@ impl FrameBuffer {
     /// white and the farthest black (a fixed range would show most scenes as one flat grey).
     /// Covered pixels lie in drawn tiles only.
     pub(crate) fn normalize_depth(&mut self) {
-        let (nearest, farthest) = self.drawn_rows().fold(
-            (f32::INFINITY, f32::NEG_INFINITY),
-            |(mut nearest, mut farthest), pixels| {
-                for (color, &covered) in self.color[pixels.clone()].iter().zip(&self.covered[pixels]) {
-                    if covered {
-                        (nearest, farthest) = (nearest.min(color.x), farthest.max(color.x));
-                    }
+        let (mut nearest, mut farthest) = (f32::INFINITY, f32::NEG_INFINITY);
+        for pixels in drawn_rows(self.width, self.height, &self.blank) {
+            for (color, &covered) in self.color[pixels.clone()].iter().zip(&self.covered[pixels]) {
+                if covered {
+                    (nearest, farthest) = (nearest.min(color.x), farthest.max(color.x));
                 }
-                (nearest, farthest)
-            },
-        );
+            }
+        }
         let range = farthest - nearest;
-        let drawn: Vec<_> = self.drawn_rows().collect();
-        for pixels in drawn {
+        for pixels in drawn_rows(self.width, self.height, &self.blank) {
             for (color, &covered) in self.color[pixels.clone()].iter_mut().zip(&self.covered[pixels]) {
                 if covered {
                     let shade = if range > 0.0 {
@@ -251,28 +247,6 @@ impl FrameBuffer {
                 }
             }
         }
-    }
-
-    /// The index ranges of the stored pixels of drawn tiles, a tile's row at a time.
-    fn drawn_rows(&self) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
-        let width = self.width as usize;
-        (0..self.height).flat_map(move |y| {
-            let row_start = y as usize * width;
-            let mut x = 0;
-            self.row_spans(y).filter_map(move |span| {
-                let start = row_start + x;
-                match span {
-                    RowSpan::Blank(count) => {
-                        x += count;
-                        None
-                    }
-                    RowSpan::Drawn { color, .. } => {
-                        x += color.len();
-                        Some(start..start + color.len())
-                    }
-                }
-            })
-        })
     }
 
     fn index(&self, x: u32, y: u32) -> usize {
@@ -311,6 +285,25 @@ impl fmt::Debug for FrameBuffer {
             .field("blank_tiles", &self.blank_tiles())
             .finish_non_exhaustive()
     }
+}
+
+/// The index ranges of the stored pixels of the drawn tiles of a `width × height` frame with
+/// the blank flags `blank`, a tile's row of pixels at a time.
+fn drawn_rows(width: u32, height: u32, blank: &[bool]) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+    let columns = tile_columns(width);
+    let tile = TILE_SIZE as usize;
+    (0..height as usize).flat_map(move |y| {
+        let row_start = y * width as usize;
+        let flags = &blank[y / tile * columns..(y / tile + 1) * columns];
+        flags
+            .iter()
+            .enumerate()
+            .filter(|&(_, &blank)| !blank)
+            .map(move |(column, _)| {
+                let (x0, x1) = (column * tile, ((column + 1) * tile).min(width as usize));
+                row_start + x0..row_start + x1
+            })
+    })
 }
 
 fn tile_columns(width: u32) -> usize {
