@@ -15,9 +15,9 @@
 //! into the light's clip space, and compared with the (2r+1)² nearest texels
 //! (percentage-closer filtering): the share of texels that do not hold a nearer surface is the
 //! light's visibility, between 0 and 1. Points outside a map are lit. The lane lighting looks
-//! eight points up at once ([`ShadowMap::visibility_lanes`]: the projection and the tests that
-//! a point is in the map lane-wise, the block's compares per lane), with the bits of the
-//! one-point lookup.
+//! eight points up at once ([`ShadowMap::visibility_lanes`]: the projection, the tests that a
+//! point is in the map and that its block is inside it, and the block's compares lane-wise; the
+//! texels gathered per lane, one bounds check a block), with the bits of the one-point lookup.
 //!
 //! Depth is reversed (1 at the light's near plane), so "nearer to the light" is "greater".
 //! Everything is computed in the frame's eye-relative space, and the maps are deterministic
@@ -91,8 +91,10 @@ impl ShadowMap {
 
     /// [`ShadowMap::visibility`] of eight points at once, where `wanted` holds (1 elsewhere):
     /// each lane has the bits of the one-point call. The projection into the light's view, the
-    /// normal offset and the tests that the point is in the map are computed lane-wise; the
-    /// (2r+1)² depth compares, which read texels wherever each point falls, lane after lane.
+    /// normal offset and the tests that the point is in the map are computed lane-wise; for
+    /// filters up to radius 2 the (2r+1)² depth compares too, once each lane's block has been
+    /// gathered from wherever its point falls (radius 3 and up, and eight points of which some
+    /// block reaches over the map's border, count lane after lane).
     #[inline]
     pub fn visibility_lanes(&self, position: Vec3s, normal: Vec3s, to_light: Vec3s, wanted: Mask) -> Floats {
         match self.faces.as_slice() {
@@ -254,13 +256,14 @@ impl ShadowFace {
         let stride = self.size as usize;
         // Each lane's block, by row and column.
         let mut blocks = [[[0.0f32; LANES]; SIDE]; SIDE];
-        for lane in 0..LANES {
-            let first = first_rows.0[lane] as usize * stride + first_columns.0[lane] as usize;
+        let firsts = first_rows.0.iter().zip(&first_columns.0);
+        for (lane, (&first_row, &first_column)) in firsts.enumerate() {
+            let first = first_row as usize * stride + first_column as usize;
             let block = &self.depth[first..first + (SIDE - 1) * stride + SIDE];
-            for row in 0..SIDE {
+            for (row, block_row) in blocks.iter_mut().enumerate() {
                 let start = row * stride;
-                for (column, &texel) in block[start..start + SIDE].iter().enumerate() {
-                    blocks[row][column][lane] = texel;
+                for (lanes, &texel) in block_row.iter_mut().zip(&block[start..start + SIDE]) {
+                    lanes[lane] = texel;
                 }
             }
         }
@@ -796,7 +799,7 @@ pub(crate) mod tests {
             // Groups of eight points at the centres of texels 0 to 3 in from one edge of a
             // face, each group at one distance: their filter blocks touch the border, reach over
             // it, or end just inside (the lane-wise block compares take those whole groups).
-            while points.len() % LANES != 0 {
+            while !points.len().is_multiple_of(LANES) {
                 points.push((Vec3::ZERO, Vec3::ZERO));
             }
             for face in &map.faces {
