@@ -15,9 +15,9 @@
 //! into the light's clip space, and compared with the (2r+1)² nearest texels
 //! (percentage-closer filtering): the share of texels that do not hold a nearer surface is the
 //! light's visibility, between 0 and 1. Points outside a map are lit. The lane lighting looks
-//! eight points up at once ([`ShadowMap::visibility_lanes`]: the projection and the tests that
-//! a point is in the map lane-wise, the block's compares per lane), with the bits of the
-//! one-point lookup.
+//! eight points up at once ([`ShadowMap::visibility_lanes`]: the projection, the tests that a
+//! point is in the map and that its block is inside it, and the block's compares lane-wise; the
+//! texels gathered per lane, one bounds check a block), with the bits of the one-point lookup.
 //!
 //! Depth is reversed (1 at the light's near plane), so "nearer to the light" is "greater".
 //! Everything is computed in the frame's eye-relative space, and the maps are deterministic
@@ -57,6 +57,16 @@ struct ShadowFace {
     forward: Vec3,
 }
 
+/// Where eight points are compared with a face ([`ShadowFace::lookup_lanes`]): the lanes
+/// looked up, their texels' columns and rows (meaningless in the other lanes) and depths.
+#[derive(Debug, Clone, Copy)]
+struct TexelLanes {
+    looked_up: Mask,
+    columns: Ints,
+    rows: Ints,
+    depth: Floats,
+}
+
 /// A light's shadow map: one face, or six for a point light.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShadowMap {
@@ -81,8 +91,10 @@ impl ShadowMap {
 
     /// [`ShadowMap::visibility`] of eight points at once, where `wanted` holds (1 elsewhere):
     /// each lane has the bits of the one-point call. The projection into the light's view, the
-    /// normal offset and the tests that the point is in the map are computed lane-wise; the
-    /// (2r+1)² depth compares, which read texels wherever each point falls, lane after lane.
+    /// normal offset and the tests that the point is in the map are computed lane-wise; for
+    /// filters up to radius 2 the (2r+1)² depth compares too, once each lane's block has been
+    /// gathered from wherever its point falls (radius 3 and up, and eight points of which some
+    /// block reaches over the map's border, count lane after lane).
     #[inline]
     pub fn visibility_lanes(&self, position: Vec3s, normal: Vec3s, to_light: Vec3s, wanted: Mask) -> Floats {
         match self.faces.as_slice() {
@@ -196,24 +208,92 @@ impl ShadowFace {
         wanted: Mask,
     ) -> Floats {
         let one = Floats::splat(1.0);
-        let (looked_up, columns, rows, depth) = self.lookup_lanes(position, normal, settings, wanted);
-        if !looked_up.any() {
+        let texels = self.lookup_lanes(position, normal, settings, wanted);
+        if !texels.looked_up.any() {
             return one;
         }
-        let radius = i64::from(settings.filter_radius);
-        let side = 2 * radius + 1;
-        let lit = Floats(std::array::from_fn(|lane| {
-            if !looked_up.lane(lane) {
-                return 0.0;
-            }
-            let (x, y) = (i64::from(columns.0[lane]), i64::from(rows.0[lane]));
-            lit_texels(&self.depth, i64::from(self.size), x, y, radius, depth.0[lane]) as f32
-        }));
-        looked_up.select(lit / Floats::splat((side * side) as u32 as f32), one)
+        let lit = match settings.filter_radius {
+            0 => self.lit_lanes::<1>(texels),
+            1 => self.lit_lanes::<3>(texels),
+            2 => self.lit_lanes::<5>(texels),
+            radius => self.lit_lanes_clamped(texels, i64::from(radius)),
+        };
+        let side = 2 * i64::from(settings.filter_radius) + 1;
+        texels
+            .looked_up
+            .select(lit / Floats::splat((side * side) as u32 as f32), one)
     }
 
-    /// [`ShadowFace::lookup`] of eight points, where `wanted` holds: the lanes looked up, their
-    /// texels' columns and rows (meaningless in the other lanes) and depths. The same
+    /// [`lit_texels`] of the `SIDE`² blocks (`SIDE` = 2r + 1) around the texels of the lanes
+    /// looked up (anything elsewhere), as floats. When every such block lies inside the map
+    /// (nearly always), the border is tested once per lane, lane-wise, and the blocks are read
+    /// with one bounds check each and compared lane-wise, texel by texel; the count is the
+    /// same integer. Otherwise lane by lane, clamping at the border.
+    #[inline(always)]
+    fn lit_lanes<const SIDE: usize>(&self, texels: TexelLanes) -> Floats {
+        let TexelLanes {
+            looked_up,
+            columns,
+            rows,
+            depth,
+        } = texels;
+        let radius = (SIDE / 2) as i32;
+        // A block is inside when its first column and row are at least 0 and its last ones at
+        // most size − 1 (the size is below 2²³, so nothing wraps).
+        let (low, high) = (Ints::splat(radius - 1), Ints::splat(self.size as i32 - radius));
+        let inside = columns
+            .gt(low)
+            .and(rows.gt(low))
+            .and(high.gt(columns))
+            .and(high.gt(rows));
+        if looked_up.and(!inside).any() {
+            return self.lit_lanes_clamped(texels, i64::from(radius));
+        }
+        // The lanes not looked up read the map's first block (some lane's block is inside, so
+        // the map holds one); their counts are not used.
+        let first_columns = looked_up.select_ints(columns - Ints::splat(radius), Ints::splat(0));
+        let first_rows = looked_up.select_ints(rows - Ints::splat(radius), Ints::splat(0));
+        let stride = self.size as usize;
+        // Each lane's block, by row and column.
+        let mut blocks = [[[0.0f32; LANES]; SIDE]; SIDE];
+        let firsts = first_rows.0.iter().zip(&first_columns.0);
+        for (lane, (&first_row, &first_column)) in firsts.enumerate() {
+            let first = first_row as usize * stride + first_column as usize;
+            let block = &self.depth[first..first + (SIDE - 1) * stride + SIDE];
+            for (row, block_row) in blocks.iter_mut().enumerate() {
+                let start = row * stride;
+                for (lanes, &texel) in block_row.iter_mut().zip(&block[start..start + SIDE]) {
+                    lanes[lane] = texel;
+                }
+            }
+        }
+        // A mask is −1 where it holds: subtracting each texel's counts it.
+        let lit = blocks.iter().flatten().fold(Ints::splat(0), |lit, &texels| {
+            lit - Floats(texels).le(depth).to_ints()
+        });
+        lit.to_floats()
+    }
+
+    /// [`lit_texels`] of the lanes looked up (0 elsewhere) one lane at a time, as floats.
+    #[inline(never)]
+    fn lit_lanes_clamped(&self, texels: TexelLanes, radius: i64) -> Floats {
+        Floats(std::array::from_fn(|lane| {
+            if !texels.looked_up.lane(lane) {
+                return 0.0;
+            }
+            let (x, y) = (i64::from(texels.columns.0[lane]), i64::from(texels.rows.0[lane]));
+            lit_texels(
+                &self.depth,
+                i64::from(self.size),
+                x,
+                y,
+                radius,
+                texels.depth.0[lane],
+            ) as f32
+        }))
+    }
+
+    /// [`ShadowFace::lookup`] of eight points, where `wanted` holds. The same
     /// operations in the same order, glam's `Mat4 * Vec4` being
     /// `((x_axis·x + y_axis·y) + z_axis·z) + w_axis·w`, each `None` a mask.
     #[inline]
@@ -223,7 +303,7 @@ impl ShadowFace {
         normal: Vec3s,
         settings: &ShadowSettings,
         wanted: Mask,
-    ) -> (Mask, Ints, Ints, Floats) {
+    ) -> TexelLanes {
         let texel = if self.perspective {
             let along = (position - Vec3s::splat(self.origin)).dot(Vec3s::splat(self.forward));
             Floats::splat(self.texel_size) * along.max(Floats::splat(0.0))
@@ -281,7 +361,12 @@ impl ShadowFace {
             let mantissa = Floats::splat((1 << 23) as f32);
             (coordinate.min(last).trunc() + mantissa).to_bits() - mantissa.to_bits()
         };
-        (looked_up, texel(columns), texel(rows), ndc.z)
+        TexelLanes {
+            looked_up,
+            columns: texel(columns),
+            rows: texel(rows),
+            depth: ndc.z,
+        }
     }
 }
 
@@ -636,7 +721,8 @@ pub(crate) mod tests {
     /// Eight points at once against the one-point lookup, bit for bit, for every kind of light
     /// and map: points on the surfaces (with their normals, reversed, zero, and grazing the
     /// light), points all around and behind the light, points that fall on the map's border
-    /// texels and just outside it, and lanes left out.
+    /// texels and just outside it, groups whose filter blocks all end at or reach over the
+    /// border, and lanes left out.
     #[test]
     fn lookups_in_lanes_equal_the_one_point_lookup_bit_for_bit() {
         use crate::render::shade_fast::tests::{LIGHTS, scene};
@@ -710,6 +796,27 @@ pub(crate) mod tests {
                     points.push((clip.truncate() / clip.w, Vec3::ZERO));
                 }
             }
+            // Groups of eight points at the centres of texels 0 to 3 in from one edge of a
+            // face, each group at one distance: their filter blocks touch the border, reach over
+            // it, or end just inside (the lane-wise block compares take those whole groups).
+            while !points.len().is_multiple_of(LANES) {
+                points.push((Vec3::ZERO, Vec3::ZERO));
+            }
+            for face in &map.faces {
+                let frame_from_clip = face.clip_from_frame.inverse();
+                for texels_in in 0..4 {
+                    for edge in 0..4 {
+                        let side = 1.0 - (texels_in as f32 + 0.5) * 2.0 / face.size as f32;
+                        let side = if edge % 2 == 0 { side } else { -side };
+                        for _ in 0..LANES {
+                            let along = random() * 1.8 - 0.9;
+                            let (x, y) = if edge < 2 { (side, along) } else { (along, side) };
+                            let clip = frame_from_clip * glam::Vec4::new(x, y, random(), 1.0);
+                            points.push((clip.truncate() / clip.w, Vec3::ZERO));
+                        }
+                    }
+                }
+            }
             let mut outcomes = [0usize; 3]; // dark, partly lit, lit
             let mut looked_up_count = 0;
             for (group, lanes) in points.chunks_exact(LANES).enumerate() {
@@ -724,7 +831,12 @@ pub(crate) mod tests {
                     wanted,
                 );
                 if let [face] = map.faces.as_slice() {
-                    let (looked_up, columns, rows, depths) = face.lookup_lanes(
+                    let TexelLanes {
+                        looked_up,
+                        columns,
+                        rows,
+                        depth: depths,
+                    } = face.lookup_lanes(
                         Vec3s::from_array(&positions),
                         Vec3s::from_array(&normals),
                         &map.settings,
