@@ -7,9 +7,10 @@
 //! - The footprint `ρ` and the choice between magnification and minification are lane-wise.
 //!   `λ = log₂ ρ` is at most 0 exactly where `ρ ≤ 1` (`log2f` is exact at 1, and its error,
 //!   below one unit in the last place, cannot change the sign of a logarithm whose magnitude
-//!   is at least 2⁻²⁴/ln 2), so only lanes with `ρ > 1` call `log2f`, which has no lane-wise
-//!   form with its bits. With a positive mip bias every lane with `ρ > 0` calls it; either
-//!   way the lane's `λ + bias` is the scalar's sum.
+//!   is at least 2⁻²⁴/ln 2), so only lanes with `ρ > 1` need the logarithm (with a positive
+//!   mip bias every lane with `ρ > 0`); either way the lane's `λ + bias` is the scalar's sum.
+//!   The logarithm is lane-wise too where the C library's `log2f` is known ([`log2`]: glibc's
+//!   algorithm in lanes, with its bits), else `log2f` per lane.
 //! - Texel coordinates are the specification's `f64` ones, `x = u·w − ½` (exact: 24 by 32
 //!   significant bits), but its `floor` and the wrap's `rem_euclid`, library calls that were
 //!   two thirds of the scalar sampler's instructions, are integer operations here. For a whole
@@ -22,10 +23,13 @@
 //! The texel fetches and the filter (`a + (b − a)·f`, then the blend between levels) stay per
 //! lane, in `Vec4`s: each lane reads its own texels, at its own level.
 
+mod log2;
+
 use glam::{Vec2, Vec4};
 
 use crate::render::lanes::{Floats, Ints, LANES, Mask, Vec2s};
 use crate::texture::{Sampler, Texture, Wrap};
+use log2::log2_lanes;
 
 /// Texture coordinates at least this far from 0 are sampled by the specification: below it,
 /// texel coordinates on any level (fewer than 2³² texels a side) are whole `f64`s below 2⁵²,
@@ -71,16 +75,15 @@ pub fn sample_lanes(
         footprint.gt(may_be_minified)
     };
     // Per lane, `Texture::sample`'s choice of levels: bilinear in `lower`, and where `blend`
-    // is above 0 in `lower + 1` too, blended by it. `log2f` is called for minified lanes only;
+    // is above 0 in `lower + 1` too, blended by it. The logarithm is taken of minified lanes only;
     // the rest is lane-wise: λ's clamp to the last level (`f32::min`, λ not NaN), its floor
     // by the rounding of `texel_pairs` (λ is below 2²²), and the fraction left.
     let zero = Floats::splat(0.0);
-    let mut lod = zero;
-    for lane in 0..LANES {
-        if minified.lane(lane) {
-            lod.0[lane] = footprint.0[lane].log2() + mip_bias;
-        }
-    }
+    let lod = if minified.any() {
+        minified.select(log2_lanes(footprint, minified) + Floats::splat(mip_bias), zero)
+    } else {
+        zero
+    };
     let minified = lod.gt(zero);
     let last = Floats::splat(last_level as f32);
     let lod = lod.gt(last).select(last, lod);
