@@ -28,7 +28,7 @@ mod log2;
 use glam::{Vec2, Vec4};
 
 use crate::render::lanes::{Floats, Ints, LANES, Mask, Vec2s};
-use crate::texture::{Sampler, Texture, Wrap};
+use crate::texture::{MipLevel, Sampler, Texture, Wrap};
 use log2::log2_lanes;
 
 /// Texture coordinates at least this far from 0 are sampled by the specification: below it,
@@ -103,7 +103,11 @@ pub fn sample_lanes(
     let mut near = [Vec4::ZERO; LANES];
     bilinear_lanes(texture, lower, at, sampler, |lane, value| near[lane] = value);
     if blended.any() {
-        let upper = blended.select_ints(lower + Ints::splat(1), lower);
+        // Lanes that are not blended read the level of the first blended lane (their values
+        // are not used), so that a batch whose blended lanes share a level reads one level.
+        let first_blended = (0..LANES).find(|&lane| blended.lane(lane)).unwrap_or(0);
+        let upper = lower + Ints::splat(1);
+        let upper = blended.select_ints(upper, Ints::splat(upper.0[first_blended]));
         // Each far value blended into the near one as it is filtered.
         bilinear_lanes(texture, upper, at, sampler, |lane, far| {
             if blended.lane(lane) {
@@ -165,41 +169,32 @@ fn bilinear_lanes(
     mut put: impl FnMut(usize, Vec4),
 ) {
     let level = |lane: usize| &texture.levels[levels.0[lane] as usize];
-    let (mut widths, mut heights) = ([0; LANES], [0; LANES]);
-    let same_level = levels.0.iter().all(|&l| l == levels.0[0]);
-    let (xs, ys) = if same_level {
-        let level = level(0);
-        (widths, heights) = ([level.width; LANES], [level.height; LANES]);
-        (
-            texel_pairs(uv.x, Sizes::splat(level.width), sampler.wrap_s),
-            texel_pairs(uv.y, Sizes::splat(level.height), sampler.wrap_t),
-        )
-    } else {
-        for lane in 0..LANES {
-            (widths[lane], heights[lane]) = (level(lane).width, level(lane).height);
-        }
-        (
-            texel_pairs(uv.x, Sizes::of(&widths), sampler.wrap_s),
-            texel_pairs(uv.y, Sizes::of(&heights), sampler.wrap_t),
-        )
-    };
     let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
-    if same_level && xs.exact.and(ys.exact).all() {
-        // The common case: one level, every index wrapped into it lane-wise, so each texel
-        // is at `y·width + x` (`MipLevel::texel` without its test of `x`, which the wrap
-        // makes true).
+    if levels.0.iter().all(|&l| l == levels.0[0]) {
         let level = level(0);
-        let (width, texels) = (level.width as usize, &level.texels[..]);
-        let texel = |index: usize| texels.get(index).copied().unwrap_or(Vec4::ZERO);
-        for lane in 0..LANES {
-            let ((x0, x1, fx), (y0, y1, fy)) = (xs.exact_lane(lane), ys.exact_lane(lane));
-            let (row0, row1) = (y0 * width, y1 * width);
-            let top = lerp(texel(row0 + x0), texel(row0 + x1), fx);
-            let bottom = lerp(texel(row1 + x0), texel(row1 + x1), fx);
-            put(lane, lerp(top, bottom, fy));
+        let (width, height) = (level.width, level.height);
+        let xs = texel_pairs(uv.x, Sizes::splat(width), sampler.wrap_s);
+        let ys = texel_pairs(uv.y, Sizes::splat(height), sampler.wrap_t);
+        if xs.exact.and(ys.exact).all() && holds_every_texel(level) {
+            // The common case: one level, every index wrapped into it lane-wise, so each
+            // texel is at `y·width + x`, inside the level (`MipLevel::texel` without its tests,
+            // which the wrap and the level's size make true).
+            let (width, texels) = (width as usize, &level.texels[..]);
+            for lane in 0..LANES {
+                let ((x0, x1, fx), (y0, y1, fy)) = (xs.exact_lane(lane), ys.exact_lane(lane));
+                let (row0, row1) = (y0 * width, y1 * width);
+                let top = lerp(texels[row0 + x0], texels[row0 + x1], fx);
+                let bottom = lerp(texels[row1 + x0], texels[row1 + x1], fx);
+                put(lane, lerp(top, bottom, fy));
+            }
+            return;
         }
-        return;
     }
+    // Lanes at different levels, or some not `exact`: the pairs of each lane's own level.
+    let widths: [u32; LANES] = std::array::from_fn(|lane| level(lane).width);
+    let heights: [u32; LANES] = std::array::from_fn(|lane| level(lane).height);
+    let xs = texel_pairs(uv.x, Sizes::of(&widths), sampler.wrap_s);
+    let ys = texel_pairs(uv.y, Sizes::of(&heights), sampler.wrap_t);
     for lane in 0..LANES {
         let level = level(lane);
         let (x0, x1, fx) = xs.lane(lane, uv.x, &widths, sampler.wrap_s);
@@ -208,6 +203,13 @@ fn bilinear_lanes(
         let bottom = lerp(level.texel(x0, y1), level.texel(x1, y1), fx);
         put(lane, lerp(top, bottom, fy));
     }
+}
+
+/// Whether `level` holds its `width·height` texels (`MipLevel`'s invariant, which every
+/// constructor keeps; its fields are public, so the fast path checks it once per lookup).
+#[inline(always)]
+fn holds_every_texel(level: &MipLevel) -> bool {
+    level.texels.len() as u64 == u64::from(level.width) * u64::from(level.height)
 }
 
 /// The sizes of an axis of each lane's level, as integers (those above 2²⁴, which are not
@@ -550,6 +552,14 @@ mod tests {
             .collect();
         for mip_bias in [0.0, -0.75, 0.5, 8.0] {
             check(&texture, &sampler, mip_bias, &points, "footprints");
+        }
+        // A level that lost texels (its fields are public) reads zero past its end, as
+        // `MipLevel::texel` does, rather than taking the fast path.
+        let mut short = texture.clone();
+        short.levels[0].texels.truncate(64 * 20);
+        short.levels[1].texels.truncate(7);
+        for mip_bias in [0.0, 0.5] {
+            check(&short, &sampler, mip_bias, &points, "short levels");
         }
         let empty = Texture {
             levels: Vec::new(),
