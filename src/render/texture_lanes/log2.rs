@@ -53,7 +53,7 @@ pub fn log2_lanes(x: Floats, wanted: Mask) -> Floats {
 /// subintervals.
 static SAME_AS_LIBM: LazyLock<bool> = LazyLock::new(|| {
     let inputs: Vec<f32> = (1u32..255)
-        .flat_map(|exponent| (0u32..64).map(move |step| f32::from_bits(exponent << 23 | step * 131_071)))
+        .flat_map(|exponent| (0u32..64).map(move |step| f32::from_bits((exponent << 23) | (step * 131_071))))
         .collect();
     inputs.chunks(LANES).all(|chunk| {
         let x = Floats(std::array::from_fn(|lane| chunk[lane % chunk.len()]));
@@ -176,8 +176,8 @@ mod tests {
         let mut filled = 0;
         let compare = |lanes: &[f32; LANES], filled: usize| {
             let log = log2_lanes(Floats(*lanes), Mask::ALL);
-            for lane in 0..filled {
-                let (x, expected) = (lanes[lane], lanes[lane].log2());
+            for (lane, &x) in lanes.iter().enumerate().take(filled) {
+                let expected = x.log2();
                 assert_eq!(
                     log.0[lane].to_bits(),
                     expected.to_bits(),
