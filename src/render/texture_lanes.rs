@@ -7,9 +7,10 @@
 //! - The footprint `ρ` and the choice between magnification and minification are lane-wise.
 //!   `λ = log₂ ρ` is at most 0 exactly where `ρ ≤ 1` (`log2f` is exact at 1, and its error,
 //!   below one unit in the last place, cannot change the sign of a logarithm whose magnitude
-//!   is at least 2⁻²⁴/ln 2), so only lanes with `ρ > 1` call `log2f`, which has no lane-wise
-//!   form with its bits. With a positive mip bias every lane with `ρ > 0` calls it; either
-//!   way the lane's `λ + bias` is the scalar's sum.
+//!   is at least 2⁻²⁴/ln 2), so only lanes with `ρ > 1` need the logarithm (with a positive
+//!   mip bias every lane with `ρ > 0`); either way the lane's `λ + bias` is the scalar's sum.
+//!   The logarithm is lane-wise too where the C library's `log2f` is known ([`log2`]: glibc's
+//!   algorithm in lanes, with its bits), else `log2f` per lane.
 //! - Texel coordinates are the specification's `f64` ones, `x = u·w − ½` (exact: 24 by 32
 //!   significant bits), but its `floor` and the wrap's `rem_euclid`, library calls that were
 //!   two thirds of the scalar sampler's instructions, are integer operations here. For a whole
@@ -22,10 +23,13 @@
 //! The texel fetches and the filter (`a + (b − a)·f`, then the blend between levels) stay per
 //! lane, in `Vec4`s: each lane reads its own texels, at its own level.
 
+mod log2;
+
 use glam::{Vec2, Vec4};
 
 use crate::render::lanes::{Floats, Ints, LANES, Mask, Vec2s};
-use crate::texture::{Sampler, Texture, Wrap};
+use crate::texture::{MipLevel, Sampler, Texture, Wrap};
+use log2::log2_lanes;
 
 /// Texture coordinates at least this far from 0 are sampled by the specification: below it,
 /// texel coordinates on any level (fewer than 2³² texels a side) are whole `f64`s below 2⁵²,
@@ -71,16 +75,15 @@ pub fn sample_lanes(
         footprint.gt(may_be_minified)
     };
     // Per lane, `Texture::sample`'s choice of levels: bilinear in `lower`, and where `blend`
-    // is above 0 in `lower + 1` too, blended by it. `log2f` is called for minified lanes only;
+    // is above 0 in `lower + 1` too, blended by it. The logarithm is taken of minified lanes only;
     // the rest is lane-wise: λ's clamp to the last level (`f32::min`, λ not NaN), its floor
     // by the rounding of `texel_pairs` (λ is below 2²²), and the fraction left.
     let zero = Floats::splat(0.0);
-    let mut lod = zero;
-    for lane in 0..LANES {
-        if minified.lane(lane) {
-            lod.0[lane] = footprint.0[lane].log2() + mip_bias;
-        }
-    }
+    let lod = if minified.any() {
+        minified.select(log2_lanes(footprint, minified) + Floats::splat(mip_bias), zero)
+    } else {
+        zero
+    };
     let minified = lod.gt(zero);
     let last = Floats::splat(last_level as f32);
     let lod = lod.gt(last).select(last, lod);
@@ -100,7 +103,11 @@ pub fn sample_lanes(
     let mut near = [Vec4::ZERO; LANES];
     bilinear_lanes(texture, lower, at, sampler, |lane, value| near[lane] = value);
     if blended.any() {
-        let upper = blended.select_ints(lower + Ints::splat(1), lower);
+        // Lanes that are not blended read the level of the first blended lane (their values
+        // are not used), so that a batch whose blended lanes share a level reads one level.
+        let first_blended = (0..LANES).find(|&lane| blended.lane(lane)).unwrap_or(0);
+        let upper = lower + Ints::splat(1);
+        let upper = blended.select_ints(upper, Ints::splat(upper.0[first_blended]));
         // Each far value blended into the near one as it is filtered.
         bilinear_lanes(texture, upper, at, sampler, |lane, far| {
             if blended.lane(lane) {
@@ -162,41 +169,32 @@ fn bilinear_lanes(
     mut put: impl FnMut(usize, Vec4),
 ) {
     let level = |lane: usize| &texture.levels[levels.0[lane] as usize];
-    let (mut widths, mut heights) = ([0; LANES], [0; LANES]);
-    let same_level = levels.0.iter().all(|&l| l == levels.0[0]);
-    let (xs, ys) = if same_level {
-        let level = level(0);
-        (widths, heights) = ([level.width; LANES], [level.height; LANES]);
-        (
-            texel_pairs(uv.x, Sizes::splat(level.width), sampler.wrap_s),
-            texel_pairs(uv.y, Sizes::splat(level.height), sampler.wrap_t),
-        )
-    } else {
-        for lane in 0..LANES {
-            (widths[lane], heights[lane]) = (level(lane).width, level(lane).height);
-        }
-        (
-            texel_pairs(uv.x, Sizes::of(&widths), sampler.wrap_s),
-            texel_pairs(uv.y, Sizes::of(&heights), sampler.wrap_t),
-        )
-    };
     let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
-    if same_level && xs.exact.and(ys.exact).all() {
-        // The common case: one level, every index wrapped into it lane-wise, so each texel
-        // is at `y·width + x` (`MipLevel::texel` without its test of `x`, which the wrap
-        // makes true).
+    if levels.0.iter().all(|&l| l == levels.0[0]) {
         let level = level(0);
-        let (width, texels) = (level.width as usize, &level.texels[..]);
-        let texel = |index: usize| texels.get(index).copied().unwrap_or(Vec4::ZERO);
-        for lane in 0..LANES {
-            let ((x0, x1, fx), (y0, y1, fy)) = (xs.exact_lane(lane), ys.exact_lane(lane));
-            let (row0, row1) = (y0 * width, y1 * width);
-            let top = lerp(texel(row0 + x0), texel(row0 + x1), fx);
-            let bottom = lerp(texel(row1 + x0), texel(row1 + x1), fx);
-            put(lane, lerp(top, bottom, fy));
+        let (width, height) = (level.width, level.height);
+        let xs = texel_pairs(uv.x, Sizes::splat(width), sampler.wrap_s);
+        let ys = texel_pairs(uv.y, Sizes::splat(height), sampler.wrap_t);
+        if xs.exact.and(ys.exact).all() && holds_every_texel(level) {
+            // The common case: one level, every index wrapped into it lane-wise, so each
+            // texel is at `y·width + x`, inside the level (`MipLevel::texel` without its tests,
+            // which the wrap and the level's size make true).
+            let (width, texels) = (width as usize, &level.texels[..]);
+            for lane in 0..LANES {
+                let ((x0, x1, fx), (y0, y1, fy)) = (xs.exact_lane(lane), ys.exact_lane(lane));
+                let (row0, row1) = (y0 * width, y1 * width);
+                let top = lerp(texels[row0 + x0], texels[row0 + x1], fx);
+                let bottom = lerp(texels[row1 + x0], texels[row1 + x1], fx);
+                put(lane, lerp(top, bottom, fy));
+            }
+            return;
         }
-        return;
     }
+    // Lanes at different levels, or some not `exact`: the pairs of each lane's own level.
+    let widths: [u32; LANES] = std::array::from_fn(|lane| level(lane).width);
+    let heights: [u32; LANES] = std::array::from_fn(|lane| level(lane).height);
+    let xs = texel_pairs(uv.x, Sizes::of(&widths), sampler.wrap_s);
+    let ys = texel_pairs(uv.y, Sizes::of(&heights), sampler.wrap_t);
     for lane in 0..LANES {
         let level = level(lane);
         let (x0, x1, fx) = xs.lane(lane, uv.x, &widths, sampler.wrap_s);
@@ -205,6 +203,13 @@ fn bilinear_lanes(
         let bottom = lerp(level.texel(x0, y1), level.texel(x1, y1), fx);
         put(lane, lerp(top, bottom, fy));
     }
+}
+
+/// Whether `level` holds its `width·height` texels (`MipLevel`'s invariant, which every
+/// constructor keeps; its fields are public, so the fast path checks it once per lookup).
+#[inline(always)]
+fn holds_every_texel(level: &MipLevel) -> bool {
+    level.texels.len() as u64 == u64::from(level.width) * u64::from(level.height)
 }
 
 /// The sizes of an axis of each lane's level, as integers (those above 2²⁴, which are not
@@ -547,6 +552,14 @@ mod tests {
             .collect();
         for mip_bias in [0.0, -0.75, 0.5, 8.0] {
             check(&texture, &sampler, mip_bias, &points, "footprints");
+        }
+        // A level that lost texels (its fields are public) reads zero past its end, as
+        // `MipLevel::texel` does, rather than taking the fast path.
+        let mut short = texture.clone();
+        short.levels[0].texels.truncate(64 * 20);
+        short.levels[1].texels.truncate(7);
+        for mip_bias in [0.0, 0.5] {
+            check(&short, &sampler, mip_bias, &points, "short levels");
         }
         let empty = Texture {
             levels: Vec::new(),
