@@ -396,6 +396,44 @@ pub fn edge_values(triangle: &RasterTriangle, x: i64, y: i64) -> [i64; 3] {
     [edge(x1, y1, x2, y2), edge(x2, y2, x0, y0), edge(x0, y0, x1, y1)]
 }
 
+/// A triangle's three edge functions as planes, `Eₖ(x, y) = aₖ·x + bₖ·y + cₖ`: [`edge_values`]
+/// at any point in two products and two sums per edge, for shading points scattered over a
+/// tile (set up once per triangle). The same integers: with |x|, |y| < 2²⁸ (the guard band)
+/// and corner differences below 2²⁹, the products are below 2⁵⁷, |cₖ| below 2⁵⁸, and every
+/// partial sum is exact in `i64`.
+#[derive(Debug, Clone, Copy)]
+pub struct EdgePlanes {
+    along_x: [i64; 3],
+    along_y: [i64; 3],
+    at_origin: [i64; 3],
+}
+
+impl EdgePlanes {
+    pub fn new(triangle: &RasterTriangle) -> Self {
+        let [x0, x1, x2] = triangle.x.map(i64::from);
+        let [y0, y1, y2] = triangle.y.map(i64::from);
+        // (b − a)ₓ·(y − a_y) − (b − a)_y·(x − a_x), with its terms in x, in y and constant.
+        let plane =
+            |ax: i64, ay: i64, bx: i64, by: i64| (-(by - ay), bx - ax, (by - ay) * ax - (bx - ax) * ay);
+        let planes = [
+            plane(x1, y1, x2, y2),
+            plane(x2, y2, x0, y0),
+            plane(x0, y0, x1, y1),
+        ];
+        EdgePlanes {
+            along_x: planes.map(|p| p.0),
+            along_y: planes.map(|p| p.1),
+            at_origin: planes.map(|p| p.2),
+        }
+    }
+
+    /// [`edge_values`] at the fixed-point point `(x, y)`.
+    #[inline]
+    pub fn at(&self, x: i64, y: i64) -> [i64; 3] {
+        std::array::from_fn(|k| self.along_x[k] * x + self.along_y[k] * y + self.at_origin[k])
+    }
+}
+
 /// How much [`edge_values`] change from one pixel centre to the next one to the right (one
 /// pixel, 256 units, along x): stepping by these gives exactly the values at each centre.
 #[inline]
@@ -1389,6 +1427,43 @@ mod tests {
                 y1: 4
             }
         );
+    }
+
+    /// The planes give `edge_values`' integers, for triangles from pixel size to the guard
+    /// band's, at points near and far.
+    #[test]
+    fn edge_planes_equal_edge_values() {
+        let reach = (GUARD_BAND_PIXELS as i64) * SUBPIXEL_ONE;
+        let triangles = [
+            [(1.3, 0.7), (10.6, 2.2), (4.1, 11.4)],
+            [(-1.0e6, -9.0e5), (1.0e6, 3.5), (7.5, 1.0e6)],
+            [(1919.9, 0.1), (0.2, 1079.8), (1919.9, 1079.9)],
+        ];
+        for corners in triangles {
+            let t = setup_triangle(
+                corners.map(|(x, y)| vertex(x, y)),
+                1920,
+                1080,
+                SamplePattern::SINGLE,
+                SourceTriangle::default(),
+                &mut Vec::new(),
+            )
+            .expect("a triangle");
+            let planes = EdgePlanes::new(&t);
+            for (x, y) in [
+                (0, 0),
+                (3 * 256 + 131, 5 * 256 + 77),
+                (-reach, reach),
+                (reach, -reach),
+                (reach, reach),
+            ] {
+                assert_eq!(
+                    planes.at(x, y),
+                    edge_values(&t, x, y),
+                    "{corners:?} at ({x}, {y})"
+                );
+            }
+        }
     }
 
     #[test]
