@@ -396,6 +396,44 @@ pub fn edge_values(triangle: &RasterTriangle, x: i64, y: i64) -> [i64; 3] {
     [edge(x1, y1, x2, y2), edge(x2, y2, x0, y0), edge(x0, y0, x1, y1)]
 }
 
+/// A triangle's three edge functions as planes, `Eₖ(x, y) = aₖ·x + bₖ·y + cₖ`: [`edge_values`]
+/// at any point in two products and two sums per edge, for shading points scattered over a
+/// tile (set up once per triangle). The same integers: with |x|, |y| < 2²⁸ (the guard band)
+/// and corner differences below 2²⁹, the products are below 2⁵⁷, |cₖ| below 2⁵⁸, and every
+/// partial sum is exact in `i64`.
+#[derive(Debug, Clone, Copy)]
+pub struct EdgePlanes {
+    along_x: [i64; 3],
+    along_y: [i64; 3],
+    at_origin: [i64; 3],
+}
+
+impl EdgePlanes {
+    pub fn new(triangle: &RasterTriangle) -> Self {
+        let [x0, x1, x2] = triangle.x.map(i64::from);
+        let [y0, y1, y2] = triangle.y.map(i64::from);
+        // (b − a)ₓ·(y − a_y) − (b − a)_y·(x − a_x), with its terms in x, in y and constant.
+        let plane =
+            |ax: i64, ay: i64, bx: i64, by: i64| (-(by - ay), bx - ax, (by - ay) * ax - (bx - ax) * ay);
+        let planes = [
+            plane(x1, y1, x2, y2),
+            plane(x2, y2, x0, y0),
+            plane(x0, y0, x1, y1),
+        ];
+        EdgePlanes {
+            along_x: planes.map(|p| p.0),
+            along_y: planes.map(|p| p.1),
+            at_origin: planes.map(|p| p.2),
+        }
+    }
+
+    /// [`edge_values`] at the fixed-point point `(x, y)`.
+    #[inline]
+    pub fn at(&self, x: i64, y: i64) -> [i64; 3] {
+        std::array::from_fn(|k| self.along_x[k] * x + self.along_y[k] * y + self.at_origin[k])
+    }
+}
+
 /// How much [`edge_values`] change from one pixel centre to the next one to the right (one
 /// pixel, 256 units, along x): stepping by these gives exactly the values at each centre.
 #[inline]
@@ -710,6 +748,15 @@ fn triangle_edges(triangle: &RasterTriangle, px: u32, py: u32) -> [Edge; 3] {
     ]
 }
 
+/// Each of a pattern's `S` sample offsets (1/256 pixel) as offsets of the three edge functions.
+#[inline(always)]
+fn sample_edge_offsets<const S: usize>(edges: &[Edge; 3], pattern: &[(i32, i32)]) -> [[i64; 3]; S] {
+    std::array::from_fn(|sample| {
+        let (ox, oy) = pattern[sample];
+        edges.map(|e| e.along_x * i64::from(ox) + e.along_y * i64::from(oy))
+    })
+}
+
 /// The depth test of one triangle at the `S` samples of every pixel of the tile:
 /// [`for_each_covered_sample`] written as [`rasterize_single_sample`] is, with `S` a constant so
 /// that the loop over a pixel's samples unrolls. Each sample's offset becomes edge-function
@@ -725,20 +772,26 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
         return;
     };
     debug_assert_eq!(visibility.pattern.len(), S);
+    let pattern = visibility.pattern.offsets();
+    // Most triangles of a mesh: eight samples at a time in `i32`.
+    if S.is_multiple_of(LANES / 2)
+        && let Some(lane_area) = LaneEdges::whole_blocks::<S>(area, rect)
+        && let Some(lane_edges) = LaneEdges::new::<S>(triangle, pattern, lane_area)
+    {
+        rasterize_sample_lanes::<S>(
+            &lane_edges,
+            triangle.depth,
+            triangle.inv_area,
+            lane_area,
+            id,
+            visibility,
+        );
+        return;
+    }
     let mut edges = triangle_edges(triangle, area.x0, area.y0);
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
-    let pattern = visibility.pattern.offsets();
-    let offsets: [[i64; 3]; S] = std::array::from_fn(|sample| {
-        let (ox, oy) = pattern[sample];
-        edges.map(|e| e.along_x * i64::from(ox) + e.along_y * i64::from(oy))
-    });
-    // Most triangles of a mesh: eight samples at a time in `i32`.
-    if S.is_multiple_of(LANES / 2) && LaneEdges::fit(&edges, &offsets, area) {
-        let lane_edges = LaneEdges::new(&edges, &offsets);
-        rasterize_sample_lanes::<S>(&lane_edges, [d0, d1, d2], inv_area, area, id, visibility);
-        return;
-    }
+    let offsets: [[i64; 3]; S] = sample_edge_offsets(&edges, pattern);
     let biased = offsets.map(|offset| std::array::from_fn::<i64, 3, _>(|k| offset[k] - edges[k].min_inside));
     // Per edge, the bias of the sample nearest its inside and of the one farthest from it: a
     // pixel whose best sample is outside an edge has no sample inside, and one whose worst
@@ -801,7 +854,58 @@ struct LaneEdges {
     nearest: [[i32; 3]; LANES / 4],
 }
 
+/// The largest span, in 1/256 pixel, of a box holding a triangle's corners and every point
+/// the lane loop evaluates its edge functions at, for which those values fit in `i32`: each is
+/// `dx·(y − a_y) − dy·(x − a_x)` with all four factors within the span, so at most
+/// `2·span² < 2³¹ − 1` in magnitude (the fill rule's bias adds one).
+const LANE_SPAN: i64 = 32_767;
+
 impl LaneEdges {
+    /// `area` (the triangle's part of the tile `rect`) widened, at four samples, by one pixel
+    /// where its rows have an odd number of pixels, so that they are whole blocks of two: on
+    /// the right where the tile goes on, else on the left. Either way the pixel added lies
+    /// outside the triangle's bounds (the side widened is the bounds' own edge), so none of
+    /// its samples is inside and the lanes leave it as it was. `None` where the area spans a
+    /// tile of odd width (the `i64` loop takes the triangle).
+    #[inline(always)]
+    fn whole_blocks<const S: usize>(area: PixelRect, rect: PixelRect) -> Option<PixelRect> {
+        let block_pixels = (LANES / S).max(1) as u32;
+        if (area.x1 - area.x0).is_multiple_of(block_pixels) {
+            Some(area)
+        } else if area.x1 < rect.x1 {
+            Some(PixelRect {
+                x1: area.x1 + 1,
+                ..area
+            })
+        } else if area.x0 > rect.x0 {
+            Some(PixelRect {
+                x0: area.x0 - 1,
+                ..area
+            })
+        } else {
+            None
+        }
+    }
+
+    /// Whether a box no wider or taller than [`LANE_SPAN`] holds the triangle's corners and
+    /// every point the lane loop evaluates over `area`: the pixel centres, one block past the
+    /// last column and one row past the last, each with its samples' offsets (at most half a
+    /// pixel). A few comparisons, where [`LaneEdges::fit`] bounds each edge; nearly every
+    /// triangle of a mesh passes.
+    #[inline(always)]
+    fn small(triangle: &RasterTriangle, area: PixelRect) -> bool {
+        let span = |corners: [i32; 3], first: u32, end: u32| {
+            let low = i64::from(corners[0].min(corners[1]).min(corners[2]));
+            let high = i64::from(corners[0].max(corners[1]).max(corners[2]));
+            // A pixel's samples lie within its own square; two more pixels past the end cover
+            // the steps past the last block or row.
+            let points_low = i64::from(first) * SUBPIXEL_ONE;
+            let points_high = (i64::from(end) + 2) * SUBPIXEL_ONE;
+            high.max(points_high) - low.min(points_low)
+        };
+        span(triangle.x, area.x0, area.x1) <= LANE_SPAN && span(triangle.y, area.y0, area.y1) <= LANE_SPAN
+    }
+
     /// Whether every value the lane loop forms over `area`, for `S` samples per pixel with
     /// edge-function offsets `sample_offsets`, fits in `i32`; where not (large triangles) the
     /// `i64` loop takes the triangle. Converting an `i32` to `f32` rounds exactly as converting
@@ -828,12 +932,22 @@ impl LaneEdges {
         })
     }
 
-    /// The layout for `S` samples per pixel with edge-function offsets `sample_offsets`, for
-    /// a triangle that [`LaneEdges::fit`] the area.
+    /// The layout of `triangle` over `area` (whole blocks: [`LaneEdges::whole_blocks`]) for
+    /// `S` samples per pixel at the offsets `pattern`, where its values fit in `i32`
+    /// ([`LaneEdges::small`], else [`LaneEdges::fit`]).
     #[inline(always)]
-    fn new<const S: usize>(edges: &[Edge; 3], sample_offsets: &[[i64; 3]; S]) -> Self {
+    fn new<const S: usize>(
+        triangle: &RasterTriangle,
+        pattern: &[(i32, i32)],
+        area: PixelRect,
+    ) -> Option<Self> {
+        let edges = triangle_edges(triangle, area.x0, area.y0);
+        let sample_offsets: [[i64; 3]; S] = sample_edge_offsets(&edges, pattern);
+        if !(Self::small(triangle, area) || Self::fit(&edges, &sample_offsets, area)) {
+            return None;
+        }
         let groups = (S * (LANES / S).max(1)) / LANES;
-        // Every value below is among those `fit` bounds.
+        // Every value below is among those `small` or `fit` bounds.
         let narrow = |value: i64| value as i32;
         let sample_offsets = sample_offsets.map(|offset| offset.map(narrow));
         let step_x = edges.map(|edge| narrow(edge.step_x));
@@ -855,23 +969,22 @@ impl LaneEdges {
         });
         let nearest =
             std::array::from_fn(|pixel| std::array::from_fn(|k| best[k] + pixel as i32 * step_x[k]));
-        LaneEdges {
+        Some(LaneEdges {
             row_start: edges.map(|edge| narrow(edge.row_start)),
             step_x,
             step_y: edges.map(|edge| narrow(edge.step_y)),
             offsets,
             biased,
             nearest,
-        }
+        })
     }
 }
 
 /// [`rasterize_samples`]'s loop in lanes for `S` = 4, 8 or 16 samples per pixel, over a
-/// triangle whose edge values fit in `i32` ([`LaneEdges::fit`]): a block's samples (two
-/// pixels at four samples, else one pixel) are tested and their depths interpolated eight at
-/// a time, in the same operations as the scalar loop, and the nearer ones written with a
-/// select. At four samples a row with an odd number of pixels ends with a pixel of its own,
-/// tested sample by sample as the scalar loop does.
+/// triangle whose edge values fit in `i32` ([`LaneEdges::new`]) and an area of whole blocks
+/// ([`LaneEdges::whole_blocks`]): a block's samples (two pixels at four samples, else one
+/// pixel) are tested and their depths interpolated eight at a time, in the same operations as
+/// the scalar loop, and the nearer ones written with a select.
 fn rasterize_sample_lanes<const S: usize>(
     edges: &LaneEdges,
     [d0, d1, d2]: [f32; 3],
@@ -886,6 +999,7 @@ fn rasterize_sample_lanes<const S: usize>(
     let groups = block_slots / LANES;
     let tile_width = rect.width() as usize;
     let columns = (area.x1 - area.x0) as usize;
+    debug_assert!(columns.is_multiple_of(block_pixels));
     let [weight0, weight1, weight2, inv_area_lanes] = [d0, d1, d2, inv_area].map(Floats::splat);
     let not_negative = Ints::splat(-1);
     let id_lanes = Ints::splat(id as i32);
@@ -895,9 +1009,9 @@ fn rasterize_sample_lanes<const S: usize>(
         let depths = &mut visibility.depth[row..row + columns * S];
         let ids = &mut visibility.triangle[row..row + columns * S];
         let mut centre = row_start;
-        let mut depth_blocks = depths.chunks_exact_mut(block_slots);
-        let mut id_blocks = ids.chunks_exact_mut(block_slots);
-        for (block_depths, block_ids) in (&mut depth_blocks).zip(&mut id_blocks) {
+        let depth_blocks = depths.chunks_exact_mut(block_slots);
+        let id_blocks = ids.chunks_exact_mut(block_slots);
+        for (block_depths, block_ids) in depth_blocks.zip(id_blocks) {
             let some_inside = edges.nearest[..block_pixels].iter().any(|nearest| {
                 ((centre[0] + nearest[0]) | (centre[1] + nearest[1]) | (centre[2] + nearest[2])) >= 0
             });
@@ -930,23 +1044,6 @@ fn rasterize_sample_lanes<const S: usize>(
                 }
             }
             centre = std::array::from_fn(|k| centre[k] + block_pixels as i32 * edges.step_x[k]);
-        }
-        // A last pixel of its own (four samples, an odd number of columns).
-        let tail = depth_blocks
-            .into_remainder()
-            .iter_mut()
-            .zip(id_blocks.into_remainder());
-        for (sample, (depth_slot, id_slot)) in tail.enumerate() {
-            let offset = |k: usize| edges.offsets[0][k].0[sample];
-            let bias = |k: usize| edges.biased[0][k].0[sample];
-            if ((centre[0] + bias(0)) | (centre[1] + bias(1)) | (centre[2] + bias(2))) >= 0 {
-                let [e0, e1, e2] = std::array::from_fn(|k| centre[k] + offset(k));
-                let depth = (e0 as f32 * d0 + e1 as f32 * d1 + e2 as f32 * d2) * inv_area;
-                if depth > *depth_slot {
-                    *depth_slot = depth;
-                    *id_slot = id;
-                }
-            }
         }
         row_start = std::array::from_fn(|k| row_start[k] + edges.step_y[k]);
     }
@@ -1332,6 +1429,43 @@ mod tests {
         );
     }
 
+    /// The planes give `edge_values`' integers, for triangles from pixel size to the guard
+    /// band's, at points near and far.
+    #[test]
+    fn edge_planes_equal_edge_values() {
+        let reach = (GUARD_BAND_PIXELS as i64) * SUBPIXEL_ONE;
+        let triangles = [
+            [(1.3, 0.7), (10.6, 2.2), (4.1, 11.4)],
+            [(-1.0e6, -9.0e5), (1.0e6, 3.5), (7.5, 1.0e6)],
+            [(1919.9, 0.1), (0.2, 1079.8), (1919.9, 1079.9)],
+        ];
+        for corners in triangles {
+            let t = setup_triangle(
+                corners.map(|(x, y)| vertex(x, y)),
+                1920,
+                1080,
+                SamplePattern::SINGLE,
+                SourceTriangle::default(),
+                &mut Vec::new(),
+            )
+            .expect("a triangle");
+            let planes = EdgePlanes::new(&t);
+            for (x, y) in [
+                (0, 0),
+                (3 * 256 + 131, 5 * 256 + 77),
+                (-reach, reach),
+                (reach, -reach),
+                (reach, reach),
+            ] {
+                assert_eq!(
+                    planes.at(x, y),
+                    edge_values(&t, x, y),
+                    "{corners:?} at ({x}, {y})"
+                );
+            }
+        }
+    }
+
     #[test]
     fn edge_values_sum_to_the_area() {
         let t = setup_triangle(
@@ -1414,14 +1548,16 @@ mod tests {
     }
 
     /// The multisample depth test takes its `i32` lanes where a triangle's edge values over the
-    /// tile fit (a small triangle) and its `i64` loop where they do not (one reaching far off
-    /// screen); both give the general loop's depths and triangles, bit for bit.
+    /// tile fit (a small triangle, by its span; a larger one, by the bound per edge) and its
+    /// `i64` loop where they do not (one reaching far off screen, or an area of odd width that
+    /// cannot be widened to whole blocks); both give the general loop's depths and triangles,
+    /// bit for bit, and the lanes leave the pixel they add to an odd row as it was.
     #[test]
     fn multisample_lanes_and_the_wide_loop_equal_the_general_loop() {
-        let rect = PixelRect {
+        let tile = |x1: u32| PixelRect {
             x0: 0,
             y0: 0,
-            x1: 12,
+            x1,
             y1: 12,
         };
         // Corner depths that differ, so that the interpolated depths differ in their last bits.
@@ -1430,18 +1566,34 @@ mod tests {
             ..vertex(x, y)
         };
         let small = [at(1.3, 0.7, 0.21), at(10.6, 2.2, 0.53), at(4.1, 11.4, 0.97)];
+        // At four samples, bounds of nine columns (2..11), of eleven ending at the tile's
+        // right edge (1..12), and of the whole of an 11-wide tile (0..11).
+        let odd_right = [at(2.3, 0.7, 0.21), at(10.4, 3.2, 0.53), at(4.1, 11.4, 0.97)];
+        let odd_left = [at(1.3, 0.7, 0.21), at(11.9, 2.2, 0.53), at(4.1, 11.4, 0.97)];
+        let odd_tile = [at(0.2, 0.7, 0.21), at(11.9, 2.2, 0.53), at(4.1, 11.4, 0.97)];
+        let large = [at(1.3, 0.7, 0.21), at(150.6, 2.2, 0.53), at(4.1, 130.4, 0.97)];
         let huge = [
             at(-500_000.0, -400_000.0, 0.21),
             at(600_000.0, 5.5, 0.53),
             at(6.5, 700_000.0, 0.97),
         ];
+        // (corners, tile width, small, lanes at four samples, lanes at eight and sixteen)
+        let cases = [
+            (small, 12, true, true, true),
+            (odd_right, 12, true, true, true),
+            (odd_left, 12, true, true, true),
+            (odd_tile, 11, true, false, true),
+            (large, 12, false, true, true),
+            (huge, 12, false, false, false),
+        ];
         for samples in [4, 8, 16] {
             let pattern = SamplePattern::new(samples).expect("a sample count");
-            let slots = 144 * samples as usize;
-            for (corners, fits) in [(small, true), (huge, false)] {
+            for (case, &(corners, width, small, lanes_at_4, lanes_wider)) in cases.iter().enumerate() {
+                let rect = tile(width);
+                let slots = (width * 12 * samples) as usize;
                 let triangle = setup_triangle(
                     corners,
-                    12,
+                    width,
                     12,
                     pattern,
                     SourceTriangle::default(),
@@ -1449,18 +1601,21 @@ mod tests {
                 )
                 .expect("a triangle");
                 let area = triangle.bounds.intersect(&rect).expect("in the tile");
-                let edges = triangle_edges(&triangle, area.x0, area.y0);
-                let offsets: Vec<[i64; 3]> = pattern
-                    .offsets()
-                    .iter()
-                    .map(|&(ox, oy)| edges.map(|e| e.along_x * i64::from(ox) + e.along_y * i64::from(oy)))
-                    .collect();
-                let fit = match samples {
-                    4 => LaneEdges::fit::<4>(&edges, offsets.as_slice().try_into().expect("4"), area),
-                    8 => LaneEdges::fit::<8>(&edges, offsets.as_slice().try_into().expect("8"), area),
-                    _ => LaneEdges::fit::<16>(&edges, offsets.as_slice().try_into().expect("16"), area),
+                let lane_area = match samples {
+                    4 => LaneEdges::whole_blocks::<4>(area, rect),
+                    8 => LaneEdges::whole_blocks::<8>(area, rect),
+                    _ => LaneEdges::whole_blocks::<16>(area, rect),
                 };
-                assert_eq!(fit, fits, "{samples} samples");
+                let lanes = lane_area.is_some_and(|lane_area| match samples {
+                    4 => LaneEdges::new::<4>(&triangle, pattern.offsets(), lane_area).is_some(),
+                    8 => LaneEdges::new::<8>(&triangle, pattern.offsets(), lane_area).is_some(),
+                    _ => LaneEdges::new::<16>(&triangle, pattern.offsets(), lane_area).is_some(),
+                });
+                let expected = if samples == 4 { lanes_at_4 } else { lanes_wider };
+                assert_eq!(lanes, expected, "{samples} samples, case {case}");
+                if let Some(lane_area) = lane_area {
+                    assert_eq!(LaneEdges::small(&triangle, lane_area), small, "case {case}");
+                }
                 let empty = || Visibility {
                     rect,
                     pattern,
@@ -1469,13 +1624,33 @@ mod tests {
                     raster_ids: Vec::new(),
                 };
                 let (mut fast, mut general) = (empty(), empty());
+                // A farther triangle drawn before over the whole tile, so that the pixel a
+                // block adds holds values the lanes must keep.
+                let before = setup_triangle(
+                    [at(0.0, 0.0, 0.15), at(24.0, 0.0, 0.05), at(0.0, 24.0, 0.15)],
+                    width,
+                    12,
+                    pattern,
+                    SourceTriangle::default(),
+                    &mut Vec::new(),
+                )
+                .expect("a triangle");
+                fast.rasterize_any_samples(&before, 1);
+                general.rasterize_any_samples(&before, 1);
                 fast.rasterize_triangle(&triangle, 0);
                 general.rasterize_any_samples(&triangle, 0);
                 let covered = fast.triangle.iter().filter(|&&id| id == 0).count();
-                assert!(covered > slots / 4, "{samples} samples: {covered} covered");
-                assert_eq!(fast.triangle, general.triangle, "{samples} samples");
+                assert!(
+                    covered > slots / 8,
+                    "{samples} samples, case {case}: {covered} covered"
+                );
+                assert_eq!(fast.triangle, general.triangle, "{samples} samples, case {case}");
                 let bits = |depths: &[f32]| depths.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
-                assert_eq!(bits(&fast.depth), bits(&general.depth), "{samples} samples");
+                assert_eq!(
+                    bits(&fast.depth),
+                    bits(&general.depth),
+                    "{samples} samples, case {case}"
+                );
             }
         }
     }

@@ -22,8 +22,8 @@ use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, 
 use crate::render::lanes::{LANES, Mask, Vec3s, samples_showing};
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
-    Corners, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility, edge_steps_x,
-    edge_steps_y, edge_values,
+    Corners, EdgePlanes, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility,
+    edge_steps_x, edge_steps_y, edge_values,
 };
 use crate::render::shade_fast::{FastLighting, FastPhong, LightingMemo, PhongBatch, SurfaceBatch};
 use crate::render::surface_lanes::{
@@ -498,15 +498,19 @@ fn shade_multisampled<'f>(
             TriangleShader::FlatWaiting(batch_index) => flat_waiting.push((local as u32, batch_index)),
             TriangleShader::Gouraud(vertex_colors) => {
                 let interpolated = GouraudColors::new(raster, &frame.corner_weights(id), vertex_colors);
+                // The edge functions at points scattered over the tile, as planes.
+                let planes = EdgePlanes::new(raster);
                 for &index in mine {
                     let (x, y) = point_at(index);
-                    colors[index as usize] = interpolated.at(edge_values(raster, x, y));
+                    colors[index as usize] = interpolated.at(planes.at(x, y));
                 }
             }
             TriangleShader::Phong(fast) => {
                 let corners = frame.corner_weights(id);
+                let planes = EdgePlanes::new(raster);
                 for &index in mine {
-                    let weights = source_weights(raster, &corners, point_at(index));
+                    let (x, y) = point_at(index);
+                    let weights = weights_from_edges(raster, &corners, planes.at(x, y));
                     phong.push(&fast, weights, index as usize, colors);
                 }
             }
