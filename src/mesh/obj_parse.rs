@@ -957,6 +957,9 @@ struct ModelAssembly<'a> {
     newest_vertex_of_position: Vec<u32>,
     model_of_position: Vec<u32>,
     model_number: u32,
+    /// Whether some vertex of the model being built has a texture coordinate or normal index:
+    /// until one does, the newest vertex at a position is the one every corner there uses.
+    model_has_extras: bool,
     /// ... and for each vertex, the previous vertex of its model at the same position
     /// ([`ABSENT`] at the first) and its texture coordinate and normal indices.
     previous_at_position: Vec<u32>,
@@ -989,6 +992,7 @@ impl<'a> ModelAssembly<'a> {
             newest_vertex_of_position: vec![ABSENT; position_count],
             model_of_position: vec![u32::MAX; position_count],
             model_number: 0,
+            model_has_extras: false,
             previous_at_position: Vec::with_capacity(position_count),
             texcoord_and_normal: Vec::with_capacity(position_count),
         }
@@ -1002,10 +1006,30 @@ impl<'a> ModelAssembly<'a> {
         if runs.last().is_none_or(|&(_, last)| last != material) {
             runs.push((self.geometry.triangles.len(), material));
         }
-        for index in range {
+        // Scans have positions only: their corners skip the search among a position's vertices.
+        let with_extras_from = if triangles.extras.is_empty() {
+            range.end
+        } else {
+            triangles.extras_from.clamp(range.start, range.end)
+        };
+        for &positions in &triangles.positions[range.start..with_extras_from] {
+            let vertices = positions.map(|position| self.vertex_without_extras(position));
+            self.geometry.triangles.push(vertices);
+        }
+        for index in with_extras_from..range.end {
             let vertices = triangles.corners(index).map(|corner| self.vertex(corner));
             self.geometry.triangles.push(vertices);
         }
+    }
+
+    /// [`Self::vertex`] for a corner with a position only.
+    #[inline(always)]
+    fn vertex_without_extras(&mut self, position: u32) -> u32 {
+        let p = position as usize;
+        if !self.model_has_extras && self.model_of_position[p] == self.model_number {
+            return self.newest_vertex_of_position[p];
+        }
+        self.vertex([position, ABSENT, ABSENT])
     }
 
     /// The vertex of the model being built for `corner`, created when it is new.
@@ -1047,6 +1071,7 @@ impl<'a> ModelAssembly<'a> {
         if !self.text.normals.is_empty() {
             self.file_normals.push(file_normal);
         }
+        self.model_has_extras |= [texcoord, normal] != [ABSENT; 2];
         self.previous_at_position.push(self.newest_vertex_of_position[p]);
         self.texcoord_and_normal.push([texcoord, normal]);
         self.newest_vertex_of_position[p] = vertex;
@@ -1076,6 +1101,7 @@ impl<'a> ModelAssembly<'a> {
         self.with_texcoords = 0;
         self.with_normals = 0;
         self.model_number += 1;
+        self.model_has_extras = false;
     }
 
     fn into_geometry(mut self) -> ObjGeometry {
@@ -1278,6 +1304,13 @@ mod tests {
                  o mixed\nf 1/1/1 2//1 3/3\n"
             ),
             format!("{TRIANGLE}vn 0 0 1\nf 1//1 2//1 3//1\nf 3//1 2//1 1//1\n"),
+            // Faces with positions only before, between and after faces with texture
+            // coordinates or normals at the same positions, in one model and across models
+            // (the small ranges put them in ranges with and without such faces).
+            format!(
+                "{TRIANGLE}vt 0 0\nvn 0 0 1\nf 1 2 3\nf 3 2 1\nf 1/1 2 3//1\nf 1 2 3\nf 2 3 1\n\
+                 o next\nf 1 2 3\nf 1/1/1 2 3\nf 3 1 2\no last\nf 3 1 2\nf 1 2 3\n"
+            ),
             format!("{TRIANGLE}vt 0.25 0.75\nvt 1 1\nvt 0 1\no a\nf 1/1 2/2 3/3\no b\nf 1 3 2\n"),
             // Polylines and points are skipped; CRLF and tab separators, indented lines,
             // Unicode whitespace, a last line without an end.
