@@ -31,6 +31,40 @@ pub struct Mask([u32; LANES]);
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Ints(pub [i32; LANES]);
 
+/// One `f64` per lane, for whole numbers: exact below 2⁵³ in magnitude, where `i32` lanes are
+/// too narrow (the one-sample rasterizer's edge functions on large triangles).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Wides(pub [f64; LANES]);
+
+impl Wides {
+    #[inline(always)]
+    pub fn splat(value: f64) -> Self {
+        Wides([value; LANES])
+    }
+
+    /// `>` per lane.
+    #[inline(always)]
+    pub fn gt(self, other: Self) -> Mask {
+        backend::gt_wides(self, other)
+    }
+
+    /// Each lane `as f32`: rounded once, to nearest, ties to even (so a whole number below 2⁵³
+    /// converts exactly as the same integer held in an `i64` does).
+    #[inline(always)]
+    pub fn to_floats(self) -> Floats {
+        backend::wides_to_floats(self)
+    }
+}
+
+/// `+` per lane.
+impl Add for Wides {
+    type Output = Wides;
+    #[inline(always)]
+    fn add(self, other: Wides) -> Wides {
+        backend::add_wides(self, other)
+    }
+}
+
 impl Floats {
     #[inline(always)]
     pub fn splat(value: f32) -> Self {
@@ -247,7 +281,22 @@ use portable as backend;
 /// it).
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 mod portable {
-    use super::{Floats, Ints, Mask};
+    use super::{Floats, Ints, Mask, Wides};
+
+    #[inline(always)]
+    pub fn add_wides(a: Wides, b: Wides) -> Wides {
+        Wides(std::array::from_fn(|i| a.0[i] + b.0[i]))
+    }
+
+    #[inline(always)]
+    pub fn gt_wides(a: Wides, b: Wides) -> Mask {
+        Mask(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
+    }
+
+    #[inline(always)]
+    pub fn wides_to_floats(a: Wides) -> Floats {
+        Floats(a.0.map(|value| value as f32))
+    }
 
     #[inline(always)]
     fn zip(a: Floats, b: Floats, f: impl Fn(f32, f32) -> f32) -> Floats {
@@ -378,13 +427,47 @@ mod portable {
 #[allow(unsafe_code)]
 mod sse {
     use std::arch::x86_64::{
-        __m128, __m128i, _mm_add_epi32, _mm_add_ps, _mm_and_ps, _mm_and_si128, _mm_andnot_ps,
-        _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmpeq_ps, _mm_cmpgt_epi32, _mm_cmpgt_ps, _mm_cmple_ps,
-        _mm_cmplt_epi32, _mm_cvtepi32_ps, _mm_cvttps_epi32, _mm_div_ps, _mm_movemask_ps, _mm_mul_ps,
-        _mm_or_ps, _mm_set1_epi32, _mm_sqrt_ps, _mm_sub_epi32, _mm_sub_ps,
+        __m128, __m128d, __m128i, _mm_add_epi32, _mm_add_pd, _mm_add_ps, _mm_and_ps, _mm_and_si128,
+        _mm_andnot_ps, _mm_castpd_ps, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmpeq_ps, _mm_cmpgt_epi32,
+        _mm_cmpgt_pd, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps, _mm_cvtpd_ps,
+        _mm_cvttps_epi32, _mm_div_ps, _mm_movelh_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_epi32,
+        _mm_shuffle_ps, _mm_sqrt_ps, _mm_sub_epi32, _mm_sub_ps,
     };
 
-    use super::{Floats, Ints, LANES, Mask};
+    use super::{Floats, Ints, LANES, Mask, Wides};
+
+    #[inline(always)]
+    pub fn add_wides(a: Wides, b: Wides) -> Wides {
+        let (a, b): ([__m128d; 4], [__m128d; 4]) = (bytemuck::cast(a.0), bytemuck::cast(b.0));
+        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+        let quarter = |i: usize| unsafe { _mm_add_pd(a[i], b[i]) };
+        Wides(bytemuck::cast([quarter(0), quarter(1), quarter(2), quarter(3)]))
+    }
+
+    /// Two `cmpgtpd` per half, their 64-bit masks narrowed to 32 bits by taking each one's
+    /// low half (all ones or all zeros, like the whole).
+    #[inline(always)]
+    pub fn gt_wides(a: Wides, b: Wides) -> Mask {
+        let (a, b): ([__m128d; 4], [__m128d; 4]) = (bytemuck::cast(a.0), bytemuck::cast(b.0));
+        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+        let half = |i: usize| unsafe {
+            let low = _mm_castpd_ps(_mm_cmpgt_pd(a[2 * i], b[2 * i]));
+            let high = _mm_castpd_ps(_mm_cmpgt_pd(a[2 * i + 1], b[2 * i + 1]));
+            _mm_shuffle_ps::<0b10_00_10_00>(low, high)
+        };
+        Mask(bytemuck::cast([half(0), half(1)]))
+    }
+
+    /// `cvtpd2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's `as f32`.
+    #[inline(always)]
+    pub fn wides_to_floats(a: Wides) -> Floats {
+        let quarters: [__m128d; 4] = bytemuck::cast(a.0);
+        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+        let half = |i: usize| unsafe {
+            _mm_movelh_ps(_mm_cvtpd_ps(quarters[2 * i]), _mm_cvtpd_ps(quarters[2 * i + 1]))
+        };
+        Floats(bytemuck::cast([half(0), half(1)]))
+    }
 
     const _: () = assert!(LANES == 8, "the lanes are two SSE registers");
 
@@ -1038,6 +1121,38 @@ mod tests {
             items.map(|n| n as i32 * 2)
         );
         assert_eq!(Floats::gather(&items, |&n| n as f32).0, items.map(|n| n as f32));
+    }
+
+    /// Wide lanes add, compare and convert to `f32` as the scalar operations do, per backend;
+    /// whole numbers below 2⁵³ convert as the same `i64` does (ties to even included).
+    #[test]
+    fn wide_lanes_equal_the_scalar_operations() {
+        let whole = [
+            0i64,
+            -1,
+            (1 << 24) + 1,
+            -(1 << 40) - 3,
+            (1 << 52) + 7,
+            3 << 25,
+            -(5 << 30) + 1,
+            1 << 31,
+        ];
+        let a = Wides(whole.map(|n| n as f64));
+        let b = Wides([1.0, -1.0, 0.5, -2e12, 4e15, 3.0, -7.0, 2147483648.0]);
+        for (sum, mask, converted) in [
+            (a + b, a.gt(b), a.to_floats()),
+            (
+                portable::add_wides(a, b),
+                portable::gt_wides(a, b),
+                portable::wides_to_floats(a),
+            ),
+        ] {
+            for (i, &n) in whole.iter().enumerate() {
+                assert_eq!(sum.0[i].to_bits(), (a.0[i] + b.0[i]).to_bits());
+                assert_eq!(mask.lane(i), a.0[i] > b.0[i]);
+                assert_eq!(converted.0[i].to_bits(), (n as f32).to_bits(), "lane {i}");
+            }
+        }
     }
 
     /// Which samples show a triangle, per backend, against a plain comparison: every pattern's

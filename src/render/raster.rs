@@ -34,7 +34,7 @@
 
 use crate::render::TILE_SIZE;
 use crate::render::bin::{RasterChunk, raster_id};
-use crate::render::lanes::{Floats, Ints, LANES};
+use crate::render::lanes::{Floats, Ints, LANES, Mask, Wides};
 use glam::Vec3;
 
 /// Fractional bits of the fixed-point screen coordinates.
@@ -1123,6 +1123,20 @@ fn depth_test_single_sample<const IDS: bool>(
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
     let columns = (area.x1 - area.x0) as usize;
+    // Triangles at least a group of lanes wide (all but the smallest): eight pixels at a time,
+    // in `i32` lanes where their edge functions fit, else (large triangles) in `f64` lanes.
+    if columns >= LANES {
+        if RowLanes::<Ints>::fit(&edges, area) {
+            let lanes = RowLanes::<Ints>::new(&edges, triangle.depth, inv_area);
+            lanes.depth_test::<IDS>(rect, area, rows, depth, ids, id);
+            return;
+        }
+        if RowLanes::<Wides>::fit(&edges, area) {
+            let lanes = RowLanes::<Wides>::new(&edges, triangle.depth, inv_area);
+            lanes.depth_test::<IDS>(rect, area, rows, depth, ids, id);
+            return;
+        }
+    }
     let [m0, m1, m2] = edges.map(|e| e.min_inside);
     // The depth where the edge values put a pixel centre inside the triangle.
     let covered_depth = |[e0, e1, e2]: [i64; 3]| {
@@ -1162,6 +1176,208 @@ fn depth_test_single_sample<const IDS: bool>(
         }
         for edge in &mut edges {
             edge.row_start += edge.step_y;
+        }
+    }
+}
+
+/// Whole numbers in lanes, as [`RowLanes`] holds edge functions: `i32` lanes where a
+/// triangle's values over the area fit (the cheaper), `f64` lanes (exact below 2⁵³) for large
+/// triangles, whose edge functions grow with their size squared.
+trait EdgeLanes: Copy + std::ops::Add<Output = Self> {
+    /// The largest magnitude a lane holds exactly.
+    const LIMIT: i64;
+    /// `value` in every lane (`|value| ≤ LIMIT`).
+    fn splat_whole(value: i64) -> Self;
+    /// Each lane's `value(lane)` (`|value| ≤ LIMIT`).
+    fn from_whole(value: impl Fn(usize) -> i64) -> Self;
+    fn gt(self, other: Self) -> Mask;
+    /// Each lane as `f32`, rounded as converting the same `i64` rounds.
+    fn to_floats(self) -> Floats;
+}
+
+impl EdgeLanes for Ints {
+    const LIMIT: i64 = i32::MAX as i64;
+    #[inline(always)]
+    fn splat_whole(value: i64) -> Self {
+        Ints::splat(value as i32)
+    }
+    #[inline(always)]
+    fn from_whole(value: impl Fn(usize) -> i64) -> Self {
+        Ints(std::array::from_fn(|lane| value(lane) as i32))
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> Mask {
+        Ints::gt(self, other)
+    }
+    #[inline(always)]
+    fn to_floats(self) -> Floats {
+        Ints::to_floats(self)
+    }
+}
+
+impl EdgeLanes for Wides {
+    const LIMIT: i64 = 1 << 53;
+    #[inline(always)]
+    fn splat_whole(value: i64) -> Self {
+        Wides::splat(value as f64)
+    }
+    #[inline(always)]
+    fn from_whole(value: impl Fn(usize) -> i64) -> Self {
+        Wides(std::array::from_fn(|lane| value(lane) as f64))
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> Mask {
+        Wides::gt(self, other)
+    }
+    #[inline(always)]
+    fn to_floats(self) -> Floats {
+        Wides::to_floats(self)
+    }
+}
+
+/// A triangle's edge functions in lanes `E` over the rows of one tile area, for
+/// [`depth_test_single_sample`]: each row is walked in groups of [`LANES`] pixels from the
+/// area's first column, lane `i` at the `i`-th pixel of its group. The rows and groups are
+/// stepped in exact `i64` scalars, splatted once per group.
+struct RowLanes<E> {
+    /// Each edge's value at the centre of the area's first pixel.
+    row_start: [i64; 3],
+    step_y: [i64; 3],
+    /// One group's step along a row: `LANES` pixels.
+    group_step: [i64; 3],
+    /// Per edge, each lane's offset from its group's first pixel centre.
+    offsets: [E; 3],
+    /// Per edge, the fill rule's bound: a lane's centre is inside where each edge value is
+    /// above it (`E > min_inside − 1` is `E ≥ min_inside`).
+    above: [E; 3],
+    corner_depths: [Floats; 3],
+    inv_area: Floats,
+}
+
+impl<E: EdgeLanes> RowLanes<E> {
+    /// Whether every value the lanes form over `area` is held exactly in `E`: a centre up to a
+    /// group past the last column and a row past the last row, plus a lane's offset. Where not
+    /// (a triangle reaching far off the tile) a wider kind or the `i64` loop takes it. A whole
+    /// number held exactly converts to `f32` as the same `i64` does, so the depths keep their
+    /// bits.
+    #[inline(always)]
+    fn fit(edges: &[Edge; 3], area: PixelRect) -> bool {
+        let (columns, rows) = (i64::from(area.x1 - area.x0), i64::from(area.y1 - area.y0));
+        edges.iter().all(|edge| {
+            let bound = edge.row_start.abs()
+                + (columns + 2 * LANES as i64) * edge.step_x.abs()
+                + (rows + 1) * edge.step_y.abs()
+                + 1;
+            bound <= E::LIMIT
+        })
+    }
+
+    /// The lanes of a triangle whose edges [`RowLanes::fit`] the area, with corner depths
+    /// `depths` and `1/A` `inv_area`.
+    #[inline(always)]
+    fn new(edges: &[Edge; 3], depths: [f32; 3], inv_area: f32) -> Self {
+        RowLanes {
+            row_start: edges.map(|edge| edge.row_start),
+            step_y: edges.map(|edge| edge.step_y),
+            group_step: edges.map(|edge| edge.step_x * LANES as i64),
+            offsets: edges.map(|edge| E::from_whole(|lane| edge.step_x * lane as i64)),
+            above: edges.map(|edge| E::splat_whole(edge.min_inside - 1)),
+            corner_depths: depths.map(Floats::splat),
+            inv_area: Floats::splat(inv_area),
+        }
+    }
+
+    /// The depth test over `area` (within `rect`), as [`depth_test_single_sample`] states it:
+    /// per group, the inside test and the depth `(e₀·d₀ + e₁·d₁ + e₂·d₂)·(1/A)` in the scalar
+    /// loop's operations, lane by lane, and the nearer depths (and `id`) written with a select.
+    /// A group that would run past the tile's row is tested on a copy padded with depths
+    /// nothing is nearer than; one that ends past the area but within the row is tested in
+    /// place, its extra lanes outside the triangle's bounds and so outside the triangle (the
+    /// edge functions are exact).
+    #[inline(always)]
+    fn depth_test<const IDS: bool>(
+        &self,
+        rect: PixelRect,
+        area: PixelRect,
+        rows: RowLayout,
+        depth: &mut [f32],
+        ids: &mut [u32],
+        id: u32,
+    ) {
+        let columns = (area.x1 - area.x0) as usize;
+        let groups = columns.div_ceil(LANES);
+        // The pixels from the area's first column to the tile's last.
+        let row_length = (rect.x1 - area.x0) as usize;
+        let full_groups = (row_length / LANES).min(groups);
+        let id_lanes = Ints::splat(id as i32);
+        let mut row_start = self.row_start;
+        for py in area.y0..area.y1 {
+            let row = (py - rect.y0) as usize * rows.stride + (area.x0 - rows.x_origin) as usize;
+            let mut centre = row_start;
+            for group in 0..groups {
+                let first = row + group * LANES;
+                if group < full_groups {
+                    let group_depths = (&mut depth[first..first + LANES])
+                        .try_into()
+                        .expect("a group of lanes");
+                    let group_ids = IDS.then(|| {
+                        (&mut ids[first..first + LANES])
+                            .try_into()
+                            .expect("a group of lanes")
+                    });
+                    self.test_group(centre, group_depths, group_ids, id_lanes);
+                } else {
+                    let count = row_length - group * LANES;
+                    let mut padded_depths = [f32::INFINITY; LANES];
+                    let mut padded_ids = [NO_TRIANGLE; LANES];
+                    padded_depths[..count].copy_from_slice(&depth[first..first + count]);
+                    if IDS {
+                        padded_ids[..count].copy_from_slice(&ids[first..first + count]);
+                    }
+                    self.test_group(
+                        centre,
+                        &mut padded_depths,
+                        IDS.then_some(&mut padded_ids),
+                        id_lanes,
+                    );
+                    depth[first..first + count].copy_from_slice(&padded_depths[..count]);
+                    if IDS {
+                        ids[first..first + count].copy_from_slice(&padded_ids[..count]);
+                    }
+                }
+                centre = std::array::from_fn(|k| centre[k] + self.group_step[k]);
+            }
+            row_start = std::array::from_fn(|k| row_start[k] + self.step_y[k]);
+        }
+    }
+
+    /// The depth test of one group of pixels whose first centre has edge values `centre`:
+    /// where a lane is inside and nearer than `depths`, its depth goes there and `id` into
+    /// `ids` (when given).
+    #[inline(always)]
+    fn test_group(
+        &self,
+        centre: [i64; 3],
+        depths: &mut [f32; LANES],
+        ids: Option<&mut [u32; LANES]>,
+        id: Ints,
+    ) {
+        let [e0, e1, e2]: [E; 3] = std::array::from_fn(|k| E::splat_whole(centre[k]) + self.offsets[k]);
+        let inside = e0
+            .gt(self.above[0])
+            .and(e1.gt(self.above[1]))
+            .and(e2.gt(self.above[2]));
+        // Most groups of a large triangle's bounds outside it are skipped here.
+        if !inside.any() {
+            return;
+        }
+        let [d0, d1, d2] = self.corner_depths;
+        let depth = (e0.to_floats() * d0 + e1.to_floats() * d1 + e2.to_floats() * d2) * self.inv_area;
+        let old = Floats(*depths);
+        let nearer = inside.and(depth.gt(old));
+        *depths = nearer.select(depth, old).0;
+        if let Some(ids) = ids {
+            *ids = bytemuck::cast(nearer.select_ints(id, Ints(bytemuck::cast(*ids))).0);
         }
     }
 }
@@ -1545,6 +1761,109 @@ mod tests {
             covered > 1500 && kept > 100,
             "{covered} pixels covered, {kept} kept"
         );
+    }
+
+    /// The one-sample depth test takes its `i32` lanes where a triangle is a group of lanes wide
+    /// and its edge values over the tile fit, `f64` lanes where they are exact there (a large
+    /// triangle), and its `i64` loop elsewhere (narrow triangles, one reaching far off screen);
+    /// all give the general loop's depths and triangles, bit for bit. The tile is 21 pixels wide, so groups run past its row and are tested on a copy;
+    /// triangles overlap at staggered depths, so later ones are nearer in some pixels only;
+    /// squares cut along a diagonal put pixel centres exactly on edges.
+    #[test]
+    fn single_sample_lanes_and_the_wide_loop_equal_the_general_loop() {
+        let rect = PixelRect {
+            x0: 40,
+            y0: 64,
+            x1: 61,
+            y1: 77,
+        };
+        let at = |x: f32, y: f32, depth: f32| ScreenVertex {
+            depth,
+            ..vertex(x, y)
+        };
+        let mut corners = vec![
+            [at(41.3, 64.7, 0.21), at(60.6, 66.2, 0.53), at(44.1, 76.4, 0.97)],
+            [
+                at(-500_000.0, -400_000.0, 0.21),
+                at(600_000.0, 69.5, 0.53),
+                at(46.5, 700_000.0, 0.97),
+            ],
+            [at(43.0, 65.0, 0.6), at(45.5, 75.0, 0.7), at(47.2, 66.0, 0.65)],
+            // Large: its edge functions outgrow `i32` but not `f64`.
+            [
+                at(-300.0, -200.0, 0.3),
+                at(55.0, 70.3, 0.6),
+                at(-100.0, 600.0, 0.4),
+            ],
+        ];
+        for k in 0..16u32 {
+            let (x0, y0) = (38.0 + k as f32 * 1.5, 63.0 + (k % 5) as f32);
+            let size = 2.0 + (k % 6) as f32 * 3.0;
+            let corner = |x: f32, y: f32| at(x, y, 0.25 + 0.04 * k as f32 - 0.02 * (x - x0));
+            let (a, b, c, d) = (
+                corner(x0, y0),
+                corner(x0 + size, y0),
+                corner(x0 + size, y0 + size),
+                corner(x0, y0 + size),
+            );
+            corners.extend([[a, b, c], [a, c, d], [c, b, a]]);
+        }
+        let triangles: Vec<_> = corners
+            .into_iter()
+            .filter_map(|t| {
+                setup_triangle(
+                    t,
+                    80,
+                    90,
+                    SamplePattern::SINGLE,
+                    SourceTriangle::default(),
+                    &mut Vec::new(),
+                )
+            })
+            .collect();
+        let (mut lanes, mut wide_lanes, mut wide, mut narrow) = (0, 0, 0, 0);
+        for triangle in &triangles {
+            let Some(area) = triangle.bounds.intersect(&rect) else {
+                continue;
+            };
+            let edges = triangle_edges(triangle, area.x0, area.y0);
+            let fits = (
+                RowLanes::<Ints>::fit(&edges, area),
+                RowLanes::<Wides>::fit(&edges, area),
+            );
+            match (area.width() as usize >= LANES, fits) {
+                (true, (true, _)) => lanes += 1,
+                (true, (false, true)) => wide_lanes += 1,
+                (true, (false, false)) => wide += 1,
+                _ => narrow += 1,
+            }
+        }
+        assert!(
+            lanes > 20 && wide_lanes == 1 && wide == 1 && narrow > 5,
+            "{lanes} in lanes, {wide_lanes} in wide lanes, {wide} wide, {narrow} narrow"
+        );
+        let empty = || Visibility {
+            rect,
+            pattern: SamplePattern::SINGLE,
+            depth: vec![f32::NEG_INFINITY; 21 * 13],
+            triangle: vec![NO_TRIANGLE; 21 * 13],
+            raster_ids: Vec::new(),
+        };
+        let (mut fast, mut general) = (empty(), empty());
+        for (local, triangle) in (0..).zip(&triangles) {
+            fast.rasterize_triangle(triangle, local);
+            general.rasterize_any_samples(triangle, local);
+        }
+        let shown = |visibility: &Visibility| {
+            let mut ids = visibility.triangle.clone();
+            ids.sort_unstable();
+            ids.dedup();
+            ids.len()
+        };
+        assert!(shown(&general) > 12, "{} triangles shown", shown(&general));
+        assert_eq!(fast.triangle, general.triangle);
+        let bits = |depths: &[f32]| depths.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&fast.depth), bits(&general.depth));
     }
 
     /// The multisample depth test takes its `i32` lanes where a triangle's edge values over the

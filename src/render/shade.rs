@@ -19,13 +19,13 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
-use crate::render::lanes::{LANES, Mask, Vec3s, samples_showing};
+use crate::render::lanes::{Floats, LANES, Mask, Vec3s, samples_showing};
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
     Corners, EdgePlanes, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility,
     edge_steps_x, edge_steps_y, edge_values,
 };
-use crate::render::shade_fast::{FastLighting, FastPhong, LightingMemo, PhongBatch, SurfaceBatch};
+use crate::render::shade_fast::{FastLighting, FastPhong, LightingMemo, PhongBatch, PhongRows, SurfaceBatch};
 use crate::render::surface_lanes::{
     EdgeQueue, QueuedPixels, RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, texture_colors,
 };
@@ -704,8 +704,9 @@ fn shade_single_sample<'f>(
     flat_waiting.clear();
     gouraud.clear();
     sources.clear();
-    sources.resize(count + 1, PixelSource::Shaded);
-    sources[count] = PixelSource::Fill;
+    // Unseen triangles keep `Fill`: no pixel reads it, and the last pass can then take its
+    // fill-only form when every seen triangle is one colour.
+    sources.resize(count + 1, PixelSource::Fill);
     seen.clear();
     seen.resize(count + 1, false);
     fills.clear();
@@ -771,6 +772,7 @@ fn shade_single_sample<'f>(
             });
             continue;
         }
+        sources[local] = PixelSource::Shaded;
         let Some(area) = raster.bounds.intersect(&rect) else {
             continue;
         };
@@ -782,10 +784,24 @@ fn shade_single_sample<'f>(
             stride,
         };
         match shader {
-            TriangleShader::Phong(fast) => pixels.for_each(|offset, _, edges| {
-                let weights = weights_from_edges(raster, &corners, edges);
-                phong.push(&fast, weights, offset, target.color);
-            }),
+            TriangleShader::Phong(fast) => {
+                match PhongRows::of(&fast, raster.inv_area, raster.inv_w, corners) {
+                    Some(rows) if area.width() as usize >= LANES => {
+                        pixels.for_each_group(|first, shown, edges| {
+                            let colors = rows.shade(edges);
+                            for (lane, &color) in colors.iter().enumerate() {
+                                if shown.lane(lane) {
+                                    target.color[first + lane] = color;
+                                }
+                            }
+                        })
+                    }
+                    _ => pixels.for_each(|offset, _, edges| {
+                        let weights = weights_from_edges(raster, &corners, edges);
+                        phong.push(&fast, weights, offset, target.color);
+                    }),
+                }
+            }
             TriangleShader::Varying(shader) => shade_varying(
                 frame,
                 raster,
@@ -868,6 +884,46 @@ impl ShownPixels<'_> {
                     visit(row * self.stride + px as usize, (pixel_centre(px), y), edges);
                 }
                 edges = [edges[0] + step[0], edges[1] + step[1], edges[2] + step[2]];
+            }
+        }
+    }
+}
+
+impl ShownPixels<'_> {
+    /// Calls `visit(first, shown, edges)` for each group of [`LANES`] neighbouring pixels of a
+    /// row of the area, from its first column, where at least one shows the triangle: `first`
+    /// the group's first pixel's offset in the band, `shown` which lanes show it (none past the
+    /// area), `edges` the triangle's edge functions at each lane's pixel centre, converted to
+    /// `f32` (stepped exactly in `i64` first, so each is the value `edge_values` gives,
+    /// rounded once).
+    #[inline]
+    fn for_each_group(&self, mut visit: impl FnMut(usize, Mask, [Floats; 3])) {
+        let rect = self.visibility.rect;
+        let tile_width = rect.width() as usize;
+        let (first, last) = (
+            (self.area.x0 - rect.x0) as usize,
+            (self.area.x1 - rect.x0) as usize,
+        );
+        let step = edge_steps_x(self.raster);
+        for py in self.area.y0..self.area.y1 {
+            let row = (py - rect.y0) as usize;
+            let ids = &self.visibility.triangle[row * tile_width..][first..last];
+            let mut group_start = edge_values(self.raster, pixel_centre(self.area.x0), pixel_centre(py));
+            for (group, ids) in ids.chunks(LANES).enumerate() {
+                let shown = Mask::from_bools(std::array::from_fn(|lane| ids.get(lane) == Some(&self.local)));
+                if shown.any() {
+                    let edges = std::array::from_fn(|k| {
+                        Floats(std::array::from_fn(|lane| {
+                            (group_start[k] + step[k] * lane as i64) as f32
+                        }))
+                    });
+                    visit(
+                        row * self.stride + self.area.x0 as usize + group * LANES,
+                        shown,
+                        edges,
+                    );
+                }
+                group_start = std::array::from_fn(|k| group_start[k] + step[k] * LANES as i64);
             }
         }
     }
@@ -1560,7 +1616,7 @@ mod tests {
                 let (mut run_caches, mut general_caches) = (new_caches(), new_caches());
                 let mut flat = FlatBatch::default();
                 let mut lightings = LightingMemo::default();
-                let (mut flat_lit, mut varying, mut general_left) = (0, 0, 0);
+                let (mut flat_lit, mut varying, mut general_left, mut in_rows) = (0, 0, 0, 0);
                 let (mut shaded, mut back_seen) = (0, 0);
                 for tile in 0..frame.tiles.count() {
                     let rect = frame.tiles.rect(tile);
@@ -1605,6 +1661,27 @@ mod tests {
                                 let mut batch = PhongBatch::default();
                                 batch.push(&fast, source_weights(raster, &corners, at), 0, &mut color);
                                 batch.flush(&mut color);
+                                // And through the rows of large triangles: a group of pixels
+                                // around this one, in the lane its column gives it.
+                                if let Some(rows) =
+                                    PhongRows::of(&fast, raster.inv_area, raster.inv_w, corners)
+                                {
+                                    let lane = (px as usize) % LANES;
+                                    let (centre, step) =
+                                        (edge_values(raster, at.0, at.1), edge_steps_x(raster));
+                                    let group = std::array::from_fn(|k| {
+                                        Floats(std::array::from_fn(|l| {
+                                            (centre[k] + step[k] * (l as i64 - lane as i64)) as f32
+                                        }))
+                                    });
+                                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                                    assert_eq!(
+                                        bits(rows.shade(group)[lane]),
+                                        bits(color[0]),
+                                        "rows at {px}, {py}"
+                                    );
+                                    in_rows += 1;
+                                }
                                 color[0]
                             }
                             TriangleShader::Varying(shader) => {
@@ -1667,6 +1744,12 @@ mod tests {
                         "{back_faces:?}: {flat_lit} flat pixels lit in lanes, {varying} modulated"
                     );
                 }
+                if shading == Shading::Phong && view.is_none() && surfaces.is_none() && !slerp {
+                    assert!(
+                        in_rows > 100,
+                        "{model:?} {look:?}: {in_rows} pixels shaded in rows"
+                    );
+                }
                 // Culled back faces are not drawn.
                 if back_faces != BackFaces::Cull {
                     assert!(
@@ -1705,6 +1788,16 @@ mod tests {
                     [first, second],
                     (260, 140),
                 );
+                // Zoomed in on the Phong pairs, so that triangles span several groups of
+                // lanes (`PhongRows`).
+                let zoomed = first == Phong || second == Phong;
+                if zoomed {
+                    scene.camera.projection = crate::scene::Projection::Perspective {
+                        fov_y_degrees: 8.0,
+                        near: 4.9,
+                        far: 100.0,
+                    };
+                }
                 if let Some(surfaces) = surfaces {
                     shade_fast::tests::vary_surfaces(&mut scene, surfaces);
                 }
@@ -1759,7 +1852,7 @@ mod tests {
                     covered_pixels += seen;
                 }
                 assert!(
-                    empty_tiles > 0 && covered_pixels > 2000,
+                    (zoomed || empty_tiles > 0) && covered_pixels > 2000,
                     "{empty_tiles} empty tiles, {covered_pixels} pixels"
                 );
             }

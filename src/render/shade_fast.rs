@@ -65,6 +65,7 @@ use crate::render::DebugView;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer, shown_component};
 use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
 use crate::render::normals::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
+use crate::render::raster::Corners;
 use crate::render::shadow::shadow_visibility_lanes;
 use crate::render::surface_lanes::{
     EdgeQueue, QueuedPixels, RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, surface_lanes, varies,
@@ -1024,6 +1025,80 @@ impl<'f> SurfaceBatch<'f> {
         for (&offset, &lit) in offsets.iter().zip(&lit) {
             color[offset] = lit;
         }
+    }
+}
+
+/// The lit pixels of one [`FastPhong`] triangle with Nlerp normals, shaded a group of
+/// [`LANES`] neighbouring pixels of a row at a time: the triangle's corners, `1/w` and `1/A`
+/// splatted once, so that a group's weights, position and normal are interpolated lane-wise
+/// with no per-pixel gathering or queueing. Each pixel gets the bits [`FastPhong::shade`]
+/// gives it: `shade::weights_from_edges` and the interpolation are the same operations in the
+/// same order, lane by lane. For triangles whose rows span groups of pixels; the small ones
+/// of dense meshes go through a [`PhongBatch`], which fills its lanes across triangles.
+pub struct PhongRows<'f> {
+    lighting: FastLighting<'f>,
+    triangle: &'f FrameTriangle,
+    positions: [Vec3s; 3],
+    normals: [Vec3s; 3],
+    reversed: bool,
+    inv_area: Floats,
+    inv_w: [Floats; 3],
+    corners: Corners,
+}
+
+impl<'f> PhongRows<'f> {
+    /// The rows of `phong`'s triangle, whose raster triangle (or a piece of it) has `1/A`
+    /// `inv_area`, corners' `1/w` `inv_w` and corner weights `corners`; `None` unless its
+    /// pixels are lit (not a debug view) with normals interpolated component by component
+    /// on a surface that does not vary.
+    #[inline]
+    pub fn of(phong: &FastPhong<'f>, inv_area: f32, inv_w: [f32; 3], corners: Corners) -> Option<Self> {
+        let (PixelOutput::Lit(lighting), NormalStage::Nlerp(normals), false) =
+            (phong.output, phong.normals, phong.varies)
+        else {
+            return None;
+        };
+        Some(PhongRows {
+            lighting,
+            triangle: phong.triangle,
+            positions: phong.positions.map(Vec3s::splat),
+            normals: normals.map(Vec3s::splat),
+            reversed: phong.reversed,
+            inv_area: Floats::splat(inv_area),
+            inv_w: inv_w.map(Floats::splat),
+            corners,
+        })
+    }
+
+    /// The colours of the pixels where the raster triangle's edge functions take the values
+    /// `edges` (converted to `f32`, one pixel per lane). Lanes outside the triangle get a
+    /// colour too, which the caller drops.
+    #[inline]
+    pub fn shade(&self, edges: [Floats; 3]) -> [Vec3; LANES] {
+        // `shade::perspective_weights`, then `Corners::apply`.
+        let screen = edges.map(|edge| edge * self.inv_area);
+        let over_w: [Floats; 3] = std::array::from_fn(|k| screen[k] * self.inv_w[k]);
+        let sum = over_w[0] + over_w[1] + over_w[2];
+        let positive = sum.gt(Floats::splat(0.0));
+        let [x, y, z]: [Floats; 3] = std::array::from_fn(|k| positive.select(over_w[k] / sum, screen[k]));
+        let [x, y, z] = match self.corners {
+            Corners::Identity => [x, y, z],
+            Corners::Swapped => [x, z, y],
+            Corners::Clipped(_) => {
+                let weights = Vec3s { x, y, z }.to_array().map(|w| self.corners.apply(w));
+                let weights = Vec3s::from_array(&weights);
+                [weights.x, weights.y, weights.z]
+            }
+        };
+        let interpolate = |[a, b, c]: [Vec3s; 3]| a.scale(x) + b.scale(y) + c.scale(z);
+        let position = interpolate(self.positions);
+        let normals = renormalize_lanes(
+            self.lighting.frame,
+            interpolate(self.normals),
+            &[Some(self.triangle); LANES],
+        );
+        let normals = if self.reversed { -normals } else { normals };
+        self.lighting.light_lanes_of(position, normals)
     }
 }
 
