@@ -197,6 +197,12 @@ impl Mask {
         backend::any(self)
     }
 
+    /// How many lanes the condition holds in.
+    #[inline(always)]
+    pub fn count(self) -> usize {
+        self.0.iter().filter(|&&lane| lane != 0).count()
+    }
+
     /// Whether the condition holds in every lane.
     #[inline(always)]
     pub fn all(self) -> bool {

@@ -786,16 +786,24 @@ fn shade_single_sample<'f>(
         match shader {
             TriangleShader::Phong(fast) => {
                 match PhongRows::of(&fast, raster.inv_area, raster.inv_w, corners) {
-                    Some(rows) if area.width() as usize >= LANES => {
-                        pixels.for_each_group(|first, shown, edges| {
-                            let colors = rows.shade(edges);
-                            for (lane, &color) in colors.iter().enumerate() {
-                                if shown.lane(lane) {
-                                    target.color[first + lane] = color;
-                                }
+                    Some(rows) if area.width() as usize >= LANES => pixels.for_each_group(|group| {
+                        // A group that shows the triangle in few lanes (its edges, a thin
+                        // triangle) would light mostly lanes that are thrown away: its pixels
+                        // wait in the batch, which lights eight shown pixels at a time.
+                        if group.shown.count() < LANES * 3 / 4 {
+                            for lane in (0..LANES).filter(|&lane| group.shown.lane(lane)) {
+                                let weights = weights_from_edges(raster, &corners, group.edges_at(lane));
+                                phong.push(&fast, weights, group.first + lane, target.color);
                             }
-                        })
-                    }
+                            return;
+                        }
+                        let colors = rows.shade(group.edges());
+                        for (lane, &color) in colors.iter().enumerate() {
+                            if group.shown.lane(lane) {
+                                target.color[group.first + lane] = color;
+                            }
+                        }
+                    }),
                     _ => pixels.for_each(|offset, _, edges| {
                         let weights = weights_from_edges(raster, &corners, edges);
                         phong.push(&fast, weights, offset, target.color);
@@ -890,14 +898,10 @@ impl ShownPixels<'_> {
 }
 
 impl ShownPixels<'_> {
-    /// Calls `visit(first, shown, edges)` for each group of [`LANES`] neighbouring pixels of a
-    /// row of the area, from its first column, where at least one shows the triangle: `first`
-    /// the group's first pixel's offset in the band, `shown` which lanes show it (none past the
-    /// area), `edges` the triangle's edge functions at each lane's pixel centre, converted to
-    /// `f32` (stepped exactly in `i64` first, so each is the value `edge_values` gives,
-    /// rounded once).
+    /// Calls `visit` for each group of [`LANES`] neighbouring pixels of a row of the area,
+    /// from its first column, where at least one shows the triangle (see [`PixelGroup`]).
     #[inline]
-    fn for_each_group(&self, mut visit: impl FnMut(usize, Mask, [Floats; 3])) {
+    fn for_each_group(&self, mut visit: impl FnMut(PixelGroup)) {
         let rect = self.visibility.rect;
         let tile_width = rect.width() as usize;
         let (first, last) = (
@@ -908,24 +912,48 @@ impl ShownPixels<'_> {
         for py in self.area.y0..self.area.y1 {
             let row = (py - rect.y0) as usize;
             let ids = &self.visibility.triangle[row * tile_width..][first..last];
-            let mut group_start = edge_values(self.raster, pixel_centre(self.area.x0), pixel_centre(py));
+            let mut start = edge_values(self.raster, pixel_centre(self.area.x0), pixel_centre(py));
             for (group, ids) in ids.chunks(LANES).enumerate() {
                 let shown = Mask::from_bools(std::array::from_fn(|lane| ids.get(lane) == Some(&self.local)));
                 if shown.any() {
-                    let edges = std::array::from_fn(|k| {
-                        Floats(std::array::from_fn(|lane| {
-                            (group_start[k] + step[k] * lane as i64) as f32
-                        }))
-                    });
-                    visit(
-                        row * self.stride + self.area.x0 as usize + group * LANES,
+                    visit(PixelGroup {
+                        first: row * self.stride + self.area.x0 as usize + group * LANES,
                         shown,
-                        edges,
-                    );
+                        start,
+                        step,
+                    });
                 }
-                group_start = std::array::from_fn(|k| group_start[k] + step[k] * LANES as i64);
+                start = std::array::from_fn(|k| start[k] + step[k] * LANES as i64);
             }
         }
+    }
+}
+
+/// [`LANES`] neighbouring pixels of a row, some of which show a triangle.
+struct PixelGroup {
+    /// The first pixel's offset in the band.
+    first: usize,
+    /// Which lanes show the triangle (none past the area).
+    shown: Mask,
+    /// The triangle's edge functions at the first pixel's centre, and their step to the next
+    /// pixel of the row.
+    start: [i64; 3],
+    step: [i64; 3],
+}
+
+impl PixelGroup {
+    /// The edge functions at `lane`'s pixel centre: exact integers, the values `edge_values`
+    /// gives.
+    #[inline]
+    fn edges_at(&self, lane: usize) -> [i64; 3] {
+        std::array::from_fn(|k| self.start[k] + self.step[k] * lane as i64)
+    }
+
+    /// The edge functions at every lane's pixel centre, each exact in `i64` and then rounded
+    /// once to `f32`.
+    #[inline]
+    fn edges(&self) -> [Floats; 3] {
+        std::array::from_fn(|k| Floats(std::array::from_fn(|lane| self.edges_at(lane)[k] as f32)))
     }
 }
 
