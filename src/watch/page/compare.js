@@ -330,8 +330,13 @@
       document.body.dataset.compare = viewer.settings.mode;
       document.body.dataset.compareBase = pinned ? "pinned" : previous ? "previous" : "none";
     };
+    // Each image has its own URL (its version in the query). The same URL can be reported
+    // twice: by the check below, when the image was complete before this script ran, and by
+    // its load event if that was still queued; the second must not become its own "previous".
+    let shownSource = null;
     const loaded = () => {
-      if (!view.naturalWidth) return;
+      if (!view.naturalWidth || view.src === shownSource) return;
+      shownSource = view.src;
       previous = current;
       current = snapshot(view);
       show();
