@@ -789,7 +789,7 @@ pub(crate) fn constant_lighting_point(object: &Object, scene: &Scene, viewer: &V
 /// front face before any back face, and skipping back faces changes no pixel but those where
 /// rounding let a back face win at the silhouette. OpenGL programs enable face culling for such
 /// meshes; this does it only when it is safe.
-fn back_faces_hidden(object: &Object, camera: &CameraSetup) -> bool {
+pub(crate) fn back_faces_hidden(object: &Object, camera: &CameraSetup) -> bool {
     let mesh = &object.mesh;
     let Some((lo, hi)) = mesh.bounds().filter(|_| mesh.closed) else {
         return false;
