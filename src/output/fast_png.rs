@@ -100,7 +100,7 @@ struct Strip {
     filtered_len: usize,
 }
 
-/// A thread's buffers for its strips.
+/// Buffers reused from strip to strip (rayon makes one set per piece of work it splits off).
 struct StripScratch {
     /// The row above the one being filtered, and that row, as levels.
     above: Vec<u8>,
