@@ -772,6 +772,30 @@ mod tests {
         assert_eq!(read.as_raw(), &[255, 128, 0, 255, 0, 64]);
     }
 
+    /// A frame written as PNG at the fast level (strips quantising their own rows, blank tiles
+    /// among them) decodes to the frame quantised whole, linear and sRGB.
+    #[test]
+    fn fast_png_of_a_frame_decodes_to_its_quantised_pixels() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join("out.png");
+        let framebuffer =
+            crate::render::framebuffer::tests::frame_with_blank_tiles(200, 130, Vec3::new(0.2, 0.7, 1.5));
+        for encoding in [Encoding::Linear, Encoding::Srgb] {
+            write_image(
+                &path,
+                &framebuffer,
+                OutputFormat::Png,
+                encoding,
+                PngCompression::Fast,
+            )
+            .unwrap();
+            let read = image::open(&path).unwrap().to_rgb8();
+            assert_eq!(read, to_rgb8_encoded(&framebuffer, encoding), "{encoding:?}");
+        }
+        let leftovers = std::fs::read_dir(folder.path()).unwrap().count();
+        assert_eq!(leftovers, 1, "no temporary file is left");
+    }
+
     /// A frame with blank tiles, over stale pixels, quantises (linear and sRGB) and goes to the
     /// float formats exactly as the same image stored pixel by pixel.
     #[test]
