@@ -10,7 +10,7 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant, SystemTime};
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -346,6 +346,7 @@ impl DebugArg {
 
 /// Parses `args` and runs the command; returns the exit code.
 pub fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> i32 {
+    RUN_STARTED.get_or_init(Instant::now);
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(error) => {
@@ -475,6 +476,7 @@ fn run_render(args: &RenderArgs) -> i32 {
     // Scenes rendered in turn share meshes (a mesh several scenes use is read once) and the
     // renderer's arrays.
     let mut cache = BuildCache::default();
+    let mut last_rendered = None;
     let run = RenderRun {
         load_options: &load_options,
         render_options: &render_options,
@@ -497,12 +499,17 @@ fn run_render(args: &RenderArgs) -> i32 {
             Destination::File(Some(path)) => Target::File(path.clone()),
             Destination::File(None) => Target::File(scene_path.with_extension(format.extension())),
         };
-        match render_one(scene_path, &target, &run, &mut cache) {
+        match render_one(scene_path, &target, &run, &mut cache, &mut last_rendered) {
             Ok(()) => {}
             Err(RenderFailure::BadInput) => bad_inputs.push(scene_path),
             Err(RenderFailure::Output) => failed_outputs += 1,
         }
     }
+    // The process ends after this command: handing the meshes, the renderer's arrays and the
+    // last frame back to the allocator makes mimalloc return them to the kernel page range by
+    // page range (about 35 MB for the koala scene, in `madvise` calls) before the exit would
+    // free them at once.
+    std::mem::forget((cache, last_rendered));
     if args.scenes.len() > 1 && !bad_inputs.is_empty() {
         let names: Vec<String> = bad_inputs.iter().map(|p| p.display().to_string()).collect();
         errln!(
@@ -555,7 +562,7 @@ fn run_pick(
             reference: None,
             progress_bar: false,
         };
-        match render_one(scene_path, &target, &run, &mut BuildCache::default()) {
+        match render_one(scene_path, &target, &run, &mut BuildCache::default(), &mut None) {
             Ok(()) => {}
             Err(RenderFailure::BadInput) => return EXIT_BAD_INPUT,
             Err(RenderFailure::Output) => return EXIT_OUTPUT_FAILED,
@@ -642,6 +649,9 @@ struct RenderRecord {
     bar: Option<BarClearer>,
 }
 
+/// When `run` began: the start of `render`'s timings (`LAMPSHADE_TIMINGS`).
+static RUN_STARTED: OnceLock<Instant> = OnceLock::new();
+
 static RENDER_RECORD: Mutex<RenderRecord> = Mutex::new(RenderRecord {
     written: Vec::new(),
     current: None,
@@ -676,12 +686,16 @@ fn interrupted_render_line(record: &RenderRecord) -> String {
     }
 }
 
+/// Renders one scene and writes its image; the scene and its frame are left in `last_rendered`
+/// (whose previous content is dropped first, so scenes rendered in turn never hold two frames).
 fn render_one(
     scene_path: &Path,
     target: &Target,
     run: &RenderRun,
     cache: &mut BuildCache,
+    last_rendered: &mut Option<RenderedScene>,
 ) -> Result<(), RenderFailure> {
+    *last_rendered = None;
     let RenderRun {
         load_options,
         render_options,
@@ -690,6 +704,7 @@ fn render_one(
         ref reference,
         progress_bar,
     } = *run;
+    let timings = timings_requested().then(PhaseClock::now);
     // The scene itself is refused before it is read; the files it reads, once they are known.
     if let Target::File(output_path) = target
         && output::overwritten_input(output_path, [scene_path]).is_some()
@@ -743,13 +758,18 @@ fn render_one(
         stats,
         load_time,
         ..
-    } = rendered;
+    } = &rendered;
+    let load_time = *load_time;
 
+    let rendered_clock = timings.as_ref().map(|_| PhaseClock::now());
     let started = Instant::now();
     let (format, encoding) = (output_settings.format, output_settings.encoding);
     let written = match target {
-        Target::File(path) => output::write_image(path, &framebuffer, format, encoding, PngCompression::Fast),
-        Target::Stdout => output::write_image_to_stdout(&framebuffer, format, encoding, PngCompression::Fast),
+        Target::File(path) => {
+            output::write_image_timed(path, framebuffer, format, encoding, PngCompression::Fast)
+        }
+        Target::Stdout => output::write_image_to_stdout(framebuffer, format, encoding, PngCompression::Fast)
+            .map(|()| output::WriteTimings::default()),
     };
     {
         let mut record = render_record();
@@ -758,17 +778,31 @@ fn render_one(
             record.written.push(target.name());
         }
     }
-    match written {
-        Ok(()) => {}
+    let write_timings = match written {
+        Ok(write_timings) => write_timings,
         // A reader that went away (`render -o - | head -c 100`) wants no more: not an error.
         Err(output::OutputError::Io { source, .. })
-            if matches!(target, Target::Stdout) && source.kind() == std::io::ErrorKind::BrokenPipe => {}
+            if matches!(target, Target::Stdout) && source.kind() == std::io::ErrorKind::BrokenPipe =>
+        {
+            output::WriteTimings::default()
+        }
         Err(error) => {
             errln!("error: {error}");
             return Err(RenderFailure::Output);
         }
-    }
+    };
     let encode_time = started.elapsed();
+    if let (Some(start), Some(rendered)) = (timings, rendered_clock) {
+        let phases = RenderPhases {
+            start,
+            rendered,
+            written: PhaseClock::now(),
+            load: load_time,
+            stats,
+            write: write_timings,
+        };
+        errln!("{}", phases.line());
+    }
     if !quiet {
         let summary = format!(
             "{} → {}: {} triangles, {}×{} px | load {}, {}geometry {}, raster+shade {}, encode {} ({} threads)",
@@ -778,7 +812,7 @@ fn render_one(
             framebuffer.width(),
             framebuffer.height(),
             milliseconds(load_time),
-            shadow_maps_part(&stats),
+            shadow_maps_part(stats),
             milliseconds(stats.geometry),
             milliseconds(stats.raster_shade),
             milliseconds(encode_time),
@@ -790,7 +824,82 @@ fn render_one(
             Target::Stdout => errln!("{summary}"),
         }
     }
+    *last_rendered = Some(rendered);
     Ok(())
+}
+
+/// `LAMPSHADE_TIMINGS=1` (any value but 0): `render` prints to standard error where each
+/// scene's time went, wall clock and CPU time.
+fn timings_requested() -> bool {
+    std::env::var_os("LAMPSHADE_TIMINGS").is_some_and(|value| value != "0")
+}
+
+/// A point in time, by the wall clock and by the CPU time the process has used.
+struct PhaseClock {
+    wall: Instant,
+    cpu: Option<Duration>,
+}
+
+impl PhaseClock {
+    fn now() -> PhaseClock {
+        PhaseClock {
+            wall: Instant::now(),
+            cpu: process_cpu_time(),
+        }
+    }
+}
+
+/// The CPU time every thread of this process has used so far: the sum of the scheduler's
+/// nanosecond counts (Linux's `/proc/self/task/*/schedstat`); `None` elsewhere. Threads that
+/// have ended are not counted (the render's pool lives as long as the process).
+fn process_cpu_time() -> Option<Duration> {
+    let mut nanoseconds = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let schedstat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        nanoseconds += schedstat.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(Duration::from_nanos(nanoseconds))
+}
+
+/// One scene's render, phase by phase, for `LAMPSHADE_TIMINGS`.
+struct RenderPhases<'a> {
+    /// When the scene's render began, when its frame was ready, when its image was in place.
+    start: PhaseClock,
+    rendered: PhaseClock,
+    written: PhaseClock,
+    load: Duration,
+    stats: &'a RenderStats,
+    write: output::WriteTimings,
+}
+
+impl RenderPhases<'_> {
+    /// `timings: before 1.2 ms | load 33.0 ms | shadow maps … | … | CPU load+frame 80.1 ms, output 4.2 ms, process 90.3 ms`.
+    fn line(&self) -> String {
+        let run_started = *RUN_STARTED.get_or_init(Instant::now);
+        let cpu = |from: &PhaseClock, to: &PhaseClock| match (from.cpu, to.cpu) {
+            (Some(from), Some(to)) => milliseconds(to.saturating_sub(from)),
+            _ => "unknown".to_string(),
+        };
+        let process_cpu = self.written.cpu.map_or("unknown".to_string(), milliseconds);
+        format!(
+            "timings: before the scene {} | load {} | {}geometry {}, raster+shade {} | \
+             encode {}, write {}, sync {}, rename {} | total {} | \
+             CPU: load+frame {}, output {}, process {}",
+            milliseconds(self.start.wall - run_started),
+            milliseconds(self.load),
+            shadow_maps_part(self.stats),
+            milliseconds(self.stats.geometry),
+            milliseconds(self.stats.raster_shade),
+            milliseconds(self.write.encode),
+            milliseconds(self.write.write),
+            milliseconds(self.write.sync),
+            milliseconds(self.write.rename),
+            milliseconds(self.written.wall - run_started),
+            cpu(&self.start, &self.rendered),
+            cpu(&self.rendered, &self.written),
+            process_cpu,
+        )
+    }
 }
 
 /// What `render --turntable` was asked for.

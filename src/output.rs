@@ -19,6 +19,7 @@
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::RwLock;
+use std::time::{Duration, Instant};
 
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ImageEncoder, RgbImage};
@@ -26,6 +27,8 @@ use image::{ImageEncoder, RgbImage};
 use rayon::prelude::*;
 
 use crate::render::{FrameBuffer, RowSpan};
+
+mod fast_png;
 
 /// A problem writing an output file (not the user's scene: the file system's).
 #[derive(Debug, thiserror::Error)]
@@ -43,6 +46,12 @@ pub enum OutputError {
         path: PathBuf,
         #[source]
         source: image::ImageError,
+    },
+    #[error("cannot encode `{}`: {source}", path.display())]
+    EncodePng {
+        path: PathBuf,
+        #[source]
+        source: png::EncodingError,
     },
 }
 
@@ -111,47 +120,77 @@ pub fn to_rgb8(framebuffer: &FrameBuffer) -> RgbImage {
 pub fn to_rgb8_encoded(framebuffer: &FrameBuffer, encoding: Encoding) -> RgbImage {
     let (width, height) = (framebuffer.width(), framebuffer.height());
     let mut bytes = vec![0u8; width as usize * height as usize * 3];
-    let quantize = |channel: f32| match encoding {
-        Encoding::Linear => quantize_channel(channel),
-        Encoding::Srgb => quantize_channel(linear_to_srgb(channel.clamp(0.0, 1.0))),
-    };
-    let background = framebuffer.background().to_array().map(quantize);
+    let quantizer = RowQuantizer::new(framebuffer, encoding);
     // Rows in parallel: each writes its own bytes, so the result does not depend on threads.
-    // A blank span is the background's three levels over and over; a drawn span's channels are
-    // one flat run of `f32`s, so the linear loop runs in SIMD lanes.
     bytes
         .par_chunks_mut(width.max(1) as usize * 3)
         .enumerate()
-        .for_each(|(y, row)| {
-            let mut levels = row;
-            for span in framebuffer.row_spans(y as u32) {
-                let (span_levels, rest) = std::mem::take(&mut levels).split_at_mut(span_channels(span));
-                levels = rest;
-                match span {
-                    RowSpan::Blank(_) => {
-                        for pixel in span_levels.as_chunks_mut::<3>().0 {
-                            *pixel = background;
-                        }
+        .for_each(|(y, row)| quantizer.quantize_row(y as u32, row));
+    RgbImage::from_raw(width, height, bytes).expect("a frame buffer holds width × height pixels")
+}
+
+/// Quantises a frame's rows to 8-bit RGB, one row at a time, so that [`to_rgb8_encoded`] and
+/// the PNG encoder's strips (which quantise their own rows) give the same levels.
+struct RowQuantizer<'a> {
+    framebuffer: &'a FrameBuffer,
+    encoding: Encoding,
+    /// The background's three levels, written for every pixel of a blank span.
+    background: [u8; 3],
+}
+
+impl<'a> RowQuantizer<'a> {
+    fn new(framebuffer: &'a FrameBuffer, encoding: Encoding) -> RowQuantizer<'a> {
+        let background = framebuffer
+            .background()
+            .to_array()
+            .map(|channel| quantize_encoded(channel, encoding));
+        RowQuantizer {
+            framebuffer,
+            encoding,
+            background,
+        }
+    }
+
+    /// Writes row `y`'s levels (three a pixel) into `levels`. A blank span is the background's
+    /// three levels over and over; a drawn span's channels are one flat run of `f32`s, so the
+    /// linear loop runs in SIMD lanes.
+    fn quantize_row(&self, y: u32, mut levels: &mut [u8]) {
+        for span in self.framebuffer.row_spans(y) {
+            let (span_levels, rest) = std::mem::take(&mut levels).split_at_mut(span_channels(span));
+            levels = rest;
+            match span {
+                RowSpan::Blank(_) => {
+                    for pixel in span_levels.as_chunks_mut::<3>().0 {
+                        *pixel = self.background;
                     }
-                    RowSpan::Drawn { color, .. } => {
-                        let channels: &[f32] = bytemuck::cast_slice(color);
-                        match encoding {
-                            Encoding::Linear => {
-                                for (level, &channel) in span_levels.iter_mut().zip(channels) {
-                                    *level = quantize_channel(channel);
-                                }
+                }
+                RowSpan::Drawn { color, .. } => {
+                    let channels: &[f32] = bytemuck::cast_slice(color);
+                    match self.encoding {
+                        Encoding::Linear => {
+                            for (level, &channel) in span_levels.iter_mut().zip(channels) {
+                                *level = quantize_channel(channel);
                             }
-                            Encoding::Srgb => {
-                                for (level, &channel) in span_levels.iter_mut().zip(channels) {
-                                    *level = quantize_channel(linear_to_srgb(channel.clamp(0.0, 1.0)));
-                                }
+                        }
+                        Encoding::Srgb => {
+                            for (level, &channel) in span_levels.iter_mut().zip(channels) {
+                                *level = quantize_encoded(channel, Encoding::Srgb);
                             }
                         }
                     }
                 }
             }
-        });
-    RgbImage::from_raw(width, height, bytes).expect("a frame buffer holds width × height pixels")
+        }
+    }
+}
+
+/// One channel of linear light to its 8-bit level in `encoding`.
+#[inline(always)]
+fn quantize_encoded(channel: f32, encoding: Encoding) -> u8 {
+    match encoding {
+        Encoding::Linear => quantize_channel(channel),
+        Encoding::Srgb => quantize_channel(linear_to_srgb(channel.clamp(0.0, 1.0))),
+    }
 }
 
 /// The number of channels (three a pixel) of `span`.
@@ -370,6 +409,9 @@ fn encode_image<W: Write + std::io::Seek>(
         source,
     };
     match format {
+        OutputFormat::Png if compression == PngCompression::Fast => {
+            write_all(writer, path, &fast_png_of_frame(path, framebuffer, encoding)?)
+        }
         OutputFormat::Png => encode_png(writer, path, &to_rgb8_encoded(framebuffer, encoding), compression),
         OutputFormat::Exr | OutputFormat::Hdr => {
             let image = image::Rgb32FImage::from_raw(
@@ -390,21 +432,44 @@ fn encode_image<W: Write + std::io::Seek>(
     }
 }
 
+/// `framebuffer` as PNG at the fast level; `path` names the destination in errors. Each strip
+/// of the encoder quantises its own rows, so the 8-bit frame is never stored whole.
+fn fast_png_of_frame(
+    path: &Path,
+    framebuffer: &FrameBuffer,
+    encoding: Encoding,
+) -> Result<Vec<u8>, OutputError> {
+    let quantizer = RowQuantizer::new(framebuffer, encoding);
+    fast_png::encode(framebuffer.width(), framebuffer.height(), |y, row| {
+        quantizer.quantize_row(y, row)
+    })
+    .map_err(|source| OutputError::EncodePng {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 /// Encodes `image` as PNG into `writer`; `path` names the destination in errors.
 fn encode_png<W: Write>(
-    writer: W,
+    mut writer: W,
     path: &Path,
     image: &RgbImage,
     compression: PngCompression,
 ) -> Result<(), OutputError> {
-    // The fast level filters every row by the row above (`Up`): choosing a filter per row
-    // (`Adaptive`) tries all five on every row. A 1080p frame of the koala or cow close-up bench
-    // scene: 4.9–5.4 ms adaptive, 2.7–3.5 ms `Up` (fastest of nine), files 3–16 % larger.
-    let (compression, filter) = match compression {
-        PngCompression::Fast => (CompressionType::Fast, FilterType::Up),
-        PngCompression::Best => (CompressionType::Best, FilterType::Adaptive),
-    };
-    PngEncoder::new_with_quality(writer, compression, filter)
+    if compression == PngCompression::Fast {
+        let row_bytes = image.width() as usize * 3;
+        let png_bytes = fast_png::encode(image.width(), image.height(), |y, row| {
+            row.copy_from_slice(&image.as_raw()[y as usize * row_bytes..][..row_bytes]);
+        })
+        .map_err(|source| OutputError::EncodePng {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        return write_all(&mut writer, path, &png_bytes);
+    }
+    // References (`check --bless`) choose a filter per row (`Adaptive`: all five tried on
+    // every row) and compress harder, for files 3–16 % smaller than the fast level's.
+    PngEncoder::new_with_quality(writer, CompressionType::Best, FilterType::Adaptive)
         .write_image(
             image.as_raw(),
             image.width(),
@@ -415,6 +480,14 @@ fn encode_png<W: Write>(
             path: path.to_path_buf(),
             source,
         })
+}
+
+/// Writes `bytes` to `writer` in one piece; `path` names the destination in errors.
+fn write_all<W: Write>(writer: &mut W, path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    writer.write_all(bytes).map_err(|source| OutputError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// `image` as PNG bytes in memory (the preview's frames, which never touch a file).
@@ -433,7 +506,40 @@ pub fn write_image(
     encoding: Encoding,
     compression: PngCompression,
 ) -> Result<(), OutputError> {
-    write_atomically(path, |writer| {
+    write_image_timed(path, framebuffer, format, encoding, compression).map(drop)
+}
+
+/// Where a write's time went (wall clock).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WriteTimings {
+    /// Quantising and compressing in memory, before the file is opened (the fast PNG level
+    /// only; other formats encode as they write).
+    pub encode: Duration,
+    /// Creating the temporary file and writing it.
+    pub write: Duration,
+    /// `fdatasync` of the temporary file.
+    pub sync: Duration,
+    /// Renaming it over the destination.
+    pub rename: Duration,
+}
+
+/// [`write_image`], saying where the time went.
+pub fn write_image_timed(
+    path: &Path,
+    framebuffer: &FrameBuffer,
+    format: OutputFormat,
+    encoding: Encoding,
+    compression: PngCompression,
+) -> Result<WriteTimings, OutputError> {
+    if format == OutputFormat::Png && compression == PngCompression::Fast {
+        // Encoded whole in memory first, then written with one call.
+        let started = Instant::now();
+        let png_bytes = fast_png_of_frame(path, framebuffer, encoding)?;
+        let encode = started.elapsed();
+        let timings = write_atomically_timed(path, |writer| write_all(writer, path, &png_bytes))?;
+        return Ok(WriteTimings { encode, ..timings });
+    }
+    write_atomically_timed(path, |writer| {
         encode_image(writer, path, framebuffer, format, encoding, compression)
     })
 }
@@ -474,11 +580,20 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> Result<(), OutputError>,
 ) -> Result<(), OutputError> {
+    write_atomically_timed(path, write).map(drop)
+}
+
+/// [`write_atomically`], timing its steps (all but `encode`).
+fn write_atomically_timed(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<&mut std::fs::File>) -> Result<(), OutputError>,
+) -> Result<WriteTimings, OutputError> {
     let _writing = WRITES.read().unwrap_or_else(|poisoned| poisoned.into_inner());
     let io_error = |source| OutputError::Io {
         path: path.to_path_buf(),
         source: without_temporary_path(source),
     };
+    let started = Instant::now();
     let folder = match path.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent,
         _ => Path::new("."),
@@ -495,9 +610,16 @@ pub fn write_atomically(
         write(&mut writer)?;
         writer.flush().map_err(io_error)?;
     }
+    let written = Instant::now();
     temporary.as_file().sync_data().map_err(io_error)?;
+    let synced = Instant::now();
     temporary.persist(path).map_err(|e| io_error(e.error))?;
-    Ok(())
+    Ok(WriteTimings {
+        encode: Duration::ZERO,
+        write: written - started,
+        sync: synced - written,
+        rename: synced.elapsed(),
+    })
 }
 
 /// `error` without the ` at path "DIR/.lampshade-Ab12Cd.tmp"` that `tempfile` appends to the
@@ -648,6 +770,30 @@ mod tests {
         write_png(&path, &to_rgb8(&framebuffer), PngCompression::Fast).unwrap();
         let read = image::open(&path).unwrap().to_rgb8();
         assert_eq!(read.as_raw(), &[255, 128, 0, 255, 0, 64]);
+    }
+
+    /// A frame written as PNG at the fast level (strips quantising their own rows, blank tiles
+    /// among them) decodes to the frame quantised whole, linear and sRGB.
+    #[test]
+    fn fast_png_of_a_frame_decodes_to_its_quantised_pixels() {
+        let folder = tempfile::tempdir().unwrap();
+        let path = folder.path().join("out.png");
+        let framebuffer =
+            crate::render::framebuffer::tests::frame_with_blank_tiles(200, 130, Vec3::new(0.2, 0.7, 1.5));
+        for encoding in [Encoding::Linear, Encoding::Srgb] {
+            write_image(
+                &path,
+                &framebuffer,
+                OutputFormat::Png,
+                encoding,
+                PngCompression::Fast,
+            )
+            .unwrap();
+            let read = image::open(&path).unwrap().to_rgb8();
+            assert_eq!(read, to_rgb8_encoded(&framebuffer, encoding), "{encoding:?}");
+        }
+        let leftovers = std::fs::read_dir(folder.path()).unwrap().count();
+        assert_eq!(leftovers, 1, "no temporary file is left");
     }
 
     /// A frame with blank tiles, over stale pixels, quantises (linear and sRGB) and goes to the
