@@ -479,7 +479,18 @@ mod tests {
     #[test]
     fn lanes_equal_the_scalar_sampler_bit_for_bit() {
         // Powers of two and not, square and not, a single texel, a single row.
-        let sizes = [(8, 8), (16, 4), (5, 3), (7, 12), (1, 1), (33, 1), (64, 64)];
+        let sizes = [
+            (8, 8),
+            (16, 4),
+            (5, 3),
+            (7, 12),
+            (1, 1),
+            (33, 1),
+            (64, 64),
+            (2, 2),
+            (1, 16),
+            (128, 2),
+        ];
         for (width, height) in sizes {
             let texture = texture(width, height);
             let us = coordinates(width);
@@ -499,6 +510,47 @@ mod tests {
                         }
                     }
                     check(&texture, &sampler, 0.0, &points, &format!("{width}×{height}"));
+                }
+            }
+        }
+    }
+
+    /// Eight lanes at one level of a mip chain, blended towards the next one or not, with
+    /// pseudo-random coordinates near and far from the texture and every wrap: the case where
+    /// all lanes share their levels, on powers of two and not, a single texel column.
+    #[test]
+    fn lanes_at_one_level_equal_the_scalar_sampler() {
+        let mut state = 0x2545_f491_u32;
+        let mut random = move || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state as f32 / u32::MAX as f32
+        };
+        for (width, height) in [(64, 32), (4, 256), (2, 2), (1, 8)] {
+            let texture = texture(width, height);
+            for wrap_s in WRAPS {
+                for wrap_t in WRAPS {
+                    let sampler = Sampler { wrap_s, wrap_t };
+                    let mut points = Vec::new();
+                    // Whole levels (magnified, exactly one texel, every level of the chain)
+                    // and levels between two.
+                    for lod in [-2.0, 0.0, 1.0, 2.0, 3.0, 0.25, 1.5, 2.75, 4.5, 6.0, 9.0] {
+                        let footprint = 2f32.powf(lod) / width.max(height) as f32;
+                        for spread in [1.0, 4.0, 300.0] {
+                            points.extend((0..LANES).map(|_| {
+                                let uv = Vec2::new(random() * spread, random() * spread - 0.5);
+                                (uv, Vec2::new(footprint, 0.0), Vec2::new(0.0, footprint * 0.5))
+                            }));
+                        }
+                    }
+                    check(
+                        &texture,
+                        &sampler,
+                        0.0,
+                        &points,
+                        &format!("{width}×{height} one level"),
+                    );
                 }
             }
         }
