@@ -111,6 +111,9 @@ pub struct TileScratch<'f> {
     gouraud: Vec<GouraudPlane>,
     /// Triangles whose colours wait in `flat`: (triangle, index in the batch).
     flat_waiting: Vec<(u32, u16)>,
+    /// Triangles with a colour texture whose colours wait in `flat`: (triangle, what
+    /// modulates it, index in the batch). Their points are shaded once the batch is lit.
+    flat_modulated: Vec<(u32, Modulation<'f>, u16)>,
     /// With several samples per pixel: what the tile's pixels shade, and their colours.
     points: ShadingPoints,
 }
@@ -299,7 +302,10 @@ impl SplitGouraudColors {
 struct FlatBatch<'f> {
     /// Per waiting triangle: its lighting, the triangle and its side.
     waiting: Vec<(FastLighting<'f>, FrameTriangle, bool)>,
-    colors: Vec<Vec3>,
+    /// Per lit triangle, its colour split as `Frame::flat_colors` splits it: (the part a colour
+    /// texture multiplies, the rest); without a colour texture the first is zero and the
+    /// second the whole colour.
+    colors: Vec<(Vec3, Vec3)>,
 }
 
 // A tile's pixels show at most `TILE_SIZE²` triangles, so those waiting are numbered by `u16`.
@@ -345,15 +351,20 @@ impl<'f> FlatBatch<'f> {
             let face_normals = Vec3s::from_array(&crossed).normalize_or_zero();
             let normals = Mask::from_bools(reversed).select3(-face_normals, face_normals);
             let centroids = Vec3s::from_array(&centroids);
-            let lit = if frame.vertex_attributes.is_empty() {
-                lighting.light_lanes_of(centroids, normals)
-            } else {
+            let mut surface = SurfaceLanes::of(lighting.material());
+            if !frame.vertex_attributes.is_empty() {
                 // `Frame::flat_colors`' tinted material.
-                let mut surface = SurfaceLanes::of(lighting.material());
                 let tints = std::array::from_fn(|lane| frame.flat_tint(&waiting(lane).1));
                 surface.diffuse = surface.diffuse * Vec3s::from_array(&tints);
-                let lit = lighting.light_surface_lanes(centroids, normals, &surface);
-                (lit.textured + lit.rest).to_array()
+            }
+            let lit = lighting.light_surface_lanes(centroids, normals, &surface);
+            let lit = if has_color_texture(lighting.material()) {
+                let (textured, rest) = (lit.textured.to_array(), lit.rest.to_array());
+                std::array::from_fn(|lane| (textured[lane], rest[lane]))
+            } else {
+                (lit.textured + lit.rest)
+                    .to_array()
+                    .map(|color| (Vec3::ZERO, color))
             };
             self.colors.extend_from_slice(&lit[..end - start]);
             start = end;
@@ -433,6 +444,7 @@ fn shade_multisampled<'f>(
         flat,
         lightings,
         flat_waiting,
+        flat_modulated,
         points: tile,
         ..
     } = scratch;
@@ -478,6 +490,7 @@ fn shade_multisampled<'f>(
     }
     flat.clear();
     flat_waiting.clear();
+    flat_modulated.clear();
     let mut phong = PhongBatch::default();
     let mut surface = SurfaceBatch::default();
     let mut modulated = ModulatedBatch::default();
@@ -514,6 +527,9 @@ fn shade_multisampled<'f>(
                     phong.push(&fast, weights, index as usize, colors);
                 }
             }
+            TriangleShader::ModulatedFlatWaiting(modulation, batch_index) => {
+                flat_modulated.push((local as u32, modulation, batch_index));
+            }
             TriangleShader::Varying(shader) => {
                 let points = SampledPoints {
                     raster,
@@ -542,15 +558,37 @@ fn shade_multisampled<'f>(
     }
     phong.flush(colors);
     surface.flush(colors);
-    modulated.flush(frame, colors);
     flat.light(frame);
     for &(local, batch_index) in flat_waiting.iter() {
-        let color = flat.colors[usize::from(batch_index)];
+        let (_, color) = flat.colors[usize::from(batch_index)];
         let local = local as usize;
         for &index in &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize] {
             colors[index as usize] = color;
         }
     }
+    for &(local, modulation, batch_index) in flat_modulated.iter() {
+        let id = visibility.raster_id(local);
+        let raster = frame.raster_triangle(id);
+        let local = local as usize;
+        let points = SampledPoints {
+            raster,
+            indices: &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize],
+            points,
+        };
+        let shader = VaryingShader::Flat(modulation, flat.colors[usize::from(batch_index)]);
+        let corners = frame.corner_weights(id);
+        shade_varying(
+            frame,
+            raster,
+            &corners,
+            shader,
+            points,
+            &mut surface,
+            &mut modulated,
+            colors,
+        );
+    }
+    modulated.flush(frame, colors);
 
     // The resolve, in the order of operations of one pixel at a time.
     let resolve = |first: usize, last: usize| {
@@ -698,10 +736,12 @@ fn shade_single_sample<'f>(
         sources,
         gouraud,
         flat_waiting,
+        flat_modulated,
         points: _,
     } = scratch;
     flat.clear();
     flat_waiting.clear();
+    flat_modulated.clear();
     gouraud.clear();
     sources.clear();
     // Unseen triangles keep `Fill`: no pixel reads it, and the last pass can then take its
@@ -756,6 +796,11 @@ fn shade_single_sample<'f>(
             TriangleShader::FlatWaiting(index) => {
                 flat_waiting.push((local as u32, index));
                 sources[local] = PixelSource::Fill;
+                continue;
+            }
+            TriangleShader::ModulatedFlatWaiting(modulation, index) => {
+                flat_modulated.push((local as u32, modulation, index));
+                sources[local] = PixelSource::Shaded;
                 continue;
             }
             _ => frame.corner_weights(id),
@@ -823,16 +868,46 @@ fn shade_single_sample<'f>(
             TriangleShader::General => pixels.for_each(|offset, at, _| {
                 target.color[offset] = shade_sample(frame, raster, &corners, at, caches);
             }),
-            TriangleShader::Solid(_) | TriangleShader::FlatWaiting(_) | TriangleShader::Gouraud(_) => {}
+            TriangleShader::Solid(_)
+            | TriangleShader::FlatWaiting(_)
+            | TriangleShader::ModulatedFlatWaiting(..)
+            | TriangleShader::Gouraud(_) => {}
         }
     }
     phong.flush(target.color);
     surface.flush(target.color);
-    modulated.flush(frame, target.color);
     flat.light(frame);
     for &(local, index) in flat_waiting.iter() {
-        fills[local as usize] = flat.colors[usize::from(index)];
+        fills[local as usize] = flat.colors[usize::from(index)].1;
     }
+    // The flat triangles with a colour texture, now that their colours are known.
+    for &(local, modulation, index) in flat_modulated.iter() {
+        let id = visibility.raster_id(local);
+        let raster = frame.raster_triangle(id);
+        let Some(area) = raster.bounds.intersect(&rect) else {
+            continue;
+        };
+        let pixels = ShownPixels {
+            visibility,
+            local,
+            raster,
+            area,
+            stride,
+        };
+        let shader = VaryingShader::Flat(modulation, flat.colors[usize::from(index)]);
+        let corners = frame.corner_weights(id);
+        shade_varying(
+            frame,
+            raster,
+            &corners,
+            shader,
+            pixels,
+            &mut surface,
+            &mut modulated,
+            target.color,
+        );
+    }
+    modulated.flush(frame, target.color);
 
     // The background, the one-colour triangles and the Gouraud ones, in one pass over the pixels.
     let per_pixel = sources.iter().any(|&source| source != PixelSource::Fill);
@@ -1042,6 +1117,10 @@ enum TriangleShader<'f> {
     /// Flat shading in lanes: the triangle waits in the tile's [`FlatBatch`] at this index, and
     /// its pixels are written when the batch is lit.
     FlatWaiting(u16),
+    /// Flat shading with a colour texture, the triangle's colours lit in lanes: it waits in the
+    /// tile's [`FlatBatch`] at this index, and its pixels are shaded as
+    /// [`VaryingShader::Flat`] once the batch is lit.
+    ModulatedFlatWaiting(Modulation<'f>, u16),
     /// Gouraud shading without a colour texture: the three vertex colours, interpolated.
     Gouraud([Vec3; 3]),
     /// Pixel by pixel in lanes (see [`FastPhong`]): Phong shading of a surface that does not
@@ -1115,8 +1194,18 @@ impl<'f> TriangleShader<'f> {
                     .get_or_insert_with(raster.source, || frame.flat_colors(triangle, back_facing));
                 TriangleShader::Solid(rest)
             }
-            // With a colour texture.
+            // With a colour texture: lit in the tile's batch too, where the fast path lights it.
             Shading::Flat => {
+                let back_facing = raster.back_facing;
+                let waiting = caches.flat_waiting.get(raster.source).or_else(|| {
+                    let lighting = lightings.get(frame, triangle, Shading::Flat, back_facing)?;
+                    let index = flat.add(lighting, raster.triangle, back_facing);
+                    caches.flat_waiting.insert(raster.source, index);
+                    Some(index)
+                });
+                if let Some(index) = waiting {
+                    return TriangleShader::ModulatedFlatWaiting(modulation(), index);
+                }
                 let colors = caches
                     .flat
                     .get_or_insert_with(raster.source, || frame.flat_colors(triangle, raster.back_facing));
@@ -1678,7 +1767,7 @@ mod tests {
                                     flat.light(&frame);
                                 }
                                 flat_lit += 1;
-                                flat.colors[usize::from(index)]
+                                flat.colors[usize::from(index)].1
                             }
                             TriangleShader::Solid(color) => color,
                             TriangleShader::Gouraud(colors) => GouraudColors::new(raster, &corners, colors)
@@ -1711,6 +1800,15 @@ mod tests {
                                     in_rows += 1;
                                 }
                                 color[0]
+                            }
+                            TriangleShader::ModulatedFlatWaiting(modulation, index) => {
+                                if usize::from(index) >= flat.colors.len() {
+                                    flat.light(&frame);
+                                }
+                                flat_lit += 1;
+                                varying += 1;
+                                let shader = VaryingShader::Flat(modulation, flat.colors[usize::from(index)]);
+                                shade_one_varying(&frame, raster, &corners, shader, at)
                             }
                             TriangleShader::Varying(shader) => {
                                 varying += 1;
