@@ -1296,9 +1296,13 @@ impl RowSpan {
     #[inline(always)]
     fn of_row(&self, start: [i64; 3], columns: usize) -> Option<(usize, usize)> {
         let (mut first, mut last) = (0i64, columns as i64 - 1);
-        for k in 0..3 {
-            let margin = start[k] - self.min_inside[k];
-            let step = self.step_x[k];
+        let edges = start
+            .iter()
+            .zip(&self.min_inside)
+            .zip(&self.step_x)
+            .zip(&self.inv_step_x);
+        for (((&value, &min_inside), &step), &inv_step) in edges {
+            let margin = value - min_inside;
             if step == 0 {
                 if margin < 0 {
                     return None;
@@ -1306,7 +1310,7 @@ impl RowSpan {
                 continue;
             }
             // Saturating: a crossing far off the row clamps to a bound that keeps or empties it.
-            let crossing = (-(margin as f64) * self.inv_step_x[k]) as i64;
+            let crossing = (-(margin as f64) * inv_step) as i64;
             if step > 0 {
                 first = first.max(crossing.saturating_sub(1));
             } else {
