@@ -1252,6 +1252,73 @@ struct RowLanes<E> {
     above: [E; 3],
     corner_depths: [Floats; 3],
     inv_area: Floats,
+    /// Where along each row the triangle can be: see [`RowSpan`].
+    span: RowSpan,
+}
+
+/// A triangle's edges as bounds along a row, for skipping the groups of a row that lie wholly
+/// outside it (a large triangle's bounds over a tile are mostly outside it along its sloping
+/// edges). Edge `k` is inside at the row's `i`-th pixel where `margin + step_x·i ≥ 0`, with
+/// `margin` its value at the row's first pixel less the fill rule's `min_inside`: from
+/// `i ≥ −margin/step_x` (`step_x > 0`) or `i ≤ −margin/step_x` (`step_x < 0`), or at every
+/// pixel or none (`step_x = 0`).
+#[derive(Debug, Clone, Copy)]
+struct RowSpan {
+    min_inside: [i64; 3],
+    step_x: [i64; 3],
+    /// `1/step_x` (0 where `step_x` is 0).
+    inv_step_x: [f64; 3],
+}
+
+impl RowSpan {
+    fn new(edges: &[Edge; 3]) -> Self {
+        RowSpan {
+            min_inside: edges.map(|edge| edge.min_inside),
+            step_x: edges.map(|edge| edge.step_x),
+            inv_step_x: edges.map(|edge| {
+                if edge.step_x == 0 {
+                    0.0
+                } else {
+                    1.0 / edge.step_x as f64
+                }
+            }),
+        }
+    }
+
+    /// The first and last of a row's `columns` pixels (counted from 0) between which every
+    /// pixel inside the triangle lies, when the row's first pixel has edge values `start`; or
+    /// `None` when no pixel of the row can be inside. A bound, not the exact span: `−margin/
+    /// step_x` is taken in `f64` (`margin` is exact there, below 2⁵³ by [`RowLanes::fit`], and
+    /// the product with the rounded `1/step_x` is off by under 2⁻⁵¹ of itself: by far less than
+    /// a pixel wherever it falls within the row, and beyond the row where it falls beyond), then
+    /// truncated, and each end is widened by a pixel: the span holds every inside pixel and at
+    /// most two outside ones at each end.
+    #[inline(always)]
+    fn of_row(&self, start: [i64; 3], columns: usize) -> Option<(usize, usize)> {
+        let (mut first, mut last) = (0i64, columns as i64 - 1);
+        let edges = start
+            .iter()
+            .zip(&self.min_inside)
+            .zip(&self.step_x)
+            .zip(&self.inv_step_x);
+        for (((&value, &min_inside), &step), &inv_step) in edges {
+            let margin = value - min_inside;
+            if step == 0 {
+                if margin < 0 {
+                    return None;
+                }
+                continue;
+            }
+            // Saturating: a crossing far off the row clamps to a bound that keeps or empties it.
+            let crossing = (-(margin as f64) * inv_step) as i64;
+            if step > 0 {
+                first = first.max(crossing.saturating_sub(1));
+            } else {
+                last = last.min(crossing.saturating_add(1));
+            }
+        }
+        (first <= last).then_some((first as usize, last as usize))
+    }
 }
 
 impl<E: EdgeLanes> RowLanes<E> {
@@ -1284,12 +1351,15 @@ impl<E: EdgeLanes> RowLanes<E> {
             above: edges.map(|edge| E::splat_whole(edge.min_inside - 1)),
             corner_depths: depths.map(Floats::splat),
             inv_area: Floats::splat(inv_area),
+            span: RowSpan::new(edges),
         }
     }
 
     /// The depth test over `area` (within `rect`), as [`depth_test_single_sample`] states it:
     /// per group, the inside test and the depth `(e₀·d₀ + e₁·d₁ + e₂·d₂)·(1/A)` in the scalar
     /// loop's operations, lane by lane, and the nearer depths (and `id`) written with a select.
+    /// Groups wholly outside the row's [`RowSpan`] are skipped when a row has three groups or
+    /// more (they would test empty).
     /// A group that would run past the tile's row is tested on a copy padded with depths
     /// nothing is nearer than; one that ends past the area but within the row is tested in
     /// place, its extra lanes outside the triangle's bounds and so outside the triangle (the
@@ -1313,8 +1383,23 @@ impl<E: EdgeLanes> RowLanes<E> {
         let mut row_start = self.row_start;
         for py in area.y0..area.y1 {
             let row = (py - rect.y0) as usize * rows.stride + (area.x0 - rows.x_origin) as usize;
-            let mut centre = row_start;
-            for group in 0..groups {
+            let start = row_start;
+            row_start = std::array::from_fn(|k| row_start[k] + self.step_y[k]);
+            // Only the groups that reach the row's span: the others are outside the triangle.
+            // A row of one or two groups is tested whole: finding its span costs about as
+            // much as testing a group.
+            let span = if groups > 2 {
+                self.span.of_row(start, columns)
+            } else {
+                Some((0, columns - 1))
+            };
+            let Some((first_column, last_column)) = span else {
+                continue;
+            };
+            let (first_group, last_group) = (first_column / LANES, last_column / LANES);
+            let mut centre: [i64; 3] =
+                std::array::from_fn(|k| start[k] + first_group as i64 * self.group_step[k]);
+            for group in first_group..=last_group {
                 let first = row + group * LANES;
                 if group < full_groups {
                     let group_depths = (&mut depth[first..first + LANES])
@@ -1347,7 +1432,6 @@ impl<E: EdgeLanes> RowLanes<E> {
                 }
                 centre = std::array::from_fn(|k| centre[k] + self.group_step[k]);
             }
-            row_start = std::array::from_fn(|k| row_start[k] + self.step_y[k]);
         }
     }
 
@@ -1795,6 +1879,9 @@ mod tests {
                 at(55.0, 70.3, 0.6),
                 at(-100.0, 600.0, 0.4),
             ],
+            // Slivers across the rect, whose rows' spans leave groups out on both sides.
+            [at(30.0, 60.0, 0.4), at(72.0, 80.0, 0.5), at(31.5, 60.0, 0.45)],
+            [at(70.0, 58.0, 0.4), at(35.0, 82.0, 0.5), at(72.5, 58.5, 0.45)],
         ];
         for k in 0..16u32 {
             let (x0, y0) = (38.0 + k as f32 * 1.5, 63.0 + (k % 5) as f32);
@@ -1864,6 +1951,61 @@ mod tests {
         assert_eq!(fast.triangle, general.triangle);
         let bits = |depths: &[f32]| depths.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&fast.depth), bits(&general.depth));
+    }
+
+    /// A row's span holds every pixel inside all three edges, and at most two more at each end
+    /// (none where the row has no inside pixel), for edges of every slope and fill rule
+    /// crossing the row anywhere, at the ends, or not at all.
+    #[test]
+    fn row_spans_hold_every_inside_pixel_and_little_more() {
+        let columns = 64;
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move |range: i64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % (2 * range as u64 + 1)) as i64 - range
+        };
+        let (mut empty, mut partial) = (0, 0);
+        for case in 0..20_000 {
+            // Steps from one subpixel to a long edge's; values from the row's middle to far off.
+            let scale = [1, 256, 65_536, 1 << 24][case % 4];
+            let edges: [Edge; 3] = std::array::from_fn(|k| {
+                let step_x = if (case + k) % 7 == 0 { 0 } else { next(scale) };
+                Edge {
+                    row_start: next(40 * scale.max(256)) + if case % 5 == 0 { next(1 << 50) } else { 0 },
+                    along_x: 0,
+                    along_y: 0,
+                    step_x,
+                    step_y: 0,
+                    min_inside: (case + k) as i64 % 2,
+                }
+            });
+            let inside: Vec<usize> = (0..columns)
+                .filter(|&i| {
+                    edges
+                        .iter()
+                        .all(|edge| edge.row_start + edge.step_x * i as i64 >= edge.min_inside)
+                })
+                .collect();
+            let span = RowSpan::new(&edges).of_row(edges.map(|edge| edge.row_start), columns);
+            match (inside.first(), inside.last(), span) {
+                (None, None, None) => empty += 1,
+                (None, None, Some((first, last))) => assert!(last < first + 4, "{edges:?}: {first}..={last}"),
+                (Some(&lo), Some(&hi), Some((first, last))) => {
+                    assert!(
+                        first <= lo && lo <= first + 2 && hi <= last && last <= hi + 2,
+                        "{edges:?}"
+                    );
+                    partial += usize::from(lo > 0 || hi < columns - 1);
+                }
+                _ => panic!("{edges:?}: inside {inside:?}, span {span:?}"),
+            }
+        }
+        assert!(
+            empty > 1_000 && partial > 1_000,
+            "{empty} empty rows, {partial} partial"
+        );
     }
 
     /// The multisample depth test takes its `i32` lanes where a triangle's edge values over the

@@ -19,7 +19,7 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
-use crate::render::lanes::{Floats, LANES, Mask, Vec3s, samples_showing};
+use crate::render::lanes::{Floats, LANES, Mask, Vec3s, Wides, samples_showing};
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
     Corners, EdgePlanes, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility,
@@ -168,15 +168,48 @@ struct GouraudPlane {
     step_x: [i64; 3],
     step_y: [i64; 3],
     colors: GouraudColors,
+    /// Whether the triangle is a group of lanes wide in the tile and its edge values over the
+    /// tile are held exactly in `f64` lanes (for [`GouraudPlane::group_colors`]).
+    in_lanes: bool,
 }
 
 impl GouraudPlane {
+    fn new(raster: &RasterTriangle, rect: PixelRect, colors: GouraudColors) -> Self {
+        GouraudPlane {
+            origin: edge_values(raster, pixel_centre(rect.x0), pixel_centre(rect.y0)),
+            step_x: edge_steps_x(raster),
+            step_y: edge_steps_y(raster),
+            colors,
+            // Only a triangle a group wide can show in a whole group.
+            in_lanes: raster
+                .bounds
+                .intersect(&rect)
+                .is_some_and(|area| area.width() as usize >= LANES && LaneSteps::exact_over(raster, rect)),
+        }
+    }
+
     /// The colour at the pixel `(column, row)` of the tile: what [`shade_sample`] gives there,
     /// bit for bit.
     #[inline]
     fn color_at(&self, column: i64, row: i64) -> Vec3 {
         let edges = std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row);
         self.colors.at(edges)
+    }
+
+    /// [`GouraudPlane::color_at`] of the [`LANES`] pixels of row `row` from column `column`
+    /// on (within the tile's row), lane-wise and bit for bit; `None` where the edge values are
+    /// not held exactly in `f64` lanes (a triangle reaching far off the tile).
+    #[inline]
+    fn group_colors(&self, column: i64, row: i64) -> Option<[Vec3; LANES]> {
+        if !self.in_lanes {
+            return None;
+        }
+        let first = std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row);
+        Some(
+            self.colors
+                .at_lanes(LaneSteps::of(self.step_x).edges(first))
+                .to_array(),
+        )
     }
 }
 
@@ -223,6 +256,23 @@ impl GouraudColors {
             (c0 + c1 + c2) / (w0 + w1 + w2)
         };
         Vec3::from(color)
+    }
+
+    /// [`GouraudColors::at`] for eight points, the edge functions' values (already `f32`)
+    /// in lanes: each channel's products, sums and division in the scalar's order, lane by
+    /// lane.
+    #[inline(always)]
+    fn at_lanes(&self, edges: [Floats; 3]) -> Vec3s {
+        let [e0, e1, e2] = edges;
+        let [w0, w1, w2] = self.inv_w.map(Floats::splat);
+        let [c0, c1, c2] = self.over_w.map(|c| Vec3s::splat(Vec3::from(c)));
+        let denominator = e0 * w0 + e1 * w1 + e2 * w2;
+        let inside = denominator.gt(Floats::splat(0.0));
+        let interpolated = (c0.scale(e0) + c1.scale(e1) + c2.scale(e2)).divide(denominator);
+        let [c0, c1, c2] = self.over_w;
+        let [w0, w1, w2] = self.inv_w;
+        let degenerate = Vec3::from((c0 + c1 + c2) / (w0 + w1 + w2));
+        inside.select3(interpolated, Vec3s::splat(degenerate))
     }
 }
 
@@ -809,12 +859,11 @@ fn shade_single_sample<'f>(
         // triangle's bounds here would take a branch per pixel on which triangle it shows.
         if let TriangleShader::Gouraud(colors) = shader {
             sources[local] = PixelSource::Gouraud(gouraud.len() as u16);
-            gouraud.push(GouraudPlane {
-                origin: edge_values(raster, pixel_centre(rect.x0), pixel_centre(rect.y0)),
-                step_x: edge_steps_x(raster),
-                step_y: edge_steps_y(raster),
-                colors: GouraudColors::new(raster, &corners, colors),
-            });
+            gouraud.push(GouraudPlane::new(
+                raster,
+                rect,
+                GouraudColors::new(raster, &corners, colors),
+            ));
             continue;
         }
         sources[local] = PixelSource::Shaded;
@@ -831,24 +880,34 @@ fn shade_single_sample<'f>(
         match shader {
             TriangleShader::Phong(fast) => {
                 match PhongRows::of(&fast, raster.inv_area, raster.inv_w, corners) {
-                    Some(rows) if area.width() as usize >= LANES => pixels.for_each_group(|group| {
-                        // A group that shows the triangle in few lanes (its edges, a thin
-                        // triangle) would light mostly lanes that are thrown away: its pixels
-                        // wait in the batch, which lights eight shown pixels at a time.
-                        if group.shown.count() < LANES * 3 / 4 {
+                    Some(rows) if area.width() as usize >= LANES => {
+                        let mut gathered = GatheredPixels::default();
+                        pixels.for_each_group(|group| {
+                            if group.shown.all() {
+                                let colors = rows.shade(group.edges());
+                                target.color[group.first..group.first + LANES].copy_from_slice(&colors);
+                                return;
+                            }
+                            // A group showing the triangle in some lanes only (its edges) would
+                            // light lanes that are thrown away: its pixels are gathered into
+                            // full lanes of the same rows.
                             for lane in (0..LANES).filter(|&lane| group.shown.lane(lane)) {
-                                let weights = weights_from_edges(raster, &corners, group.edges_at(lane));
-                                phong.push(&fast, weights, group.first + lane, target.color);
+                                if gathered.push(group.first + lane, group.edges_at(lane)) {
+                                    let colors = rows.shade(gathered.edges());
+                                    for (&offset, color) in gathered.offsets.iter().zip(colors) {
+                                        target.color[offset] = color;
+                                    }
+                                    gathered.len = 0;
+                                }
                             }
-                            return;
+                        });
+                        // The last few wait in the batch, which fills its lanes across triangles.
+                        for lane in 0..gathered.len {
+                            let edges = std::array::from_fn(|k| gathered.edges[k][lane]);
+                            let weights = weights_from_edges(raster, &corners, edges);
+                            phong.push(&fast, weights, gathered.offsets[lane], target.color);
                         }
-                        let colors = rows.shade(group.edges());
-                        for (lane, &color) in colors.iter().enumerate() {
-                            if group.shown.lane(lane) {
-                                target.color[group.first + lane] = color;
-                            }
-                        }
-                    }),
+                    }
                     _ => pixels.for_each(|offset, _, edges| {
                         let weights = weights_from_edges(raster, &corners, edges);
                         phong.push(&fast, weights, offset, target.color);
@@ -915,13 +974,41 @@ fn shade_single_sample<'f>(
         let row_start = row * stride + rect.x0 as usize;
         let colors = &mut target.color[row_start..row_start + tile_width];
         if per_pixel {
-            for (column, (color, &id)) in colors.iter_mut().zip(ids).enumerate() {
-                match sources[entry(id)] {
-                    PixelSource::Fill => *color = fills[entry(id)],
-                    PixelSource::Gouraud(plane) => {
-                        *color = gouraud[usize::from(plane)].color_at(column as i64, row as i64)
+            for (group, (colors, ids)) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)).enumerate() {
+                let first_column = group * LANES;
+                // A group showing one triangle (inside a large one) takes its source once.
+                if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
+                    && samples_showing(group_ids, group_ids[0]) == (1 << LANES) - 1
+                {
+                    let id = group_ids[0];
+                    let done = match sources[entry(id)] {
+                        PixelSource::Fill => {
+                            colors.fill(fills[entry(id)]);
+                            true
+                        }
+                        PixelSource::Gouraud(plane) => {
+                            match gouraud[usize::from(plane)].group_colors(first_column as i64, row as i64) {
+                                Some(group_colors) => {
+                                    colors.copy_from_slice(&group_colors);
+                                    true
+                                }
+                                None => false,
+                            }
+                        }
+                        PixelSource::Shaded => true,
+                    };
+                    if done {
+                        continue;
                     }
-                    PixelSource::Shaded => {}
+                }
+                for (column, (color, &id)) in (first_column..).zip(colors.iter_mut().zip(ids)) {
+                    match sources[entry(id)] {
+                        PixelSource::Fill => *color = fills[entry(id)],
+                        PixelSource::Gouraud(plane) => {
+                            *color = gouraud[usize::from(plane)].color_at(column as i64, row as i64)
+                        }
+                        PixelSource::Shaded => {}
+                    }
                 }
             }
         } else {
@@ -976,7 +1063,7 @@ impl ShownPixels<'_> {
     /// Calls `visit` for each group of [`LANES`] neighbouring pixels of a row of the area,
     /// from its first column, where at least one shows the triangle (see [`PixelGroup`]).
     #[inline]
-    fn for_each_group(&self, mut visit: impl FnMut(PixelGroup)) {
+    fn for_each_group(&self, mut visit: impl FnMut(PixelGroup<'_>)) {
         let rect = self.visibility.rect;
         let tile_width = rect.width() as usize;
         let (first, last) = (
@@ -984,6 +1071,7 @@ impl ShownPixels<'_> {
             (self.area.x1 - rect.x0) as usize,
         );
         let step = edge_steps_x(self.raster);
+        let lane_steps = LaneSteps::over(self.raster, self.area);
         for py in self.area.y0..self.area.y1 {
             let row = (py - rect.y0) as usize;
             let ids = &self.visibility.triangle[row * tile_width..][first..last];
@@ -996,6 +1084,7 @@ impl ShownPixels<'_> {
                         shown,
                         start,
                         step,
+                        lane_steps: lane_steps.as_ref(),
                     });
                 }
                 start = std::array::from_fn(|k| start[k] + step[k] * LANES as i64);
@@ -1004,8 +1093,49 @@ impl ShownPixels<'_> {
     }
 }
 
+/// Per edge, each lane's step from the first pixel of a group of a row, `step_x·lane`, in
+/// `f64` lanes: for a triangle whose edge functions over an area (and a group past its last
+/// column) stay below 2⁵³, so that a group's values are summed exactly in `f64` and rounded
+/// once to `f32`, as converting the same `i64` rounds.
+struct LaneSteps([Wides; 3]);
+
+impl LaneSteps {
+    /// `None` where the edge functions of `raster` over `area` outgrow `f64`'s exact integers
+    /// (a triangle reaching far off the tile).
+    #[inline]
+    fn over(raster: &RasterTriangle, area: PixelRect) -> Option<Self> {
+        LaneSteps::exact_over(raster, area).then(|| LaneSteps::of(edge_steps_x(raster)))
+    }
+
+    /// Whether the edge functions of `raster` over `area` (and a group past its last column)
+    /// are whole numbers of at most 2⁵³.
+    #[inline]
+    fn exact_over(raster: &RasterTriangle, area: PixelRect) -> bool {
+        let origin = edge_values(raster, pixel_centre(area.x0), pixel_centre(area.y0));
+        let (step_x, step_y) = (edge_steps_x(raster), edge_steps_y(raster));
+        let (columns, rows) = (u64::from(area.width()) + LANES as u64, u64::from(area.height()));
+        (0..3).all(|k| {
+            origin[k].unsigned_abs() + columns * step_x[k].unsigned_abs() + rows * step_y[k].unsigned_abs()
+                <= 1 << 53
+        })
+    }
+
+    /// The lanes' steps of edges stepping `step_x` a pixel, for a triangle that is
+    /// [`LaneSteps::exact_over`] the area (so each product is a whole number below 2⁵³, exact).
+    #[inline(always)]
+    fn of(step_x: [i64; 3]) -> Self {
+        LaneSteps(step_x.map(|step| Wides(std::array::from_fn(|lane| step as f64 * lane as f64))))
+    }
+
+    /// The edge functions at a group's pixels, the first pixel's values `start`, in `f32`.
+    #[inline(always)]
+    fn edges(&self, start: [i64; 3]) -> [Floats; 3] {
+        std::array::from_fn(|k| (Wides::splat(start[k] as f64) + self.0[k]).to_floats())
+    }
+}
+
 /// [`LANES`] neighbouring pixels of a row, some of which show a triangle.
-struct PixelGroup {
+struct PixelGroup<'s> {
     /// The first pixel's offset in the band.
     first: usize,
     /// Which lanes show the triangle (none past the area).
@@ -1014,9 +1144,11 @@ struct PixelGroup {
     /// pixel of the row.
     start: [i64; 3],
     step: [i64; 3],
+    /// The steps in lanes, where the triangle's values over the area take them exactly.
+    lane_steps: Option<&'s LaneSteps>,
 }
 
-impl PixelGroup {
+impl PixelGroup<'_> {
     /// The edge functions at `lane`'s pixel centre: exact integers, the values `edge_values`
     /// gives.
     #[inline]
@@ -1028,7 +1160,43 @@ impl PixelGroup {
     /// once to `f32`.
     #[inline]
     fn edges(&self) -> [Floats; 3] {
-        std::array::from_fn(|k| Floats(std::array::from_fn(|lane| self.edges_at(lane)[k] as f32)))
+        match self.lane_steps {
+            Some(lane_steps) => lane_steps.edges(self.start),
+            None => {
+                std::array::from_fn(|k| Floats(std::array::from_fn(|lane| self.edges_at(lane)[k] as f32)))
+            }
+        }
+    }
+}
+
+/// Pixels of one triangle gathered from the groups that show it in some lanes only, to be
+/// shaded [`LANES`] at a time through its [`PhongRows`], which shades each lane on its own.
+#[derive(Default)]
+struct GatheredPixels {
+    len: usize,
+    /// Where each pixel's colour goes in the band.
+    offsets: [usize; LANES],
+    /// Per edge, the triangle's edge function at each pixel's centre (exact).
+    edges: [[i64; LANES]; 3],
+}
+
+impl GatheredPixels {
+    /// Adds the pixel at `offset` whose edge functions are `edges`; whether the lanes are now
+    /// full (to be shaded, then emptied by setting `len` to 0).
+    #[inline(always)]
+    fn push(&mut self, offset: usize, edges: [i64; 3]) -> bool {
+        self.offsets[self.len] = offset;
+        for (k, &edge) in edges.iter().enumerate() {
+            self.edges[k][self.len] = edge;
+        }
+        self.len += 1;
+        self.len == LANES
+    }
+
+    /// The full lanes' edge functions, each rounded once to `f32` (as [`PixelGroup::edges`]).
+    #[inline(always)]
+    fn edges(&self) -> [Floats; 3] {
+        self.edges.map(|edge| Floats(edge.map(|value| value as f32)))
     }
 }
 
@@ -1703,6 +1871,7 @@ mod tests {
                     .flat_map(|&surfaces| varied_lightings.map(|lighting| (lighting, surfaces))),
             );
         let cases = lightings.flat_map(|lighting| modes.map(|mode| (lighting, mode)));
+        let mut gouraud_in_lanes = 0;
         for ((((model, specular), look), surfaces), shading) in cases {
             let back_face_modes = [
                 BackFaces::ReverseLit,
@@ -1770,8 +1939,25 @@ mod tests {
                                 flat.colors[usize::from(index)].1
                             }
                             TriangleShader::Solid(color) => color,
-                            TriangleShader::Gouraud(colors) => GouraudColors::new(raster, &corners, colors)
-                                .at(edge_values(raster, at.0, at.1)),
+                            TriangleShader::Gouraud(colors) => {
+                                let colors = GouraudColors::new(raster, &corners, colors);
+                                let color = colors.at(edge_values(raster, at.0, at.1));
+                                // And in the last pass's lanes: the group of the tile's row
+                                // holding this pixel, in the lane its column gives it.
+                                let (column, row) = (px - i64::from(rect.x0), py - i64::from(rect.y0));
+                                let lane = column as usize % LANES;
+                                // (Lane steps for every triangle, narrow ones too.)
+                                let plane = GouraudPlane {
+                                    in_lanes: LaneSteps::exact_over(raster, rect),
+                                    ..GouraudPlane::new(raster, rect, colors)
+                                };
+                                let group = plane.group_colors(column - lane as i64, row);
+                                let group = group.expect("the test's triangles are near their tiles");
+                                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                                assert_eq!(bits(group[lane]), bits(color), "Gouraud lanes at {px}, {py}");
+                                in_rows += 1;
+                                color
+                            }
                             TriangleShader::Phong(fast) => {
                                 // Through the lanes: a batch of this one pixel.
                                 let mut color = [Vec3::NAN];
@@ -1876,6 +2062,9 @@ mod tests {
                         "{model:?} {look:?}: {in_rows} pixels shaded in rows"
                     );
                 }
+                if shading == Shading::Gouraud {
+                    gouraud_in_lanes += in_rows;
+                }
                 // Culled back faces are not drawn.
                 if back_faces != BackFaces::Cull {
                     assert!(
@@ -1885,6 +2074,10 @@ mod tests {
                 }
             }
         }
+        assert!(
+            gouraud_in_lanes > 10_000,
+            "{gouraud_in_lanes} Gouraud pixels in lanes"
+        );
     }
 
     /// Whole tiles as `shade_tile` writes them, against the general path pixel by pixel: every
@@ -1914,9 +2107,10 @@ mod tests {
                     [first, second],
                     (260, 140),
                 );
-                // Zoomed in on the Phong pairs, so that triangles span several groups of
-                // lanes (`PhongRows`).
-                let zoomed = first == Phong || second == Phong;
+                // Zoomed in on the Phong pairs and on flat beside Gouraud, so that triangles
+                // span several groups of lanes (`PhongRows`, the last pass's groups of one
+                // triangle); the Gouraud pair stays small.
+                let zoomed = first == Phong || second == Phong || (first, second) == (Flat, Gouraud);
                 if zoomed {
                     scene.camera.projection = crate::scene::Projection::Perspective {
                         fov_y_degrees: 8.0,
