@@ -34,6 +34,11 @@
 //!   ([`normals::repair_normals`]), missing ones computed with the crease angle
 //!   ([`normals::compute_vertex_normals`]) after the transform, so the crease angle applies
 //!   to what is drawn.
+//! * **`KHR_mesh_quantization`** (required or used) also allows 8- and 16-bit integer
+//!   positions (normalized or not: the node transform dequantizes them), normalized signed
+//!   byte and short normals and tangents, and signed or unnormalized integer texture
+//!   coordinates, all converted to floats by the specification's formulas
+//!   ([`gltf_accessor`](super::gltf_accessor)).
 //! * **Other vertex attributes.** `TEXCOORD_0` → [`Mesh::uvs`], `TEXCOORD_1` →
 //!   [`Mesh::uvs1`] (float, or normalised unsigned byte or short; glTF's (0, 0) is already
 //!   the top-left of the image), `COLOR_0` → [`Mesh::colors`] (RGB or RGBA, float or
@@ -126,7 +131,15 @@ use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 /// Required extensions a file may list and still load: both are understood by the `gltf`
 /// crate as built here, and neither changes the geometry (`KHR_lights_punctual` adds lights,
 /// returned in [`LoadedMesh::lights`]).
-const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] = ["KHR_materials_emissive_strength", "KHR_lights_punctual"];
+const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
+    "KHR_materials_emissive_strength",
+    "KHR_lights_punctual",
+    MESH_QUANTIZATION,
+];
+
+/// The extension that allows 8- and 16-bit integer positions, normals, tangents and texture
+/// coordinates (module documentation); the `gltf` crate does not know it.
+const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 
 /// The Blinn-Phong exponent equivalent to a glTF perceptual roughness (clamped to [0, 1]):
 /// with `α = r²` (the GGX remapping glTF uses), the Beckmann-matched exponent
@@ -286,6 +299,7 @@ impl ParsedGltf {
             buffers,
             crease_angle_degrees: options.crease_angle_degrees,
             default_material_index: document.materials().len() as u32,
+            quantized: document.extensions_used().any(|name| name == MESH_QUANTIZATION),
             mesh: Mesh::default(),
             skipped_primitives: Vec::new(),
             repaired_normals: 0,
@@ -619,7 +633,7 @@ fn check_glb_container(bytes: &[u8]) -> Result<(), String> {
 fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), String> {
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|error| format!("malformed glTF: {error}"))?;
-    let json = document.into_json();
+    let mut json = document.into_json();
     // Checked before validation, which reports an unknown required extension tersely.
     if let Some(name) = json
         .extensions_required
@@ -630,6 +644,9 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), Str
             "requires the glTF extension {name}, which is not supported"
         ));
     }
+    // gltf-json's validation refuses required extensions it does not know; this one needs
+    // nothing from it (the accessors are read here).
+    json.extensions_required.retain(|name| name != MESH_QUANTIZATION);
     // gltf-json 1.4's validation indexes a primitive's POSITION accessor before checking
     // that it exists, and panics; check attribute indices first.
     for (mesh_index, mesh) in json.meshes.iter().enumerate() {
@@ -763,6 +780,8 @@ fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMa
 struct Baker<'a> {
     buffers: &'a [Vec<u8>],
     crease_angle_degrees: f32,
+    /// The file uses `KHR_mesh_quantization`: integer attribute types are allowed.
+    quantized: bool,
     /// Material index of primitives without a material: one past the file's materials.
     default_material_index: u32,
     mesh: Mesh,
@@ -792,8 +811,11 @@ impl Baker<'_> {
                 .push(format!("{here} has no POSITION attribute and was skipped"));
             return Ok(());
         };
-        check_accessor(&position_accessor, DataType::F32, Dimensions::Vec3)
-            .map_err(|e| format!("{here}: POSITION {e}"))?;
+        match self.quantized && quantized(&position_accessor, Dimensions::Vec3, true) {
+            true => check_layout(&position_accessor),
+            false => check_accessor(&position_accessor, DataType::F32, Dimensions::Vec3),
+        }
+        .map_err(|e| format!("{here}: POSITION {e}"))?;
         let vertex_count = position_accessor.count();
         let positions: Vec<Vec3> = read_floats::<3>(&position_accessor, buffers)
             .map_err(|e| format!("{here}: POSITION {e}"))?
@@ -843,8 +865,11 @@ impl Baker<'_> {
         let file_normals = match primitive.get(&gltf::Semantic::Normals) {
             None => None,
             Some(accessor) => {
-                check_accessor(&accessor, DataType::F32, Dimensions::Vec3)
-                    .map_err(|e| format!("{here}: NORMAL {e}"))?;
+                match self.quantized && quantized(&accessor, Dimensions::Vec3, false) {
+                    true => check_layout(&accessor),
+                    false => check_accessor(&accessor, DataType::F32, Dimensions::Vec3),
+                }
+                .map_err(|e| format!("{here}: NORMAL {e}"))?;
                 // Inverse transpose of the linear part, up to the positive factor |det|:
                 // the cofactor matrix, sign-corrected, which stays finite when det = 0.
                 let cofactor = DMat3::from_cols(
@@ -966,8 +991,9 @@ impl Baker<'_> {
         let allowed = accessor.dimensions() == Dimensions::Vec2
             && match accessor.data_type() {
                 DataType::F32 => true,
-                DataType::U8 | DataType::U16 => accessor.normalized(),
-                _ => false,
+                DataType::U8 | DataType::U16 => accessor.normalized() || self.quantized,
+                DataType::I8 | DataType::I16 => self.quantized,
+                DataType::U32 => false,
             };
         if !allowed {
             self.warn_attribute(
@@ -1049,7 +1075,9 @@ impl Baker<'_> {
         let Some(accessor) = primitive.get(&gltf::Semantic::Tangents) else {
             return Ok(None);
         };
-        if accessor.dimensions() != Dimensions::Vec4 || accessor.data_type() != DataType::F32 {
+        let float = accessor.dimensions() == Dimensions::Vec4 && accessor.data_type() == DataType::F32;
+        let allowed = float || (self.quantized && quantized(&accessor, Dimensions::Vec4, false));
+        if !allowed {
             self.warn_attribute(here, "TANGENT", &accessor, "float VEC4");
             return Ok(None);
         }
@@ -1184,6 +1212,19 @@ fn assemble_triangles(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
             .collect(),
         _ => indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
     }
+}
+
+/// Whether `accessor` holds `dimensions` of a type `KHR_mesh_quantization` adds: for positions
+/// (`any_integer`) every 8- and 16-bit integer, normalized or not; for normals and tangents
+/// normalized signed bytes and shorts.
+fn quantized(accessor: &gltf::Accessor, dimensions: Dimensions, any_integer: bool) -> bool {
+    let signed = matches!(accessor.data_type(), DataType::I8 | DataType::I16);
+    let unsigned = matches!(accessor.data_type(), DataType::U8 | DataType::U16);
+    accessor.dimensions() == dimensions
+        && match any_integer {
+            true => signed || unsigned,
+            false => signed && accessor.normalized(),
+        }
 }
 
 /// Checks an accessor before it is read: the element type, a count of at least one, and a
@@ -2709,6 +2750,69 @@ mod tests {
         check_error(
             &path,
             "POSITION buffer view 0 covers bytes 0..128 of buffer 0 (`interleaved.bin`), which has 100",
+        );
+    }
+
+    /// With `KHR_mesh_quantization`, u16 positions, normalized i8 normals and normalized i16
+    /// texture coordinates load by the specification's formulas; without it the normals are
+    /// a type error.
+    #[test]
+    fn quantized_attributes_load_with_the_extension_only() {
+        let dir = scratch_dir();
+        let mut bin = Vec::new();
+        for p in SQUARE {
+            bin.extend(p.map(|c| c as u16).iter().flat_map(|c| c.to_le_bytes()));
+        }
+        bin.extend([0u8, 0, 127, 0].repeat(4)); // normals (0, 0, 1), 4-byte aligned elements
+        let uvs: [i16; 8] = [0, 32767, -32768, 32767, 0, 0, 100, -1];
+        bin.extend(uvs.iter().flat_map(|c| c.to_le_bytes()));
+        bin.extend([0u8, 1, 2, 2, 1, 3]);
+        let write_file = |extensions: &str| {
+            write(dir.path(), "quantized.bin", &bin);
+            let json = format!(
+                r#"{{
+  "asset": {{"version": "2.0"}}, {extensions}
+  "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "indices": 3}}]}}],
+  "buffers": [{{"uri": "quantized.bin", "byteLength": {}}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteLength": 24}},
+    {{"buffer": 0, "byteOffset": 24, "byteLength": 16, "byteStride": 4}},
+    {{"buffer": 0, "byteOffset": 40, "byteLength": 16}},
+    {{"buffer": 0, "byteOffset": 56, "byteLength": 6}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5123, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3"}},
+    {{"bufferView": 2, "componentType": 5122, "normalized": true, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 3, "componentType": 5121, "count": 6, "type": "SCALAR"}}]
+}}"#,
+                bin.len()
+            );
+            write(dir.path(), "quantized.gltf", json.as_bytes())
+        };
+        let path = write_file(
+            r#""extensionsUsed": ["KHR_mesh_quantization"], "extensionsRequired": ["KHR_mesh_quantization"],"#,
+        );
+        let loaded = check_faces_up(&path, 2);
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let mesh = &loaded.mesh;
+        let expected_uvs = [
+            [0.0, 1.0],
+            [-1.0, 1.0],
+            [0.0, 0.0],
+            [100.0 / 32767.0, -1.0 / 32767.0],
+        ];
+        for (position, uv) in SQUARE.iter().zip(expected_uvs) {
+            let vertex = mesh
+                .positions
+                .iter()
+                .position(|&p| p == Vec3::from(*position))
+                .unwrap_or_else(|| panic!("{position:?} in {:?}", mesh.positions));
+            assert_eq!(mesh.uvs[vertex], Vec2::from(uv), "{position:?}");
+        }
+        check_error(
+            &write_file(""),
+            "POSITION accessor 0 holds Vec3 U16; expected Vec3 F32",
         );
     }
 }
