@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the two meshes of the real-mesh benchmarks that are generated rather than committed, into
 benches/meshes/ (ignored by git; benches/llvmpipe.py runs this script when one is missing).
-Deterministic, standard library only, a few seconds:
+Deterministic, standard library only, a few seconds (name meshes to write only those, e.g.
+`python3 benches/gen_meshes.py sphere-gltf`):
 
     python3 benches/gen_meshes.py
 
@@ -13,6 +14,11 @@ Deterministic, standard library only, a few seconds:
   only): its one primitive with the scene's transform (the root node's scale of 0.01) applied to
   the positions, and its normals, so that both renderers light the same normals
   (benches/anchors/s4_duck.json; lampshade's scenes/bench/duck.ron reads the glTF itself).
+* sphere-gltf/sphere.gltf with sphere.bin (about 29 MB): a latitude-longitude unit sphere of
+  512 rings by 1,024 segments (525,825 vertices, 1,048,576 triangles, the poles' degenerate
+  ones included) with its exact normals and texture coordinates, as tightly packed float
+  accessors and 32-bit indices: the glTF loading benchmark (benches/scenes/sphere-gltf.ron),
+  where reading accessors is most of the load.
 
 Loop subdivision (Loop 1987, with Warren's weights): every triangle becomes four, its corners
 moved to (1 - n*b) v + b * (sum of the n neighbours), b = 3/(8n) (3/16 when n = 3), and a new
@@ -35,6 +41,8 @@ TARGET = os.path.join(ROOT, "benches", "meshes", "nefertiti-1m.obj")
 LEVELS = 2
 DUCK = os.path.join(ROOT, "assets", "gltf", "Duck", "glTF", "Duck.gltf")
 DUCK_TARGET = os.path.join(ROOT, "benches", "meshes", "duck.obj")
+SPHERE_TARGET = os.path.join(ROOT, "benches", "meshes", "sphere-gltf", "sphere.gltf")
+SPHERE_RINGS, SPHERE_SEGMENTS = 512, 1024
 
 
 def read_obj(path):
@@ -180,9 +188,61 @@ def write_duck():
     print(f"wrote {DUCK_TARGET}: {len(positions):,} vertices, {len(indices) // 3:,} triangles", file=sys.stderr)
 
 
+def write_sphere_gltf():
+    import math
+    from array import array
+    positions, normals, uvs, indices = array("f"), array("f"), array("f"), array("I")
+    for ring in range(SPHERE_RINGS + 1):
+        theta = math.pi * ring / SPHERE_RINGS
+        for segment in range(SPHERE_SEGMENTS + 1):
+            phi = 2.0 * math.pi * segment / SPHERE_SEGMENTS
+            point = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
+            positions.extend(point)
+            normals.extend(point)
+            uvs.extend((segment / SPHERE_SEGMENTS, ring / SPHERE_RINGS))
+    row = SPHERE_SEGMENTS + 1
+    for ring in range(SPHERE_RINGS):
+        for segment in range(SPHERE_SEGMENTS):
+            a = ring * row + segment
+            b, c, d = a + row, a + 1, a + row + 1
+            indices.extend((a, b, c, c, b, d))
+    if sys.byteorder != "little":
+        for values in (positions, normals, uvs, indices):
+            values.byteswap()
+    parts = [positions.tobytes(), normals.tobytes(), uvs.tobytes(), indices.tobytes()]
+    views, offset = [], 0
+    for part in parts:
+        views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(part)})
+        offset += len(part)
+    vertices = len(positions) // 3
+    document = {
+        "asset": {"version": "2.0", "generator": "benches/gen_meshes.py"},
+        "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}, "indices": 3}]}],
+        "buffers": [{"uri": "sphere.bin", "byteLength": offset}],
+        "bufferViews": views,
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": vertices, "type": "VEC3", "min": [-1, -1, -1], "max": [1, 1, 1]},
+            {"bufferView": 1, "componentType": 5126, "count": vertices, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": vertices, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5125, "count": len(indices), "type": "SCALAR"},
+        ],
+    }
+    binary = os.path.join(os.path.dirname(SPHERE_TARGET), "sphere.bin")
+    os.makedirs(os.path.dirname(binary), exist_ok=True)
+    with open(binary + ".partial", "wb") as out:
+        out.write(b"".join(parts))
+    os.replace(binary + ".partial", binary)
+    write_atomically(SPHERE_TARGET, json.dumps(document, indent=1) + "\n")
+    print(f"wrote {SPHERE_TARGET}: {vertices:,} vertices, {len(indices) // 3:,} triangles", file=sys.stderr)
+
+
+MESHES = {"nefertiti-1m": write_dense_scan, "duck": write_duck, "sphere-gltf": write_sphere_gltf}
+
+
 def main():
-    write_dense_scan()
-    write_duck()
+    for name in sys.argv[1:] or MESHES:
+        MESHES[name]()
 
 
 if __name__ == "__main__":

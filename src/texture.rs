@@ -71,7 +71,7 @@ use std::io::Cursor;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
-use glam::{Vec2, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 /// How texture coordinates outside [0, 1] are brought back (glTF sampler wrap modes).
@@ -185,23 +185,34 @@ impl Texture {
             });
         }
         use image::DynamicImage::{ImageLuma8, ImageLumaA8, ImageRgb8, ImageRgba8};
-        let texels: Vec<Vec4> = if matches!(
-            image,
-            ImageLuma8(_) | ImageLumaA8(_) | ImageRgb8(_) | ImageRgba8(_)
-        ) {
-            let table = decode_table(color_space);
-            let rgba = image.to_rgba8();
+        let table = decode_table(color_space);
+        let alpha = |a: u8| f32::from(a) / 255.0;
+        // 8-bit images are converted from their own layout, without an RGBA copy first: each
+        // texel is what `to_rgba8` would give (grey repeated, alpha 255 when absent).
+        let texels: Vec<Vec4> = if let ImageRgb8(rgb) = image {
+            let (pixels, _) = rgb.as_raw().as_chunks::<3>();
+            pixels
+                .par_iter()
+                .map(|&[r, g, b]| Vec4::new(table[r as usize], table[g as usize], table[b as usize], 1.0))
+                .collect()
+        } else if let ImageRgba8(rgba) = image {
             let (pixels, _) = rgba.as_raw().as_chunks::<4>();
             pixels
                 .par_iter()
                 .map(|&[r, g, b, a]| {
-                    Vec4::new(
-                        table[r as usize],
-                        table[g as usize],
-                        table[b as usize],
-                        f32::from(a) / 255.0,
-                    )
+                    Vec4::new(table[r as usize], table[g as usize], table[b as usize], alpha(a))
                 })
+                .collect()
+        } else if let ImageLuma8(grey) = image {
+            grey.as_raw()
+                .par_iter()
+                .map(|&l| Vec3::splat(table[l as usize]).extend(1.0))
+                .collect()
+        } else if let ImageLumaA8(grey_alpha) = image {
+            let (pixels, _) = grey_alpha.as_raw().as_chunks::<2>();
+            pixels
+                .par_iter()
+                .map(|&[l, a]| Vec3::splat(table[l as usize]).extend(alpha(a)))
                 .collect()
         } else {
             // 16-bit and float images: through f32, the transfer function per texel.
@@ -417,19 +428,22 @@ fn downsample(level: &MipLevel) -> MipLevel {
 
     let mut narrowed = vec![Vec4::ZERO; new_width * height];
     fill_rows(&mut narrowed, new_width, |y, row| {
+        let source = level.texels.get(y * width..(y + 1) * width).unwrap_or_default();
         for (texel, taps) in row.iter_mut().zip(&columns) {
-            *texel = weighted_sum(taps, |x| level.texel(x, y));
+            *texel = weighted_sum(taps, |x| source.get(x).copied().unwrap_or(Vec4::ZERO));
         }
     });
+    // Whole rows at a time: each texel starts at zero and adds its taps in order, the same
+    // sums as `weighted_sum` takes.
     let mut texels = vec![Vec4::ZERO; new_width * new_height];
     fill_rows(&mut texels, new_width, |y, row| {
-        for (x, texel) in row.iter_mut().enumerate() {
-            *texel = weighted_sum(&rows[y], |source_y| {
-                narrowed
-                    .get(source_y * new_width + x)
-                    .copied()
-                    .unwrap_or(Vec4::ZERO)
-            });
+        for &(source_y, weight) in &rows[y] {
+            let source = narrowed
+                .get(source_y * new_width..(source_y + 1) * new_width)
+                .unwrap_or_default();
+            for (texel, &above) in row.iter_mut().zip(source) {
+                *texel += above * weight;
+            }
         }
     });
     MipLevel {
@@ -576,6 +590,57 @@ mod tests {
         assert!((table[10] - 10.0 / 255.0 / 12.92).abs() < 1e-9);
         assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-5);
         assert_eq!(decode_table(ColorSpace::Linear)[51], 0.2);
+    }
+
+    /// Every 8-bit layout (grey, grey and alpha, RGB, RGBA) converted from its own bytes gives
+    /// exactly the texels of its RGBA copy (`to_rgba8`) through the table, for every code.
+    #[test]
+    fn eight_bit_layouts_equal_their_rgba_copy_bit_for_bit() {
+        let codes =
+            |channels: usize| -> Vec<u8> { (0..256 * channels).map(|i| (i * 37 % 256) as u8).collect() };
+        let images = [
+            image::DynamicImage::ImageLuma8(
+                image::ImageBuffer::from_raw(16, 16, codes(1)).unwrap_or_default(),
+            ),
+            image::DynamicImage::ImageLumaA8(
+                image::ImageBuffer::from_raw(16, 16, codes(2)).unwrap_or_default(),
+            ),
+            image::DynamicImage::ImageRgb8(
+                image::ImageBuffer::from_raw(16, 16, codes(3)).unwrap_or_default(),
+            ),
+            image::DynamicImage::ImageRgba8(
+                image::ImageBuffer::from_raw(16, 16, codes(4)).unwrap_or_default(),
+            ),
+        ];
+        for color_space in [ColorSpace::Srgb, ColorSpace::Linear] {
+            let table = decode_table(color_space);
+            for image in &images {
+                assert_eq!(image.width(), 16, "{:?}", image.color());
+                let expected: Vec<Vec4> = image
+                    .to_rgba8()
+                    .pixels()
+                    .map(|p| {
+                        let [r, g, b, a] = p.0;
+                        Vec4::new(
+                            table[r as usize],
+                            table[g as usize],
+                            table[b as usize],
+                            f32::from(a) / 255.0,
+                        )
+                    })
+                    .collect();
+                let texels = &Texture::from_image(image, color_space).levels[0].texels;
+                let bits = |texels: &[Vec4]| -> Vec<[u32; 4]> {
+                    texels.iter().map(|t| t.to_array().map(f32::to_bits)).collect()
+                };
+                assert_eq!(
+                    bits(texels),
+                    bits(&expected),
+                    "{:?} {color_space:?}",
+                    image.color()
+                );
+            }
+        }
     }
 
     #[test]

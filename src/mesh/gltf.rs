@@ -9,6 +9,10 @@
 //!   that the drawn textures use are decoded (`gltf::import` would decode every one, and read
 //!   files without telling us which). A required extension the loader does not support is an
 //!   error naming it.
+//! * **Accessors** are read by [`gltf_accessor`](super::gltf_accessor): tightly packed ones
+//!   in bulk, strided, normalized-integer and sparse ones element by element, every byte
+//!   range checked against its view and buffer (an error names the accessor, view and
+//!   buffer file).
 //! * **No panics.** `gltf` can panic on malformed input (out-of-range accessors, bad
 //!   percent-encoding in a URI); every accessor is checked before it is read (component
 //!   type, element size, stride, count) and every index against the vertex count, and the
@@ -30,6 +34,11 @@
 //!   ([`normals::repair_normals`]), missing ones computed with the crease angle
 //!   ([`normals::compute_vertex_normals`]) after the transform, so the crease angle applies
 //!   to what is drawn.
+//! * **`KHR_mesh_quantization`** (required or used) also allows 8- and 16-bit integer
+//!   positions (normalized or not: the node transform dequantizes them), normalized signed
+//!   byte and short normals and tangents, and signed or unnormalized integer texture
+//!   coordinates, all converted to floats by the specification's formulas
+//!   ([`gltf_accessor`](super::gltf_accessor)).
 //! * **Other vertex attributes.** `TEXCOORD_0` → [`Mesh::uvs`], `TEXCOORD_1` →
 //!   [`Mesh::uvs1`] (float, or normalised unsigned byte or short; glTF's (0, 0) is already
 //!   the top-left of the image), `COLOR_0` → [`Mesh::colors`] (RGB or RGBA, float or
@@ -107,6 +116,7 @@ use glam::{DMat3, DMat4, DVec3, Mat4, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
+use super::gltf_accessor::{read_floats, read_indices};
 use super::normals::VertexAttributes;
 use super::{FileContent, USE_GLTF_HINT, first_bytes};
 use super::{
@@ -121,7 +131,15 @@ use crate::texture::{ColorSpace, Sampler, Texture, Wrap};
 /// Required extensions a file may list and still load: both are understood by the `gltf`
 /// crate as built here, and neither changes the geometry (`KHR_lights_punctual` adds lights,
 /// returned in [`LoadedMesh::lights`]).
-const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 2] = ["KHR_materials_emissive_strength", "KHR_lights_punctual"];
+const SUPPORTED_REQUIRED_EXTENSIONS: [&str; 3] = [
+    "KHR_materials_emissive_strength",
+    "KHR_lights_punctual",
+    MESH_QUANTIZATION,
+];
+
+/// The extension that allows 8- and 16-bit integer positions, normals, tangents and texture
+/// coordinates (module documentation); the `gltf` crate does not know it.
+const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 
 /// The Blinn-Phong exponent equivalent to a glTF perceptual roughness (clamped to [0, 1]):
 /// with `α = r²` (the GGX remapping glTF uses), the Beckmann-matched exponent
@@ -281,6 +299,7 @@ impl ParsedGltf {
             buffers,
             crease_angle_degrees: options.crease_angle_degrees,
             default_material_index: document.materials().len() as u32,
+            quantized: document.extensions_used().any(|name| name == MESH_QUANTIZATION),
             mesh: Mesh::default(),
             skipped_primitives: Vec::new(),
             repaired_normals: 0,
@@ -614,7 +633,7 @@ fn check_glb_container(bytes: &[u8]) -> Result<(), String> {
 fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), String> {
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|error| format!("malformed glTF: {error}"))?;
-    let json = document.into_json();
+    let mut json = document.into_json();
     // Checked before validation, which reports an unknown required extension tersely.
     if let Some(name) = json
         .extensions_required
@@ -625,6 +644,9 @@ fn parse_document(bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), Str
             "requires the glTF extension {name}, which is not supported"
         ));
     }
+    // gltf-json's validation refuses required extensions it does not know; this one needs
+    // nothing from it (the accessors are read here).
+    json.extensions_required.retain(|name| name != MESH_QUANTIZATION);
     // gltf-json 1.4's validation indexes a primitive's POSITION accessor before checking
     // that it exists, and panics; check attribute indices first.
     for (mesh_index, mesh) in json.meshes.iter().enumerate() {
@@ -686,8 +708,12 @@ fn load_buffers(
             }
         };
         if data.len() < buffer.length() {
+            let name = match buffer.source() {
+                gltf::buffer::Source::Uri(uri) if !uri.starts_with("data:") => format!(" `{uri}`"),
+                _ => String::new(),
+            };
             return Err(format!(
-                "buffer {index} has {} bytes but the file declares {}",
+                "buffer {index}{name} has {} bytes but the file declares {}: it is truncated",
                 data.len(),
                 buffer.length()
             ));
@@ -754,6 +780,8 @@ fn scene_instances(document: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, DMa
 struct Baker<'a> {
     buffers: &'a [Vec<u8>],
     crease_angle_degrees: f32,
+    /// The file uses `KHR_mesh_quantization`: integer attribute types are allowed.
+    quantized: bool,
     /// Material index of primitives without a material: one past the file's materials.
     default_material_index: u32,
     mesh: Mesh,
@@ -777,19 +805,21 @@ impl Baker<'_> {
             return Ok(());
         }
         let buffers = self.buffers;
-        let reader = primitive.reader(|buffer| buffers.get(buffer.index()).map(Vec::as_slice));
 
         let Some(position_accessor) = primitive.get(&gltf::Semantic::Positions) else {
             self.warnings
                 .push(format!("{here} has no POSITION attribute and was skipped"));
             return Ok(());
         };
-        check_accessor(&position_accessor, DataType::F32, Dimensions::Vec3)
-            .map_err(|e| format!("{here}: POSITION {e}"))?;
+        match self.quantized && quantized(&position_accessor, Dimensions::Vec3, true) {
+            true => check_layout(&position_accessor),
+            false => check_accessor(&position_accessor, DataType::F32, Dimensions::Vec3),
+        }
+        .map_err(|e| format!("{here}: POSITION {e}"))?;
         let vertex_count = position_accessor.count();
-        let positions: Vec<Vec3> = reader
-            .read_positions()
-            .ok_or_else(|| format!("{here}: POSITION data lies outside its buffer"))?
+        let positions: Vec<Vec3> = read_floats::<3>(&position_accessor, buffers)
+            .map_err(|e| format!("{here}: POSITION {e}"))?
+            .into_iter()
             .map(|p| world.transform_point3(Vec3::from(p).as_dvec3()).as_vec3())
             .collect();
         if positions.len() != vertex_count {
@@ -808,11 +838,7 @@ impl Baker<'_> {
             None => (0..vertex_count as u32).collect(),
             Some(accessor) => {
                 check_index_accessor(&accessor).map_err(|e| format!("{here}: indices {e}"))?;
-                let indices: Vec<u32> = reader
-                    .read_indices()
-                    .ok_or_else(|| format!("{here}: index data lies outside its buffer"))?
-                    .into_u32()
-                    .collect();
+                let indices = read_indices(&accessor, buffers).map_err(|e| format!("{here}: indices {e}"))?;
                 if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertex_count) {
                     return Err(format!(
                         "{here}: index {bad} is out of range ({vertex_count} vertices)"
@@ -839,8 +865,11 @@ impl Baker<'_> {
         let file_normals = match primitive.get(&gltf::Semantic::Normals) {
             None => None,
             Some(accessor) => {
-                check_accessor(&accessor, DataType::F32, Dimensions::Vec3)
-                    .map_err(|e| format!("{here}: NORMAL {e}"))?;
+                match self.quantized && quantized(&accessor, Dimensions::Vec3, false) {
+                    true => check_layout(&accessor),
+                    false => check_accessor(&accessor, DataType::F32, Dimensions::Vec3),
+                }
+                .map_err(|e| format!("{here}: NORMAL {e}"))?;
                 // Inverse transpose of the linear part, up to the positive factor |det|:
                 // the cofactor matrix, sign-corrected, which stays finite when det = 0.
                 let cofactor = DMat3::from_cols(
@@ -848,10 +877,7 @@ impl Baker<'_> {
                     linear.z_axis.cross(linear.x_axis),
                     linear.x_axis.cross(linear.y_axis),
                 ) * if mirrored { -1.0 } else { 1.0 };
-                let raw: Vec<[f32; 3]> = reader
-                    .read_normals()
-                    .ok_or_else(|| format!("{here}: NORMAL data lies outside its buffer"))?
-                    .collect();
+                let raw = read_floats::<3>(&accessor, buffers).map_err(|e| format!("{here}: NORMAL {e}"))?;
                 // Rejected like a non-finite position (issue 6), not repaired: a NaN normal is a
                 // broken export. (Zero normals, which some exporters write, are recomputed.)
                 if raw.iter().flatten().any(|c| !c.is_finite()) {
@@ -873,11 +899,11 @@ impl Baker<'_> {
             }
         };
 
-        let uvs = self.read_uvs(primitive, &reader, 0, vertex_count, &here)?;
-        let uvs1 = self.read_uvs(primitive, &reader, 1, vertex_count, &here)?;
-        let colors = self.read_colors(primitive, &reader, vertex_count, &here)?;
+        let uvs = self.read_uvs(primitive, 0, vertex_count, &here)?;
+        let uvs1 = self.read_uvs(primitive, 1, vertex_count, &here)?;
+        let colors = self.read_colors(primitive, vertex_count, &here)?;
         let file_tangents = self
-            .read_tangents(primitive, &reader, vertex_count, &here)?
+            .read_tangents(primitive, vertex_count, &here)?
             .map(|tangents| {
                 // Directions transform like edges between positions, by the linear part.
                 let handedness = if mirrored { -1.0 } else { 1.0 };
@@ -951,10 +977,9 @@ impl Baker<'_> {
     }
 
     /// `TEXCOORD_<set>`, or `None` (with a warning when it exists but cannot be used).
-    fn read_uvs<'a, 's, F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>>(
+    fn read_uvs(
         &mut self,
-        primitive: &gltf::Primitive<'a>,
-        reader: &gltf::mesh::Reader<'a, 's, F>,
+        primitive: &gltf::Primitive,
         set: u32,
         vertex_count: usize,
         here: &str,
@@ -966,8 +991,9 @@ impl Baker<'_> {
         let allowed = accessor.dimensions() == Dimensions::Vec2
             && match accessor.data_type() {
                 DataType::F32 => true,
-                DataType::U8 | DataType::U16 => accessor.normalized(),
-                _ => false,
+                DataType::U8 | DataType::U16 => accessor.normalized() || self.quantized,
+                DataType::I8 | DataType::I16 => self.quantized,
+                DataType::U32 => false,
             };
         if !allowed {
             self.warn_attribute(
@@ -978,10 +1004,11 @@ impl Baker<'_> {
             );
             return Ok(None);
         }
-        let Some(uvs) = self.read_checked(here, &name, &accessor, || {
-            reader
-                .read_tex_coords(set)
-                .map(|uvs| uvs.into_f32().map(Vec2::from).collect::<Vec<Vec2>>())
+        let Some(uvs) = self.read_checked(here, &name, &accessor, |accessor, buffers| {
+            Ok(read_floats::<2>(accessor, buffers)?
+                .into_iter()
+                .map(Vec2::from)
+                .collect())
         }) else {
             return Ok(None);
         };
@@ -993,10 +1020,9 @@ impl Baker<'_> {
     }
 
     /// `COLOR_0` as linear RGBA, or `None` (with a warning when it exists but cannot be used).
-    fn read_colors<'a, 's, F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>>(
+    fn read_colors(
         &mut self,
-        primitive: &gltf::Primitive<'a>,
-        reader: &gltf::mesh::Reader<'a, 's, F>,
+        primitive: &gltf::Primitive,
         vertex_count: usize,
         here: &str,
     ) -> Result<Option<Vec<Vec4>>, String> {
@@ -1018,10 +1044,17 @@ impl Baker<'_> {
             );
             return Ok(None);
         }
-        let Some(colors) = self.read_checked(here, "COLOR_0", &accessor, || {
-            reader
-                .read_colors(0)
-                .map(|colors| colors.into_rgba_f32().map(Vec4::from).collect::<Vec<Vec4>>())
+        let Some(colors) = self.read_checked(here, "COLOR_0", &accessor, |accessor, buffers| {
+            Ok(match accessor.dimensions() {
+                Dimensions::Vec3 => read_floats::<3>(accessor, buffers)?
+                    .into_iter()
+                    .map(|rgb| Vec3::from(rgb).extend(1.0))
+                    .collect(),
+                _ => read_floats::<4>(accessor, buffers)?
+                    .into_iter()
+                    .map(Vec4::from)
+                    .collect(),
+            })
         }) else {
             return Ok(None);
         };
@@ -1033,24 +1066,26 @@ impl Baker<'_> {
 
     /// `TANGENT` as stored (model space), or `None` (with a warning when it exists but
     /// cannot be used).
-    fn read_tangents<'a, 's, F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>>(
+    fn read_tangents(
         &mut self,
-        primitive: &gltf::Primitive<'a>,
-        reader: &gltf::mesh::Reader<'a, 's, F>,
+        primitive: &gltf::Primitive,
         vertex_count: usize,
         here: &str,
     ) -> Result<Option<Vec<Vec4>>, String> {
         let Some(accessor) = primitive.get(&gltf::Semantic::Tangents) else {
             return Ok(None);
         };
-        if accessor.dimensions() != Dimensions::Vec4 || accessor.data_type() != DataType::F32 {
+        let float = accessor.dimensions() == Dimensions::Vec4 && accessor.data_type() == DataType::F32;
+        let allowed = float || (self.quantized && quantized(&accessor, Dimensions::Vec4, false));
+        if !allowed {
             self.warn_attribute(here, "TANGENT", &accessor, "float VEC4");
             return Ok(None);
         }
-        let Some(tangents) = self.read_checked(here, "TANGENT", &accessor, || {
-            reader
-                .read_tangents()
-                .map(|tangents| tangents.map(Vec4::from).collect::<Vec<Vec4>>())
+        let Some(tangents) = self.read_checked(here, "TANGENT", &accessor, |accessor, buffers| {
+            Ok(read_floats::<4>(accessor, buffers)?
+                .into_iter()
+                .map(Vec4::from)
+                .collect())
         }) else {
             return Ok(None);
         };
@@ -1071,26 +1106,22 @@ impl Baker<'_> {
     }
 
     /// Reads an optional attribute whose type was checked, after checking its layout; `None`
-    /// with a warning when the layout is wrong or the data lies outside its buffer.
+    /// with a warning when the layout is wrong or the data does not lie in its buffer.
     fn read_checked<T>(
         &mut self,
         here: &str,
         name: &str,
         accessor: &gltf::Accessor,
-        read: impl FnOnce() -> Option<Vec<T>>,
+        read: impl FnOnce(&gltf::Accessor, &[Vec<u8>]) -> Result<Vec<T>, String>,
     ) -> Option<Vec<T>> {
-        if let Err(problem) = check_layout(accessor) {
-            self.warnings
-                .push(format!("{here}: {name} {problem}; it is ignored"));
-            return None;
+        match check_layout(accessor).and_then(|()| read(accessor, self.buffers)) {
+            Ok(values) => Some(values),
+            Err(problem) => {
+                self.warnings
+                    .push(format!("{here}: {name} {problem}; it is ignored"));
+                None
+            }
         }
-        let values = read();
-        if values.is_none() {
-            self.warnings.push(format!(
-                "{here}: {name} data lies outside its buffer; it is ignored"
-            ));
-        }
-        values
     }
 
     fn check_count<T>(
@@ -1183,8 +1214,21 @@ fn assemble_triangles(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
     }
 }
 
-/// Checks what `gltf`'s reader assumes (and would panic or misread on): the element type,
-/// a count of at least one, and a stride no smaller than an element.
+/// Whether `accessor` holds `dimensions` of a type `KHR_mesh_quantization` adds: for positions
+/// (`any_integer`) every 8- and 16-bit integer, normalized or not; for normals and tangents
+/// normalized signed bytes and shorts.
+fn quantized(accessor: &gltf::Accessor, dimensions: Dimensions, any_integer: bool) -> bool {
+    let signed = matches!(accessor.data_type(), DataType::I8 | DataType::I16);
+    let unsigned = matches!(accessor.data_type(), DataType::U8 | DataType::U16);
+    accessor.dimensions() == dimensions
+        && match any_integer {
+            true => signed || unsigned,
+            false => signed && accessor.normalized(),
+        }
+}
+
+/// Checks an accessor before it is read: the element type, a count of at least one, and a
+/// stride no smaller than an element.
 fn check_accessor(
     accessor: &gltf::Accessor,
     data_type: DataType,
@@ -2614,6 +2658,161 @@ mod tests {
                 .any(|w| w.contains("TEXCOORD_0") && w.contains("ignored")),
             "{:?}",
             loaded.warnings
+        );
+    }
+
+    /// Writes `interleaved.gltf` and `interleaved.bin`: the square facing +Z as one view of
+    /// interleaved vertices (position, normal, normalized u16 uv, 4 bytes of padding: a
+    /// 32-byte stride), whose last position is wrong in the view and put right by a sparse
+    /// substitution, and u8 indices. `bin_length` cuts the .bin short.
+    fn write_interleaved_square(dir: &Path, bin_length: Option<usize>) -> PathBuf {
+        let uvs: [[u16; 2]; 4] = [[0, 65535], [65535, 65535], [0, 3], [257, 0]];
+        let mut bin = Vec::new();
+        for (vertex, (position, uv)) in SQUARE.iter().zip(uvs).enumerate() {
+            let stored = if vertex == 3 { [9.0, 9.0, 9.0] } else { *position };
+            bin.extend(
+                stored
+                    .iter()
+                    .chain(&[0.0, 0.0, 1.0])
+                    .flat_map(|c| c.to_le_bytes()),
+            );
+            bin.extend(uv.iter().flat_map(|c| c.to_le_bytes()));
+            bin.extend([0xFF; 4]);
+        }
+        bin.extend([0u8, 1, 2, 2, 1, 3, 3, 0]); // indices at 128, sparse index 3 at 134
+        bin.extend(SQUARE[3].iter().flat_map(|c| c.to_le_bytes())); // sparse value at 136
+        let length = bin.len();
+        bin.truncate(bin_length.unwrap_or(length));
+        write(dir, "interleaved.bin", &bin);
+        let json = format!(
+            r#"{{
+  "asset": {{"version": "2.0"}},
+  "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "indices": 3}}]}}],
+  "buffers": [{{"uri": "interleaved.bin", "byteLength": {length}}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteLength": 128, "byteStride": 32}},
+    {{"buffer": 0, "byteOffset": 128, "byteLength": 6}},
+    {{"buffer": 0, "byteOffset": 134, "byteLength": 1}},
+    {{"buffer": 0, "byteOffset": 136, "byteLength": 12}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0],
+      "sparse": {{"count": 1, "indices": {{"bufferView": 2, "componentType": 5121}}, "values": {{"bufferView": 3}}}}}},
+    {{"bufferView": 0, "byteOffset": 12, "componentType": 5126, "count": 4, "type": "VEC3"}},
+    {{"bufferView": 0, "byteOffset": 24, "componentType": 5123, "normalized": true, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 1, "componentType": 5121, "count": 6, "type": "SCALAR"}}]
+}}"#
+        );
+        write(dir, "interleaved.gltf", json.as_bytes())
+    }
+
+    /// Strided attributes, a sparse position, normalized u16 texture coordinates and u8
+    /// indices arrive exactly in the mesh.
+    #[test]
+    fn interleaved_sparse_and_normalized_attributes_load_exactly() {
+        let dir = scratch_dir();
+        let loaded = check_faces_up(&write_interleaved_square(dir.path(), None), 2);
+        let mesh = &loaded.mesh;
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let expected_uvs = [
+            [0.0, 1.0],
+            [1.0, 1.0],
+            [0.0, 3.0 / 65535.0],
+            [257.0 / 65535.0, 0.0],
+        ];
+        for (position, uv) in SQUARE.iter().zip(expected_uvs) {
+            let vertex = mesh
+                .positions
+                .iter()
+                .position(|&p| p == Vec3::from(*position))
+                .unwrap_or_else(|| panic!("{position:?} in {:?}", mesh.positions));
+            assert_eq!(mesh.uvs[vertex], Vec2::from(uv), "{position:?}");
+            assert_eq!(mesh.normals[vertex], Vec3::Z);
+        }
+        assert_eq!(mesh.triangles.len(), 2);
+    }
+
+    /// A .bin cut short (with the declared length, or inside a view) is an error naming the
+    /// buffer file and the sizes, never a panic or a mesh missing data.
+    #[test]
+    fn truncated_buffer_files_are_named() {
+        let dir = scratch_dir();
+        check_error(
+            &write_interleaved_square(dir.path(), Some(100)),
+            "buffer 0 `interleaved.bin` has 100 bytes but the file declares 148: it is truncated",
+        );
+        // The declared length cut as well: the views now reach past the buffer.
+        let path = write_interleaved_square(dir.path(), Some(100));
+        let text = std::fs::read_to_string(&path)
+            .unwrap_or_default()
+            .replace(r#""byteLength": 148"#, r#""byteLength": 100"#);
+        std::fs::write(&path, text).unwrap_or_else(|e| panic!("{e}"));
+        check_error(
+            &path,
+            "POSITION buffer view 0 covers bytes 0..128 of buffer 0 (`interleaved.bin`), which has 100",
+        );
+    }
+
+    /// With `KHR_mesh_quantization`, u16 positions, normalized i8 normals and normalized i16
+    /// texture coordinates load by the specification's formulas; without it the normals are
+    /// a type error.
+    #[test]
+    fn quantized_attributes_load_with_the_extension_only() {
+        let dir = scratch_dir();
+        let mut bin = Vec::new();
+        for p in SQUARE {
+            bin.extend(p.map(|c| c as u16).iter().flat_map(|c| c.to_le_bytes()));
+        }
+        bin.extend([0u8, 0, 127, 0].repeat(4)); // normals (0, 0, 1), 4-byte aligned elements
+        let uvs: [i16; 8] = [0, 32767, -32768, 32767, 0, 0, 100, -1];
+        bin.extend(uvs.iter().flat_map(|c| c.to_le_bytes()));
+        bin.extend([0u8, 1, 2, 2, 1, 3]);
+        let write_file = |extensions: &str| {
+            write(dir.path(), "quantized.bin", &bin);
+            let json = format!(
+                r#"{{
+  "asset": {{"version": "2.0"}}, {extensions}
+  "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2}}, "indices": 3}}]}}],
+  "buffers": [{{"uri": "quantized.bin", "byteLength": {}}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteLength": 24}},
+    {{"buffer": 0, "byteOffset": 24, "byteLength": 16, "byteStride": 4}},
+    {{"buffer": 0, "byteOffset": 40, "byteLength": 16}},
+    {{"buffer": 0, "byteOffset": 56, "byteLength": 6}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5123, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3"}},
+    {{"bufferView": 2, "componentType": 5122, "normalized": true, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 3, "componentType": 5121, "count": 6, "type": "SCALAR"}}]
+}}"#,
+                bin.len()
+            );
+            write(dir.path(), "quantized.gltf", json.as_bytes())
+        };
+        let path = write_file(
+            r#""extensionsUsed": ["KHR_mesh_quantization"], "extensionsRequired": ["KHR_mesh_quantization"],"#,
+        );
+        let loaded = check_faces_up(&path, 2);
+        assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+        let mesh = &loaded.mesh;
+        let expected_uvs = [
+            [0.0, 1.0],
+            [-1.0, 1.0],
+            [0.0, 0.0],
+            [100.0 / 32767.0, -1.0 / 32767.0],
+        ];
+        for (position, uv) in SQUARE.iter().zip(expected_uvs) {
+            let vertex = mesh
+                .positions
+                .iter()
+                .position(|&p| p == Vec3::from(*position))
+                .unwrap_or_else(|| panic!("{position:?} in {:?}", mesh.positions));
+            assert_eq!(mesh.uvs[vertex], Vec2::from(uv), "{position:?}");
+        }
+        check_error(
+            &write_file(""),
+            "POSITION accessor 0 holds Vec3 U16; expected Vec3 F32",
         );
     }
 }

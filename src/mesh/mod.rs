@@ -24,6 +24,7 @@
 mod atan;
 pub mod closed;
 pub mod gltf;
+mod gltf_accessor;
 pub mod normals;
 pub mod obj;
 mod obj_parse;
