@@ -49,6 +49,9 @@ struct TriangleColorCache<T: Copy> {
 
 const TRIANGLE_CACHE_SIZE: usize = 64;
 
+/// [`samples_showing`]'s mask of a group of [`LANES`] pixels that all show one triangle.
+const ALL_LANES: u32 = (1 << LANES) - 1;
+
 impl<T: Copy + Default> TriangleColorCache<T> {
     fn new() -> Self {
         TriangleColorCache {
@@ -168,9 +171,10 @@ struct GouraudPlane {
     step_x: [i64; 3],
     step_y: [i64; 3],
     colors: GouraudColors,
-    /// Whether the triangle is a group of lanes wide in the tile and its edge values over the
-    /// tile are held exactly in `f64` lanes (for [`GouraudPlane::group_colors`]).
-    in_lanes: bool,
+    /// The lanes' steps along a row (for [`GouraudPlane::group_colors`]), formed once per
+    /// triangle and tile: where the triangle is a group of lanes wide in the tile and its edge
+    /// values over the tile are held exactly in `f64` lanes.
+    lane_steps: Option<LaneSteps>,
 }
 
 impl GouraudPlane {
@@ -181,10 +185,12 @@ impl GouraudPlane {
             step_y: edge_steps_y(raster),
             colors,
             // Only a triangle a group wide can show in a whole group.
-            in_lanes: raster
+            lane_steps: raster
                 .bounds
                 .intersect(&rect)
-                .is_some_and(|area| area.width() as usize >= LANES && LaneSteps::exact_over(raster, rect)),
+                .is_some_and(|area| area.width() as usize >= LANES)
+                .then(|| LaneSteps::over(raster, rect))
+                .flatten(),
         }
     }
 
@@ -201,15 +207,9 @@ impl GouraudPlane {
     /// not held exactly in `f64` lanes (a triangle reaching far off the tile).
     #[inline]
     fn group_colors(&self, column: i64, row: i64) -> Option<[Vec3; LANES]> {
-        if !self.in_lanes {
-            return None;
-        }
+        let lane_steps = self.lane_steps.as_ref()?;
         let first = std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row);
-        Some(
-            self.colors
-                .at_lanes(LaneSteps::of(self.step_x).edges(first))
-                .to_array(),
-        )
+        Some(self.colors.at_lanes(lane_steps.edges(first)).to_array())
     }
 }
 
@@ -821,7 +821,19 @@ fn shade_single_sample<'f>(
             .filter(|&&covered| covered)
             .count();
     }
-    for &id in &visibility.triangle {
+    // A group of pixels showing one triangle (inside a large one, or the background) marks it
+    // once.
+    let (groups, rest) = visibility.triangle.as_chunks::<LANES>();
+    for group in groups {
+        if samples_showing(group, group[0]) == ALL_LANES {
+            seen[entry(group[0])] = true;
+            continue;
+        }
+        for &id in group {
+            seen[entry(id)] = true;
+        }
+    }
+    for &id in rest {
         seen[entry(id)] = true;
     }
 
@@ -978,7 +990,7 @@ fn shade_single_sample<'f>(
                 let first_column = group * LANES;
                 // A group showing one triangle (inside a large one) takes its source once.
                 if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
-                    && samples_showing(group_ids, group_ids[0]) == (1 << LANES) - 1
+                    && samples_showing(group_ids, group_ids[0]) == ALL_LANES
                 {
                     let id = group_ids[0];
                     let done = match sources[entry(id)] {
@@ -1012,8 +1024,17 @@ fn shade_single_sample<'f>(
                 }
             }
         } else {
-            for (color, &id) in colors.iter_mut().zip(ids) {
-                *color = fills[entry(id)];
+            for (colors, ids) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)) {
+                // A group showing one triangle takes its colour once.
+                if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
+                    && samples_showing(group_ids, group_ids[0]) == ALL_LANES
+                {
+                    colors.fill(fills[entry(group_ids[0])]);
+                    continue;
+                }
+                for (color, &id) in colors.iter_mut().zip(ids) {
+                    *color = fills[entry(id)];
+                }
             }
         }
     }
@@ -1948,7 +1969,7 @@ mod tests {
                                 let lane = column as usize % LANES;
                                 // (Lane steps for every triangle, narrow ones too.)
                                 let plane = GouraudPlane {
-                                    in_lanes: LaneSteps::exact_over(raster, rect),
+                                    lane_steps: LaneSteps::over(raster, rect),
                                     ..GouraudPlane::new(raster, rect, colors)
                                 };
                                 let group = plane.group_colors(column - lane as i64, row);
