@@ -73,6 +73,7 @@ FEATURE_SCENES = [
     Feature("s1_shadow_noplane", "scenes/bench/shadow-noplane.ron", SHADED, None, "anchor", None),
     Feature("s1_textured", "scenes/bench/textured.ron", MODES, None, "anchor", None),
     Feature("s1_slerp", "scenes/bench/slerp.ron", SHADED, None, None, None),
+    Feature("s1_textured_slerp", "scenes/bench/textured-slerp.ron", SHADED, None, None, None),
     Feature("s1_cook_torrance", "scenes/bench/cook-torrance.ron", ["phong"], None, None, "scene"),
 ]
 PLAIN_S1 = ("s1_two_spheres", "scenes/bench/two-spheres.ron")

@@ -931,6 +931,9 @@ fn renormalize_lanes(
 pub struct SurfaceBatch<'f> {
     lighting: Option<FastLighting<'f>>,
     pixels: EdgeQueue<SurfaceTriangle<'f>>,
+    /// Whether a triangle named so far slerps its normals (else no lane does). Never cleared:
+    /// a triangle's pixels may go on past a flush, and a batch lives for one tile.
+    slerping: bool,
 }
 
 /// `FastPhong::shade`'s interpolation, lane-wise: per lane the `corner`s of its triangle
@@ -951,7 +954,10 @@ struct SurfaceTriangle<'f> {
     triangle: Option<&'f FrameTriangle>,
     plane: RasterPlane,
     positions: [Vec3; 3],
+    /// With Nlerp: the vertex normals.
     normals: [Vec3; 3],
+    /// With Slerp: the first arc and the third normal (as [`NormalStage::Slerp`]).
+    slerp: Option<(NormalArc, Vec3)>,
     /// Whether the lit side's normal is the reversed one (`ObjectStyle::reverses_normal`).
     reversed: bool,
 }
@@ -961,10 +967,13 @@ impl<'f> SurfaceBatch<'f> {
     /// (flushing the waiting pixels into `color` first if it lights otherwise).
     #[inline]
     pub fn begin(&mut self, phong: &FastPhong<'f>, plane: RasterPlane, color: &mut [Vec3]) {
-        // `FastPhong::new` lets a surface vary only where it lights it, interpolating normals
-        // component by component.
-        let (PixelOutput::Lit(lighting), NormalStage::Nlerp(normals)) = (phong.output, phong.normals) else {
-            unreachable!("a varying surface is lit, with Nlerp");
+        // `FastPhong::new` lets a surface vary only where it lights it.
+        let PixelOutput::Lit(lighting) = phong.output else {
+            unreachable!("a varying surface is lit");
+        };
+        let (normals, slerp) = match phong.normals {
+            NormalStage::Nlerp(normals) => (normals, None),
+            NormalStage::Slerp { first_two, third } => ([Vec3::ZERO; 3], Some((first_two, third))),
         };
         if let Some(waiting) = self.lighting
             && !waiting.same_as(&lighting)
@@ -972,11 +981,13 @@ impl<'f> SurfaceBatch<'f> {
             self.flush(color);
         }
         self.lighting = Some(lighting);
+        self.slerping |= slerp.is_some();
         self.pixels.begin(SurfaceTriangle {
             triangle: Some(phong.triangle),
             plane,
             positions: phong.positions,
             normals,
+            slerp,
             reversed: phong.reversed,
         });
     }
@@ -1010,7 +1021,11 @@ impl<'f> SurfaceBatch<'f> {
         let frame_triangles = triangles.map(|triangle| triangle.triangle);
         let vertices = frame_triangles.map(|triangle| triangle.expect("every lane holds a pixel").vertices);
         let positions = interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.positions[k]);
-        let normals = interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.normals[k]);
+        let normals = if self.slerping {
+            surface_normals(&triangles, &weights.at)
+        } else {
+            interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.normals[k])
+        };
         let normals = renormalize_lanes(frame, normals, &frame_triangles);
         // The normal map perturbs the front normal, before the side is chosen.
         let points = SurfacePoints {
@@ -1025,6 +1040,33 @@ impl<'f> SurfaceBatch<'f> {
         for (&offset, &lit) in offsets.iter().zip(&lit) {
             color[offset] = lit;
         }
+    }
+}
+
+/// The interpolated normals (before renormalising) of a [`SurfaceBatch`]'s lanes at source
+/// weights `weights`, each as its triangle interpolates them: component by component, or
+/// slerped (`slerp_triangle_lanes`; a batch may hold triangles of both kinds where two objects
+/// light alike, so each lane takes its own).
+#[inline(always)]
+fn surface_normals(triangles: &[&SurfaceTriangle; LANES], weights: &[Floats; 3]) -> Vec3s {
+    let nlerped = || interpolate_corners(triangles, weights, |triangle, k| triangle.normals[k]);
+    let Some(any_arc) = triangles.iter().find_map(|triangle| triangle.slerp) else {
+        return nlerped();
+    };
+    // Lanes with Nlerp take another lane's arc for the slerp, whose result they drop.
+    let arcs = triangles.map(|triangle| triangle.slerp.unwrap_or(any_arc));
+    let weights = Vec3s {
+        x: weights[0],
+        y: weights[1],
+        z: weights[2],
+    }
+    .to_array();
+    let slerped = slerp_triangle_lanes(&arcs.map(|(arc, _)| arc), &arcs.map(|(_, third)| third), &weights);
+    let slerping = Mask::from_bools(triangles.map(|triangle| triangle.slerp.is_some()));
+    if slerping.all() {
+        slerped
+    } else {
+        slerping.select3(slerped, nlerped())
     }
 }
 
@@ -1105,7 +1147,7 @@ impl<'f> PhongRows<'f> {
 impl<'f> FastPhong<'f> {
     /// The per-pixel shading of `triangle` seen from the front or the back, or `None` when it
     /// needs the general path: a lit pixel whose lighting does not take lanes (see
-    /// [`FastLighting::new`]), or of a surface that varies with Slerp. The debug views of normals and
+    /// [`FastLighting::new`]). The debug views of normals and
     /// depth take any triangle; the caller asks them for every mode whose pixels they vary over
     /// (depth: all; normals: Gouraud and Phong). `lightings` forms the lighting.
     #[inline(always)]
@@ -1126,8 +1168,6 @@ impl<'f> FastPhong<'f> {
         let [n0, n1, n2] = vertices.map(|v| v.normal);
         let normals = match style.normal_interpolation {
             NormalInterpolation::Nlerp => NormalStage::Nlerp([n0, n1, n2]),
-            // The surface stage interpolates normals component by component only.
-            NormalInterpolation::Slerp if varies => return None,
             NormalInterpolation::Slerp => NormalStage::Slerp {
                 first_two: NormalArc::new(n0, n1),
                 third: n2,
