@@ -1864,8 +1864,7 @@ mod tests {
     /// `shade_sample`: the same bits, for each shading mode, back-face mode and light set, with
     /// every lighting model, and with every component, interpolation and debug view (see
     /// `shade_fast::tests::LOOKS`), on plain surfaces and on surfaces that vertex colours,
-    /// textures and normal maps vary. Only a varying surface whose lighting is one colour is left
-    /// to the general path.
+    /// textures and normal maps vary. No pixel is left to the general path.
     #[test]
     fn triangle_shaders_equal_the_general_path_bit_for_bit() {
         use shade_fast::tests::{LIGHTS, LOOKS, Look, MODELS, PLAIN};
@@ -2041,25 +2040,16 @@ mod tests {
                     shaded + general_left > 100,
                     "{shading:?} {lights:?}: {shaded} pixels compared"
                 );
-                // What the lanes leave: a varying surface whose lighting is one colour (the
-                // ambient term alone, an unlit material, an unlit back side). Slerp on a varying
-                // surface goes through the lanes (`SurfaceBatch`).
+                // The lanes leave nothing: varying surfaces with Slerp, and those whose lighting
+                // is one colour (the ambient term alone, an unlit material, an unlit back side),
+                // go through the surface lanes too.
                 let one_colour = look.component == crate::scene::LightingComponent::Ambient
                     || model == LightingModel::Unlit;
                 let slerp = look.interpolation == NormalInterpolation::Slerp;
-                let lit_view = !matches!(look.view, Some(DebugView::Normals | DebugView::Depth));
-                let varying_phong = surfaces.is_some() && shading == Shading::Phong && lit_view;
-                if !(varying_phong && (one_colour || back_faces == BackFaces::Unlit)) {
-                    assert_eq!(
-                        general_left, 0,
-                        "{shading:?} {model:?} {look:?} {surfaces:?} {back_faces:?}: pixels left to the general path"
-                    );
-                } else if one_colour {
-                    assert!(
-                        general_left > 100,
-                        "{model:?} {look:?} {surfaces:?}: {general_left}"
-                    );
-                }
+                assert_eq!(
+                    general_left, 0,
+                    "{shading:?} {model:?} {look:?} {surfaces:?} {back_faces:?}: pixels left to the general path"
+                );
                 // Textured flat and Gouraud pixels, and varying Phong ones, are shaded in lanes.
                 let lanes_expected = match surfaces {
                     Some(Surfaces::Tinted) => shading == Shading::Phong,
@@ -2070,6 +2060,13 @@ mod tests {
                     assert!(
                         varying > 100,
                         "{shading:?} {surfaces:?}: {varying} pixels with varying surfaces compared"
+                    );
+                }
+                // One-colour lighting of varying Phong surfaces, per lane.
+                if surfaces.is_some() && shading == Shading::Phong && look.view.is_none() && one_colour {
+                    assert!(
+                        varying > 100,
+                        "{model:?} {look:?} {surfaces:?}: {varying} one-colour varying pixels compared"
                     );
                 }
                 if shading == Shading::Flat && view.is_none() && !(surfaces.is_some() && one_colour) {

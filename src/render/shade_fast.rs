@@ -7,10 +7,10 @@
 //! what a pixel shows ([`PixelOutput`]: the lit colour, or the normals or depth debug view).
 //! Textures, vertex colours and normal maps are not the lighting's business: the surface stage
 //! (`surface_lanes`) turns them into each lane's `k_a`, `k_d` and normal first
-//! ([`SurfaceBatch`], [`FastLighting::light_surface_lanes`]). The general path in `shade` is
-//! left only what has no lane form yet: a surface that varies with Slerp, or whose lighting
-//! is one colour (unlit materials, unlit back sides, the ambient term alone) while its
-//! coefficients vary.
+//! ([`SurfaceBatch`], [`FastLighting::light_surface_lanes`]), with Nlerp or Slerp normals; a
+//! lighting that is one colour (unlit materials, unlit back sides, the ambient term alone) is
+//! formed per lane there from each point's own coefficients. Every lit Phong pixel is shaded
+//! here; the general path in `shade` is the specification the lanes are tested against.
 //!
 //! The arithmetic is the general path's (`lighting::illuminate_with_visibility` followed by the
 //! split of `Frame::light_side`), operation for operation and in the same order, so a pixel
@@ -47,7 +47,8 @@
 //! Cook-Torrance    k_d·(1 − F)·I·(N·L) + π·F·D·G/(4(N·V)(N·L))·I·(N·L)   F by squaring ((1 − V·H)^5
 //!                  is `powi(5)`'s multiplications), G as one minimum of three ratios
 //!                  (`f32::min` lane by lane), D lane-wise for GGX; Beckmann's `exp` lane by lane
-//! unlit, or an unlit back side, or the ambient term alone: one colour, lit once
+//! unlit, or an unlit back side, or the ambient term alone: one colour, lit once (on a
+//!                  varying surface: k_d, or k_a·I_a, per lane, with the emission)
 //! ```
 //!
 //! `powf` and `exp` have no lane-wise form with the scalar bits, so an exponent that is not a
@@ -95,6 +96,10 @@ enum LaneModel {
         textured: Vec3,
         rest: Vec3,
     },
+    /// What `Constant` is, on a surface whose `k_a` and `k_d` vary from point to point (the
+    /// surface stage's Phong pixels): formed per lane from each point's own coefficients
+    /// ([`FastLighting::one_colour_lanes`]).
+    SurfaceConstant,
     /// Lambert's diffuse term alone; also Phong and Blinn-Phong without a specular colour, which
     /// add nothing else.
     Lambert,
@@ -148,7 +153,14 @@ impl<'f> FastLighting<'f> {
             || lighting.component == LightingComponent::Ambient
             || material.model == LightingModel::Unlit;
         if one_colour && varies(frame, material) {
-            return None;
+            // Per lane where the points' own coefficients are at hand: the surface stage's
+            // Phong pixels. Flat and Gouraud triangles take their colours from
+            // `Frame::flat_colors` and the vertices' lighting.
+            if shading != Shading::Phong {
+                return None;
+            }
+            lighting.model = LaneModel::SurfaceConstant;
+            return Some(lighting);
         }
         lighting.model = match material.model {
             _ if one_colour => lighting.constant(),
@@ -231,6 +243,7 @@ impl<'f> FastLighting<'f> {
                 textured: Vec3s::splat(textured),
                 rest: Vec3s::splat(rest),
             },
+            LaneModel::SurfaceConstant => self.one_colour_lanes(surface),
             LaneModel::Lambert => self.light_model_lanes(Lambert, position, normal, surface),
             LaneModel::Phong => self.light_model_lanes(Phong, position, normal, surface),
             LaneModel::BlinnPhong => self.light_model_lanes(BlinnPhong, position, normal, surface),
@@ -243,6 +256,30 @@ impl<'f> FastLighting<'f> {
                 self.light_model_lanes(model, position, normal, surface)
             }
         }
+    }
+
+    /// `Frame::light_side` where no term shown depends on the point (an unlit material, an
+    /// unlit back side, the ambient term alone), for each lane's own `k_a` and `k_d`: the terms
+    /// `illuminate_each_light` forms for an unlit material (`k_d` and the emission) or without
+    /// lights (`k_a·I_a` and the emission), split as `select_component_split` splits them. The
+    /// light sums are zero: no light reaches an unlit side or material, and the ambient term
+    /// alone does not show them.
+    #[inline]
+    fn one_colour_lanes(&self, surface: &SurfaceLanes) -> LitLanes {
+        let none = Vec3s::splat(Vec3::ZERO);
+        let (ambient, diffuse) = if self.material.model == LightingModel::Unlit {
+            (none, surface.diffuse)
+        } else {
+            (surface.ambient * Vec3s::splat(self.frame.ambient_light), none)
+        };
+        let specular = none;
+        let (textured, rest) = match self.component {
+            LightingComponent::All => (ambient + diffuse, specular + Vec3s::splat(self.material.emission)),
+            LightingComponent::Ambient => (ambient, none),
+            LightingComponent::Diffuse => (diffuse, none),
+            LightingComponent::Specular => (none, specular),
+        };
+        LitLanes { textured, rest }
     }
 
     /// The material's microfacet surface (a Cook-Torrance material's; unused for the others).
