@@ -1292,10 +1292,12 @@ impl RowSpan {
     /// the product with the rounded `1/step_x` is off by under 2⁻⁵¹ of itself: by far less than
     /// a pixel wherever it falls within the row, and beyond the row where it falls beyond), then
     /// truncated, and each end is widened by a pixel: the span holds every inside pixel and at
-    /// most two outside ones at each end.
+    /// most two outside ones at each end. Also a span every pixel of which is inside, narrowed
+    /// by two pixels at each end from the same crossings ([`RowRange::inner`]).
     #[inline(always)]
-    fn of_row(&self, start: [i64; 3], columns: usize) -> Option<(usize, usize)> {
+    fn of_row(&self, start: [i64; 3], columns: usize) -> Option<RowRange> {
         let (mut first, mut last) = (0i64, columns as i64 - 1);
+        let (mut inner_first, mut inner_last) = (first, last);
         let edges = start
             .iter()
             .zip(&self.min_inside)
@@ -1313,12 +1315,33 @@ impl RowSpan {
             let crossing = (-(margin as f64) * inv_step) as i64;
             if step > 0 {
                 first = first.max(crossing.saturating_sub(1));
+                inner_first = inner_first.max(crossing.saturating_add(2));
             } else {
                 last = last.min(crossing.saturating_add(1));
+                inner_last = inner_last.min(crossing.saturating_sub(2));
             }
         }
-        (first <= last).then_some((first as usize, last as usize))
+        (first <= last).then_some(RowRange {
+            first: first as usize,
+            last: last as usize,
+            inner: (inner_first <= inner_last).then_some((inner_first as usize, inner_last as usize)),
+        })
     }
+}
+
+/// What [`RowSpan::of_row`] finds of a row: where its inside pixels can be, and where they
+/// surely are.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct RowRange {
+    /// Every pixel inside the triangle lies in `first..=last`.
+    first: usize,
+    last: usize,
+    /// Every pixel of this span is inside the triangle, if any is surely inside. The true
+    /// crossing `t = −margin/step_x` of an edge is within a quarter pixel of its `f64` value
+    /// where `|t| < 2⁵⁰` (and beyond the row, on the same side, where not), and truncation
+    /// moves it by less than one: so a pixel two past the truncated crossing is inside the
+    /// edge.
+    inner: Option<(usize, usize)>,
 }
 
 impl<E: EdgeLanes> RowLanes<E> {
@@ -1391,10 +1414,24 @@ impl<E: EdgeLanes> RowLanes<E> {
             let span = if groups > 2 {
                 self.span.of_row(start, columns)
             } else {
-                Some((0, columns - 1))
+                Some(RowRange {
+                    first: 0,
+                    last: columns - 1,
+                    inner: None,
+                })
             };
-            let Some((first_column, last_column)) = span else {
+            let Some(RowRange {
+                first: first_column,
+                last: last_column,
+                inner,
+            }) = span
+            else {
                 continue;
+            };
+            // The groups wholly inside the triangle, whose inside test is skipped.
+            let (first_inside, last_inside) = match inner {
+                Some((first, last)) => (first.div_ceil(LANES), (last + 1) / LANES),
+                None => (1, 0),
             };
             let (first_group, last_group) = (first_column / LANES, last_column / LANES);
             let mut centre: [i64; 3] =
@@ -1410,7 +1447,11 @@ impl<E: EdgeLanes> RowLanes<E> {
                             .try_into()
                             .expect("a group of lanes")
                     });
-                    self.test_group(centre, group_depths, group_ids, id_lanes);
+                    if (first_inside..last_inside).contains(&group) {
+                        self.test_group::<true>(centre, group_depths, group_ids, id_lanes);
+                    } else {
+                        self.test_group::<false>(centre, group_depths, group_ids, id_lanes);
+                    }
                 } else {
                     let count = row_length - group * LANES;
                     let mut padded_depths = [f32::INFINITY; LANES];
@@ -1419,7 +1460,7 @@ impl<E: EdgeLanes> RowLanes<E> {
                     if IDS {
                         padded_ids[..count].copy_from_slice(&ids[first..first + count]);
                     }
-                    self.test_group(
+                    self.test_group::<false>(
                         centre,
                         &mut padded_depths,
                         IDS.then_some(&mut padded_ids),
@@ -1437,9 +1478,10 @@ impl<E: EdgeLanes> RowLanes<E> {
 
     /// The depth test of one group of pixels whose first centre has edge values `centre`:
     /// where a lane is inside and nearer than `depths`, its depth goes there and `id` into
-    /// `ids` (when given).
+    /// `ids` (when given). `INSIDE`: the group is known to lie wholly inside the triangle
+    /// ([`RowRange::inner`]), so its lanes are not tested against the edges.
     #[inline(always)]
-    fn test_group(
+    fn test_group<const INSIDE: bool>(
         &self,
         centre: [i64; 3],
         depths: &mut [f32; LANES],
@@ -1447,12 +1489,15 @@ impl<E: EdgeLanes> RowLanes<E> {
         id: Ints,
     ) {
         let [e0, e1, e2]: [E; 3] = std::array::from_fn(|k| E::splat_whole(centre[k]) + self.offsets[k]);
-        let inside = e0
-            .gt(self.above[0])
-            .and(e1.gt(self.above[1]))
-            .and(e2.gt(self.above[2]));
+        let inside = if INSIDE {
+            Mask::ALL
+        } else {
+            e0.gt(self.above[0])
+                .and(e1.gt(self.above[1]))
+                .and(e2.gt(self.above[2]))
+        };
         // Most groups of a large triangle's bounds outside it are skipped here.
-        if !inside.any() {
+        if !INSIDE && !inside.any() {
             return;
         }
         let [d0, d1, d2] = self.corner_depths;
@@ -1966,7 +2011,7 @@ mod tests {
             state ^= state << 17;
             (state % (2 * range as u64 + 1)) as i64 - range
         };
-        let (mut empty, mut partial) = (0, 0);
+        let (mut empty, mut partial, mut inner_rows) = (0, 0, 0);
         for case in 0..20_000 {
             // Steps from one subpixel to a long edge's; values from the row's middle to far off.
             let scale = [1, 256, 65_536, 1 << 24][case % 4];
@@ -1988,7 +2033,29 @@ mod tests {
                         .all(|edge| edge.row_start + edge.step_x * i as i64 >= edge.min_inside)
                 })
                 .collect();
-            let span = RowSpan::new(&edges).of_row(edges.map(|edge| edge.row_start), columns);
+            let range = RowSpan::new(&edges).of_row(edges.map(|edge| edge.row_start), columns);
+            // Every pixel of the inner span is inside, and it misses at most two at each end.
+            if let Some(RowRange {
+                inner: Some((inner_first, inner_last)),
+                ..
+            }) = range
+            {
+                assert!(
+                    (inner_first..=inner_last).all(|i| inside.contains(&i)),
+                    "{edges:?}"
+                );
+                assert!(
+                    inside.first().is_some_and(|&lo| inner_first <= lo + 3),
+                    "{edges:?}"
+                );
+                assert!(inside.last().is_some_and(|&hi| hi <= inner_last + 3), "{edges:?}");
+                inner_rows += 1;
+            } else if let (Some(&lo), Some(&hi)) = (inside.first(), inside.last()) {
+                // No inner span: the inside one is short (each end is narrowed by at most
+                // three pixels).
+                assert!(hi < lo + 13, "{edges:?}: inside {lo}..={hi}, no inner span");
+            }
+            let span = range.map(|range| (range.first, range.last));
             match (inside.first(), inside.last(), span) {
                 (None, None, None) => empty += 1,
                 (None, None, Some((first, last))) => assert!(last < first + 4, "{edges:?}: {first}..={last}"),
@@ -2002,6 +2069,7 @@ mod tests {
                 _ => panic!("{edges:?}: inside {inside:?}, span {span:?}"),
             }
         }
+        assert!(inner_rows > 1_000, "{inner_rows} rows with an inner span");
         assert!(
             empty > 1_000 && partial > 1_000,
             "{empty} empty rows, {partial} partial"
