@@ -813,24 +813,32 @@ fn split_vertices(
     let mut mesh = Mesh {
         positions: Vec::with_capacity(positions.len()),
         normals: Vec::with_capacity(positions.len()),
-        triangles: vec![[0; 3]; triangles.len()],
         ..Mesh::default()
     };
-    for (corner, &slot) in corners.slot_of_corner.iter().enumerate() {
-        let first = first_slots[slot as usize];
-        let new_vertex = if first == slot {
-            let vertex = triangles[corner / 3][corner % 3] as usize;
-            mesh.positions.push(positions[vertex]);
-            mesh.normals.push(normal_of_slot(slot as usize));
-            attributes.push_vertex(vertex, &mut mesh);
-            (mesh.positions.len() - 1) as u32
-        } else {
-            // The first corner comes earlier: its new vertex is already in place.
-            let first_corner = corners.corners_by_group[first as usize] as usize;
-            mesh.triangles[first_corner / 3][first_corner % 3]
-        };
-        mesh.triangles[corner / 3][corner % 3] = new_vertex;
+    let mut new_triangles = vec![[0; 3]; triangles.len()];
+    // Once a first slot's vertex is made, its entry becomes that vertex's number: a later corner
+    // with the same key reads it there. (A slot's own entry is itself exactly when it is a first
+    // slot, and each slot is met once, so the two kinds of entry are never confused.)
+    let mut vertex_of_first = first_slots;
+    let (slots_by_triangle, _) = corners.slot_of_corner.as_chunks::<3>();
+    for ((triangle, slots), new_triangle) in triangles.iter().zip(slots_by_triangle).zip(&mut new_triangles) {
+        for ((&vertex, &slot), new_vertex) in triangle.iter().zip(slots).zip(new_triangle) {
+            let first = vertex_of_first[slot as usize];
+            *new_vertex = if first == slot {
+                let vertex = vertex as usize;
+                mesh.positions.push(positions[vertex]);
+                mesh.normals.push(normal_of_slot(slot as usize));
+                attributes.push_vertex(vertex, &mut mesh);
+                let new_vertex = (mesh.positions.len() - 1) as u32;
+                vertex_of_first[slot as usize] = new_vertex;
+                new_vertex
+            } else {
+                // The first corner comes earlier: its new vertex is made.
+                vertex_of_first[first as usize]
+            };
+        }
     }
+    mesh.triangles = new_triangles;
     mesh
 }
 
