@@ -604,8 +604,10 @@ fn corner_normals(
     corners.for_each_group(
         &mut normals,
         |_, group_corners, normals, crease_sums: &mut Vec<Vec3>| {
-            normals_at_position(group_corners, faces, crease_cosine, crease_sums);
-            normals.copy_from_slice(crease_sums);
+            if !smooth_normals_at_position(group_corners, faces, crease_cosine, normals) {
+                normals_at_position(group_corners, faces, crease_cosine, crease_sums);
+                normals.copy_from_slice(crease_sums);
+            }
         },
     );
     normals
@@ -627,6 +629,35 @@ impl CornerFaces<'_> {
     fn weight(self, corner: u32) -> f32 {
         self.faces[corner as usize / 3].1[corner as usize % 3]
     }
+}
+
+/// [`normals_at_position`] for a position whose faces all lie within the crease angle of each
+/// other (a smooth surface, the usual case), into `normals` (one per corner): every
+/// non-degenerate corner's sum is then the sum of all the faces, normalised once, and no
+/// per-corner sums are kept. `false`, with nothing written, for any other position.
+fn smooth_normals_at_position(
+    corners: &[u32],
+    faces: CornerFaces,
+    crease_cosine: f32,
+    normals: &mut [Vec3],
+) -> bool {
+    if corners.len() > MAX_CORNERS_FOR_EXACT_CREASE || !is_smooth(corners, faces, crease_cosine) {
+        return false;
+    }
+    let unit = unit_or_zero(sum_of_weighted_faces(corners, faces));
+    let mut smooth_normal_of_position = None;
+    for (&corner, normal) in corners.iter().zip(normals) {
+        let face = faces.face(corner);
+        // The fallbacks of `normals_at_position`: a degenerate triangle's corner has a zero sum.
+        *normal = if face == Vec3::ZERO {
+            *smooth_normal_of_position.get_or_insert_with(|| smooth_normal_ignoring_crease(corners, faces))
+        } else if unit != Vec3::ZERO {
+            unit
+        } else {
+            face
+        };
+    }
+    true
 }
 
 /// The normals of the corners of one position (in the order given), per the module
@@ -668,25 +699,8 @@ fn normals_at_position(corners: &[u32], faces: CornerFaces, crease_cosine: f32, 
 /// usual case), every corner's sum is the sum of all of them in the same order: it is added up
 /// once, after testing each pair once (`a·b` and `b·a` have the same bits).
 fn sum_within_crease_exact(corners: &[u32], faces: CornerFaces, crease_cosine: f32, sums: &mut Vec<Vec3>) {
-    // At a crease angle of 180° no pair can fail the test (see `LEAST_DOT_OF_UNIT_NORMALS`):
-    // the scans' usual setting skips the pairwise products.
-    let smooth = crease_cosine <= LEAST_DOT_OF_UNIT_NORMALS
-        || corners.iter().enumerate().all(|(index, &corner)| {
-            let face = faces.face(corner);
-            face == Vec3::ZERO
-                || corners[index + 1..].iter().all(|&other| {
-                    let other_face = faces.face(other);
-                    other_face == Vec3::ZERO || face.dot(other_face) >= crease_cosine
-                })
-        });
-    if smooth {
-        let mut sum = Vec3::ZERO;
-        for &other in corners {
-            let other_face = faces.face(other);
-            if other_face != Vec3::ZERO {
-                sum += faces.weight(other) * other_face;
-            }
-        }
+    if is_smooth(corners, faces, crease_cosine) {
+        let sum = sum_of_weighted_faces(corners, faces);
         sums.extend(corners.iter().map(|&corner| {
             if faces.face(corner) == Vec3::ZERO {
                 Vec3::ZERO
@@ -710,6 +724,33 @@ fn sum_within_crease_exact(corners: &[u32], faces: CornerFaces, crease_cosine: f
         }
         sums.push(sum);
     }
+}
+
+/// Whether every two of the non-degenerate faces at a position lie within the crease angle.
+fn is_smooth(corners: &[u32], faces: CornerFaces, crease_cosine: f32) -> bool {
+    // At a crease angle of 180° no pair can fail the test (see `LEAST_DOT_OF_UNIT_NORMALS`):
+    // the scans' usual setting skips the pairwise products.
+    crease_cosine <= LEAST_DOT_OF_UNIT_NORMALS
+        || corners.iter().enumerate().all(|(index, &corner)| {
+            let face = faces.face(corner);
+            face == Vec3::ZERO
+                || corners[index + 1..].iter().all(|&other| {
+                    let other_face = faces.face(other);
+                    other_face == Vec3::ZERO || face.dot(other_face) >= crease_cosine
+                })
+        })
+}
+
+/// The angle-weighted sum of the non-degenerate faces at a position, in corner order.
+fn sum_of_weighted_faces(corners: &[u32], faces: CornerFaces) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    for &other in corners {
+        let other_face = faces.face(other);
+        if other_face != Vec3::ZERO {
+            sum += faces.weight(other) * other_face;
+        }
+    }
+    sum
 }
 
 /// Like [`sum_within_crease_exact`] for positions with very many corners: each corner joins
