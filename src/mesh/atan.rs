@@ -13,6 +13,16 @@
 //! arguments (every 13th finite `f32`, both signs) and 100 M `atan2f` pairs (random bit
 //! patterns, NaN and infinities included, and the normals' domain `y ∈ [0, 1]`, `x ∈ [−1, 1]`);
 //! the tests pin a checksum of those bits.
+//!
+//! [`atan2_lanes`] is the same function eight lanes at a time, for the face angles of eight
+//! triangles at once (a third of computing a scan's normals was these calls). Its branches are
+//! selects: the four argument reductions share one division (`t / 1` is `t`, so the
+//! unreduced argument divides too), and the polynomial is written once over [`Real`] for
+//! both forms. The arguments fdlibm treats specially (zeros, infinities, NaN, `x = 1`) are
+//! rare among face angles, and a lane holding one is measured by [`atan2`] itself; tests
+//! compare the lanes with it bit for bit.
+
+use crate::render::lanes::{Floats, Ints, LANES, Real};
 
 /// `atan(0.5)`, `atan(1)`, `atan(1.5)` and `atan(∞)`, each as a high part ...
 const ATAN_HIGH: [f32; 4] = [
@@ -90,18 +100,26 @@ fn atan(x: f32) -> f32 {
             (-1.0 / x, Some(3))
         }
     };
-    let a = COEFFICIENTS;
+    let series = series(reduced);
+    match identity {
+        None => reduced - series,
+        Some(k) => {
+            let angle = ATAN_HIGH[k] - ((series - ATAN_LOW[k]) - reduced);
+            if signed_bits < 0 { -angle } else { angle }
+        }
+    }
+}
+
+/// `x·Σ aₖ·x^(2k+2)`, so that `atan(x) ≈ x − series(x)` on |x| < 7/16: the odd and even halves
+/// of the polynomial in `x⁴`, summed, as fdlibm orders the operations.
+#[inline(always)]
+fn series<R: Real>(reduced: R) -> R {
+    let a = COEFFICIENTS.map(R::splat);
     let z = reduced * reduced;
     let w = z * z;
     let odd = z * (a[0] + w * (a[2] + w * (a[4] + w * (a[6] + w * (a[8] + w * a[10])))));
     let even = w * (a[1] + w * (a[3] + w * (a[5] + w * (a[7] + w * a[9]))));
-    match identity {
-        None => reduced - reduced * (odd + even),
-        Some(k) => {
-            let angle = ATAN_HIGH[k] - ((reduced * (odd + even) - ATAN_LOW[k]) - reduced);
-            if signed_bits < 0 { -angle } else { angle }
-        }
-    }
+    reduced * (odd + even)
 }
 
 /// `atan2(y, x)`, the angle of `(x, y)` from the x axis in [−π, π]: fdlibm's `atan2f`, with
@@ -164,6 +182,69 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     }
 }
 
+/// [`atan2`] in eight lanes, with its bits in every lane.
+///
+/// Where `y` and `x` are finite, non-zero and `x ≠ 1`, fdlibm's path is: the angle of
+/// `t = |y / x|` (or π/2 or 0 when the exponents differ by more than 60), its reduction chosen
+/// by the bits of `t` (which order as the values do, `t` being positive), then the quadrant.
+/// Each choice is a select here. Other lanes are recomputed by [`atan2`].
+#[inline(always)]
+pub fn atan2_lanes(y: Floats, x: Floats) -> Floats {
+    let c = Floats::splat;
+    let zero = c(0.0);
+    let ordinary = y
+        .is_finite()
+        .and(x.is_finite())
+        .and(!y.eq(zero))
+        .and(!x.eq(zero))
+        .and(!x.eq(c(1.0)));
+
+    let t = (y / x).abs();
+    // Whether `t` is at or past a bound of fdlibm's `atan`, given by its bits.
+    let band = |bits: u32| !c(f32::from_bits(bits)).gt(t);
+    let past = [0x3ee0_0000, 0x3f30_0000, 0x3f98_0000, 0x401c_0000].map(band);
+    let (mut numerator, mut denominator) = (t, c(1.0));
+    let (mut high, mut low) = (zero, zero);
+    let reductions = [
+        (c(2.0) * t - c(1.0), c(2.0) + t),
+        (t - c(1.0), t + c(1.0)),
+        (t - c(1.5), c(1.0) + c(1.5) * t),
+        (c(-1.0), t),
+    ];
+    for (k, (reduced_numerator, reduced_denominator)) in reductions.into_iter().enumerate() {
+        numerator = past[k].select(reduced_numerator, numerator);
+        denominator = past[k].select(reduced_denominator, denominator);
+        high = past[k].select(c(ATAN_HIGH[k]), high);
+        low = past[k].select(c(ATAN_LOW[k]), low);
+    }
+    let reduced = numerator / denominator;
+    let series = series(reduced);
+    let atan = past[0].select(high - ((series - low) - reduced), reduced - series);
+    // Below 2⁻²⁹ the angle is `t`; from 2²⁵ on, π/2.
+    let atan = band(0x3100_0000).select(atan, t);
+    let atan = band(0x4c00_0000).select(c(ATAN_HIGH[3] + ATAN_LOW[3]), atan);
+
+    // `(|y| bits − |x| bits) >> 23`, beyond ±60, compared before the shift.
+    let exponent_gap = y.abs().to_bits() - x.abs().to_bits();
+    let x_negative = zero.gt(x);
+    let steep = exponent_gap.gt(Ints::splat((61 << 23) - 1));
+    let flat = Ints::splat(-60 << 23).gt(exponent_gap).and(x_negative);
+    let angle = steep.select(c(HALF_PI + 0.5 * PI_LOW), flat.select(zero, atan));
+
+    let left = x_negative.select(c(PI) - (angle - c(PI_LOW)), angle);
+    let left_below = (angle - c(PI_LOW)) - c(PI);
+    let y_negative = zero.gt(y);
+    let mut angles = y_negative.select(x_negative.select(left_below, -angle), left);
+    if !ordinary.all() {
+        for lane in 0..LANES {
+            if !ordinary.lane(lane) {
+                angles.0[lane] = atan2(y.0[lane], x.0[lane]);
+            }
+        }
+    }
+    angles
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -196,6 +277,80 @@ mod tests {
             hash = (hash ^ u64::from(bits)).wrapping_mul(0x0100_0000_01b3);
         }
         assert_eq!(hash, 0x6b3e_9516_4446_136a);
+    }
+
+    /// `atan2_lanes` against `atan2`, lane by lane, on `pairs` taken eight at a time (NaNs
+    /// compared as NaN).
+    fn check_lanes(pairs: &[(f32, f32)]) {
+        for eight in pairs.chunks(LANES) {
+            let lane_pair = |lane: usize| eight[lane % eight.len()];
+            let y = Floats(std::array::from_fn(|lane| lane_pair(lane).0));
+            let x = Floats(std::array::from_fn(|lane| lane_pair(lane).1));
+            let angles = atan2_lanes(y, x);
+            for lane in 0..LANES {
+                let (y, x) = lane_pair(lane);
+                let (angle, expected) = (angles.0[lane], atan2(y, x));
+                assert!(
+                    angle.to_bits() == expected.to_bits() || angle.is_nan() && expected.is_nan(),
+                    "atan2({y:e}, {x:e}): lanes {angle:e}, one float {expected:e}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn lanes_have_the_bits_of_one_float() {
+        check_lanes(&sample_pairs().collect::<Vec<_>>());
+        // Every pair of awkward values: zeros, ±1, subnormals, tiny and huge, infinities, NaN,
+        // the bounds of `atan`'s reductions and a unit in the last place either side, and
+        // exponents 60 and 61 apart.
+        let mut values = vec![
+            0.0f32,
+            1.0,
+            2.0,
+            0.5,
+            1.5,
+            f32::MIN_POSITIVE,
+            1e-45,
+            3e-39,
+            1e-30,
+            1e-10,
+            1e10,
+            1e30,
+            f32::MAX,
+            f32::INFINITY,
+            f32::NAN,
+            2f32.powi(60),
+            2f32.powi(61),
+            2f32.powi(-60),
+            2f32.powi(-61),
+            2f32.powi(-62),
+            1.234_567,
+            0.999_999_94,
+            0.3,
+        ];
+        for bound in [
+            0x3100_0000u32,
+            0x3ee0_0000,
+            0x3f30_0000,
+            0x3f98_0000,
+            0x401c_0000,
+            0x4c00_0000,
+        ] {
+            values.extend([bound - 1, bound, bound + 1].map(f32::from_bits));
+        }
+        let signed: Vec<f32> = values.iter().flat_map(|&v| [v, -v]).collect();
+        let pairs: Vec<(f32, f32)> = signed
+            .iter()
+            .flat_map(|&y| signed.iter().map(move |&x| (y, x)))
+            .collect();
+        check_lanes(&pairs);
+        // Quotients landing on the bounds: `x = 1`, 2 and 0.5 times one of them.
+        let near_bounds: Vec<(f32, f32)> = signed
+            .iter()
+            .flat_map(|&y| [(y, 1.0), (2.0 * y, 2.0), (0.5 * y, -0.5), (y * 3.0, 3.0)])
+            .collect();
+        check_lanes(&near_bounds);
     }
 
     #[test]

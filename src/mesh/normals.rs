@@ -55,6 +55,7 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
 use super::{Mesh, atan};
+use crate::render::lanes::{Floats, LANES, Mask, Real, Vec3s};
 
 /// The crease angle used when a scene does not set one: between the 90° of a box's edges
 /// (kept hard) and the few degrees between neighbouring faces of a tessellated curve
@@ -493,6 +494,81 @@ pub(super) fn interior_angles(a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
     ]
 }
 
+/// A triangle's unit face normal (zero when it is degenerate) and its interior angles at its
+/// three corners (zero for a degenerate triangle): what each corner's weighted normal is made of.
+type FaceAndAngles = (Vec3, [f32; 3]);
+
+/// The face normal and interior angles of one triangle: the specification
+/// [`faces_and_angles`] computes eight at a time.
+fn face_and_angles(positions: &[Vec3], triangle: [u32; 3]) -> FaceAndAngles {
+    let [a, b, c] = triangle.map(|vertex| positions[vertex as usize]);
+    let face = face_normal(a, b, c);
+    let angles = if face == Vec3::ZERO {
+        [0.0; 3]
+    } else {
+        interior_angles(a, b, c)
+    };
+    (face, angles)
+}
+
+/// How many triangles one parallel task of [`corner_normals`]' face pass takes (a multiple of
+/// [`LANES`]).
+const FACE_CHUNK: usize = 1024;
+
+/// [`face_and_angles`] of each triangle into `faces`, eight triangles at a time in lanes: the
+/// same operations on [`Vec3s`] as [`face_normal`] and [`interior_angles`] make on `Vec3`s, and
+/// [`atan::atan2_lanes`] for the angles, so every bit is the same. A triangle the lanes do not
+/// follow (degenerate, or with an edge too long or too short to have a direction: the
+/// branches of [`interior_angles`]) is measured again by [`face_and_angles`]; the rest of the
+/// triangles, fewer than eight, are measured that way too.
+fn faces_and_angles(positions: &[Vec3], triangles: &[[u32; 3]], faces: &mut [FaceAndAngles]) {
+    let (eights, rest) = triangles.as_chunks::<LANES>();
+    let (face_eights, face_rest) = faces.as_chunks_mut::<LANES>();
+    for (triangles, faces) in eights.iter().zip(face_eights) {
+        let corner = |k: usize| Vec3s::gather(triangles, |triangle| positions[triangle[k] as usize]);
+        let (a, b, c) = (corner(0), corner(1), corner(2));
+        let (face, has_face) = unit_or_zero_lanes((b - a).cross(c - a));
+        let (along_ab, ab) = unit_or_zero_lanes(b - a);
+        let (along_bc, bc) = unit_or_zero_lanes(c - b);
+        let (along_ca, ca) = unit_or_zero_lanes(a - c);
+        let angle = |u: Vec3s, v: Vec3s| atan::atan2_lanes(u.cross(v).length(), u.dot(v));
+        let angles = [
+            angle(along_ab, -along_ca),
+            angle(along_bc, -along_ab),
+            angle(along_ca, -along_bc),
+        ];
+        let followed = has_face.and(ab).and(bc).and(ca);
+        let face = face.to_array();
+        for (lane, (output, triangle)) in faces.iter_mut().zip(triangles).enumerate() {
+            *output = if followed.lane(lane) {
+                (face[lane], angles.map(|angles| angles.0[lane]))
+            } else {
+                face_and_angles(positions, *triangle)
+            };
+        }
+    }
+    for (output, &triangle) in face_rest.iter_mut().zip(rest) {
+        *output = face_and_angles(positions, triangle);
+    }
+}
+
+/// [`unit_or_zero`] in lanes, and where the result is not zero.
+#[inline(always)]
+fn unit_or_zero_lanes(v: Vec3s) -> (Vec3s, Mask) {
+    let finite = v.x.is_finite().and(v.y.is_finite()).and(v.z.is_finite());
+    // `Vec3::max_element`: `max(x, max(y, z))` with `if a > b { a } else { b }`.
+    let max = |a: Floats, b: Floats| a.gt(b).select(a, b);
+    let largest = max(v.x.abs(), max(v.y.abs(), v.z.abs()));
+    let has_direction = finite.and(largest.gt(Floats::splat(0.0)));
+    // `Vec3::normalize`: times `1 / length`.
+    let scaled = v.divide(largest);
+    let unit = scaled.scale(Floats::splat(1.0) / scaled.length());
+    (
+        has_direction.select3(unit, Vec3s::splat(Vec3::ZERO)),
+        has_direction,
+    )
+}
+
 /// Below this many triangles (or corners) the per-triangle and per-position passes run on the
 /// calling thread: rayon's task set-up would cost more than the work.
 const PARALLEL_THRESHOLD: usize = 4096;
@@ -509,21 +585,18 @@ fn corner_normals(
     corners: &CornersByPosition,
     crease_angle_degrees: f32,
 ) -> Vec<Vec3> {
-    let face_and_angles = |triangle: &[u32; 3]| {
-        let [a, b, c] = triangle.map(|vertex| positions[vertex as usize]);
-        let face = face_normal(a, b, c);
-        let angles = if face == Vec3::ZERO {
-            [0.0; 3]
-        } else {
-            interior_angles(a, b, c)
-        };
-        (face, angles)
+    let mut faces = vec![(Vec3::ZERO, [0.0; 3]); triangles.len()];
+    let fill = |(faces, triangles): (&mut [FaceAndAngles], &[[u32; 3]])| {
+        faces_and_angles(positions, triangles, faces);
     };
-    let faces: Vec<(Vec3, [f32; 3])> = if triangles.len() < PARALLEL_THRESHOLD {
-        triangles.iter().map(face_and_angles).collect()
+    if triangles.len() < PARALLEL_THRESHOLD {
+        fill((&mut faces, triangles));
     } else {
-        triangles.par_iter().map(face_and_angles).collect()
-    };
+        faces
+            .par_chunks_mut(FACE_CHUNK)
+            .zip(triangles.par_chunks(FACE_CHUNK))
+            .for_each(fill);
+    }
     let faces = CornerFaces { faces: &faces };
 
     let crease_cosine = crease_angle_degrees.clamp(0.0, 180.0).to_radians().cos() - CREASE_COSINE_TOLERANCE;
@@ -531,8 +604,10 @@ fn corner_normals(
     corners.for_each_group(
         &mut normals,
         |_, group_corners, normals, crease_sums: &mut Vec<Vec3>| {
-            normals_at_position(group_corners, faces, crease_cosine, crease_sums);
-            normals.copy_from_slice(crease_sums);
+            if !smooth_normals_at_position(group_corners, faces, crease_cosine, normals) {
+                normals_at_position(group_corners, faces, crease_cosine, crease_sums);
+                normals.copy_from_slice(crease_sums);
+            }
         },
     );
     normals
@@ -541,7 +616,7 @@ fn corner_normals(
 /// The face normal and interior angles of each triangle, read by corner.
 #[derive(Clone, Copy)]
 struct CornerFaces<'a> {
-    faces: &'a [(Vec3, [f32; 3])],
+    faces: &'a [FaceAndAngles],
 }
 
 impl CornerFaces<'_> {
@@ -554,6 +629,35 @@ impl CornerFaces<'_> {
     fn weight(self, corner: u32) -> f32 {
         self.faces[corner as usize / 3].1[corner as usize % 3]
     }
+}
+
+/// [`normals_at_position`] for a position whose faces all lie within the crease angle of each
+/// other (a smooth surface, the usual case), into `normals` (one per corner): every
+/// non-degenerate corner's sum is then the sum of all the faces, normalised once, and no
+/// per-corner sums are kept. `false`, with nothing written, for any other position.
+fn smooth_normals_at_position(
+    corners: &[u32],
+    faces: CornerFaces,
+    crease_cosine: f32,
+    normals: &mut [Vec3],
+) -> bool {
+    if corners.len() > MAX_CORNERS_FOR_EXACT_CREASE || !is_smooth(corners, faces, crease_cosine) {
+        return false;
+    }
+    let unit = unit_or_zero(sum_of_weighted_faces(corners, faces));
+    let mut smooth_normal_of_position = None;
+    for (&corner, normal) in corners.iter().zip(normals) {
+        let face = faces.face(corner);
+        // The fallbacks of `normals_at_position`: a degenerate triangle's corner has a zero sum.
+        *normal = if face == Vec3::ZERO {
+            *smooth_normal_of_position.get_or_insert_with(|| smooth_normal_ignoring_crease(corners, faces))
+        } else if unit != Vec3::ZERO {
+            unit
+        } else {
+            face
+        };
+    }
+    true
 }
 
 /// The normals of the corners of one position (in the order given), per the module
@@ -595,25 +699,8 @@ fn normals_at_position(corners: &[u32], faces: CornerFaces, crease_cosine: f32, 
 /// usual case), every corner's sum is the sum of all of them in the same order: it is added up
 /// once, after testing each pair once (`a·b` and `b·a` have the same bits).
 fn sum_within_crease_exact(corners: &[u32], faces: CornerFaces, crease_cosine: f32, sums: &mut Vec<Vec3>) {
-    // At a crease angle of 180° no pair can fail the test (see `LEAST_DOT_OF_UNIT_NORMALS`):
-    // the scans' usual setting skips the pairwise products.
-    let smooth = crease_cosine <= LEAST_DOT_OF_UNIT_NORMALS
-        || corners.iter().enumerate().all(|(index, &corner)| {
-            let face = faces.face(corner);
-            face == Vec3::ZERO
-                || corners[index + 1..].iter().all(|&other| {
-                    let other_face = faces.face(other);
-                    other_face == Vec3::ZERO || face.dot(other_face) >= crease_cosine
-                })
-        });
-    if smooth {
-        let mut sum = Vec3::ZERO;
-        for &other in corners {
-            let other_face = faces.face(other);
-            if other_face != Vec3::ZERO {
-                sum += faces.weight(other) * other_face;
-            }
-        }
+    if is_smooth(corners, faces, crease_cosine) {
+        let sum = sum_of_weighted_faces(corners, faces);
         sums.extend(corners.iter().map(|&corner| {
             if faces.face(corner) == Vec3::ZERO {
                 Vec3::ZERO
@@ -637,6 +724,33 @@ fn sum_within_crease_exact(corners: &[u32], faces: CornerFaces, crease_cosine: f
         }
         sums.push(sum);
     }
+}
+
+/// Whether every two of the non-degenerate faces at a position lie within the crease angle.
+fn is_smooth(corners: &[u32], faces: CornerFaces, crease_cosine: f32) -> bool {
+    // At a crease angle of 180° no pair can fail the test (see `LEAST_DOT_OF_UNIT_NORMALS`):
+    // the scans' usual setting skips the pairwise products.
+    crease_cosine <= LEAST_DOT_OF_UNIT_NORMALS
+        || corners.iter().enumerate().all(|(index, &corner)| {
+            let face = faces.face(corner);
+            face == Vec3::ZERO
+                || corners[index + 1..].iter().all(|&other| {
+                    let other_face = faces.face(other);
+                    other_face == Vec3::ZERO || face.dot(other_face) >= crease_cosine
+                })
+        })
+}
+
+/// The angle-weighted sum of the non-degenerate faces at a position, in corner order.
+fn sum_of_weighted_faces(corners: &[u32], faces: CornerFaces) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    for &other in corners {
+        let other_face = faces.face(other);
+        if other_face != Vec3::ZERO {
+            sum += faces.weight(other) * other_face;
+        }
+    }
+    sum
 }
 
 /// Like [`sum_within_crease_exact`] for positions with very many corners: each corner joins
@@ -740,24 +854,32 @@ fn split_vertices(
     let mut mesh = Mesh {
         positions: Vec::with_capacity(positions.len()),
         normals: Vec::with_capacity(positions.len()),
-        triangles: vec![[0; 3]; triangles.len()],
         ..Mesh::default()
     };
-    for (corner, &slot) in corners.slot_of_corner.iter().enumerate() {
-        let first = first_slots[slot as usize];
-        let new_vertex = if first == slot {
-            let vertex = triangles[corner / 3][corner % 3] as usize;
-            mesh.positions.push(positions[vertex]);
-            mesh.normals.push(normal_of_slot(slot as usize));
-            attributes.push_vertex(vertex, &mut mesh);
-            (mesh.positions.len() - 1) as u32
-        } else {
-            // The first corner comes earlier: its new vertex is already in place.
-            let first_corner = corners.corners_by_group[first as usize] as usize;
-            mesh.triangles[first_corner / 3][first_corner % 3]
-        };
-        mesh.triangles[corner / 3][corner % 3] = new_vertex;
+    let mut new_triangles = vec![[0; 3]; triangles.len()];
+    // Once a first slot's vertex is made, its entry becomes that vertex's number: a later corner
+    // with the same key reads it there. (A slot's own entry is itself exactly when it is a first
+    // slot, and each slot is met once, so the two kinds of entry are never confused.)
+    let mut vertex_of_first = first_slots;
+    let (slots_by_triangle, _) = corners.slot_of_corner.as_chunks::<3>();
+    for ((triangle, slots), new_triangle) in triangles.iter().zip(slots_by_triangle).zip(&mut new_triangles) {
+        for ((&vertex, &slot), new_vertex) in triangle.iter().zip(slots).zip(new_triangle) {
+            let first = vertex_of_first[slot as usize];
+            *new_vertex = if first == slot {
+                let vertex = vertex as usize;
+                mesh.positions.push(positions[vertex]);
+                mesh.normals.push(normal_of_slot(slot as usize));
+                attributes.push_vertex(vertex, &mut mesh);
+                let new_vertex = (mesh.positions.len() - 1) as u32;
+                vertex_of_first[slot as usize] = new_vertex;
+                new_vertex
+            } else {
+                // The first corner comes earlier: its new vertex is made.
+                vertex_of_first[first as usize]
+            };
+        }
     }
+    mesh.triangles = new_triangles;
     mesh
 }
 
@@ -1003,6 +1125,51 @@ mod tests {
                     "{a} {b} {c}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn faces_in_lanes_have_the_bits_of_one_triangle_at_a_time() {
+        // Corners on a coarse grid (zero components, coincident corners, collinear and
+        // sliver triangles) and anywhere in a cube, scaled from subnormal to overflowing, and a
+        // few positions that are not finite; 8·k + 5 triangles, so that some are left over.
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut positions = vec![
+            Vec3::INFINITY,
+            Vec3::new(0.0, f32::NAN, 1.0),
+            Vec3::new(-0.0, 0.0, 0.0),
+        ];
+        for scale in [1e-40, 1e-30, 1e-3, 1.0, 7.3, 1e30, 1.5e38] {
+            for _ in 0..2_000 {
+                let [x, y, z] = [(); 3].map(|_| next() >> 40);
+                positions.push(scale * Vec3::new(x as f32, y as f32, z as f32).map(|t| t % 5.0 - 2.0));
+                positions
+                    .push(scale * Vec3::new(x as f32, y as f32, z as f32).map(|t| t / 8_388_608.0 - 1.0));
+            }
+        }
+        let count = positions.len() as u64;
+        let mut triangles: Vec<[u32; 3]> = (0..200_005)
+            .map(|_| [(); 3].map(|_| (next() % count) as u32))
+            .collect();
+        // Neighbours in the list share a scale: these are the usual, non-degenerate triangles.
+        triangles.extend((0..13_000u32).map(|k| [2 * k + 4, 2 * k + 6, 2 * k + 8]));
+        let mut faces = vec![(Vec3::ZERO, [0.0; 3]); triangles.len()];
+        faces_and_angles(&positions, &triangles, &mut faces);
+        let bits =
+            |(face, angles): (Vec3, [f32; 3])| (face.to_array().map(f32::to_bits), angles.map(f32::to_bits));
+        for (triangle, face) in triangles.iter().zip(faces) {
+            assert_eq!(
+                bits(face),
+                bits(face_and_angles(&positions, *triangle)),
+                "{:?}",
+                triangle.map(|vertex| positions[vertex as usize])
+            );
         }
     }
 
