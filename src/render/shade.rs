@@ -188,9 +188,8 @@ impl GouraudPlane {
             lane_steps: raster
                 .bounds
                 .intersect(&rect)
-                .is_some_and(|area| area.width() as usize >= LANES)
-                .then(|| LaneSteps::over(raster, rect))
-                .flatten(),
+                .filter(|area| area.width() as usize >= LANES)
+                .and_then(|_| LaneSteps::over(raster, rect)),
         }
     }
 
@@ -1317,7 +1316,9 @@ enum TriangleShader<'f> {
     Phong(FastPhong<'f>),
     /// A surface that textures or vertex colours vary pixel by pixel, in lanes.
     Varying(VaryingShader<'f>),
-    /// Everything else (see [`FastPhong::new`]).
+    /// `shade_sample` per pixel: what is left where [`FastPhong::new`] declines a triangle.
+    /// Every lit Phong triangle takes the lanes now, so no scene's pixel comes here (the
+    /// triangle-shader test asserts it); kept as the safe fallback of that match.
     General,
 }
 
