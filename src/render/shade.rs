@@ -1063,18 +1063,26 @@ impl ShownPixels<'_> {
             (self.area.x0 - rect.x0) as usize,
             (self.area.x1 - rect.x0) as usize,
         );
-        let step = edge_steps_x(self.raster);
+        let (step, step_down) = (edge_steps_x(self.raster), edge_steps_y(self.raster));
+        // Each row's first values one step down from the last row's: the same integers as
+        // `edge_values` there, without its products.
+        let mut row_start = edge_values(
+            self.raster,
+            pixel_centre(self.area.x0),
+            pixel_centre(self.area.y0),
+        );
         for py in self.area.y0..self.area.y1 {
             let row = (py - rect.y0) as usize;
             let ids = &self.visibility.triangle[row * tile_width..][first..last];
             let y = pixel_centre(py);
-            let mut edges = edge_values(self.raster, pixel_centre(self.area.x0), y);
+            let mut edges = row_start;
             for (px, &id) in (self.area.x0..).zip(ids) {
                 if id == self.local {
                     visit(row * self.stride + px as usize, (pixel_centre(px), y), edges);
                 }
                 edges = [edges[0] + step[0], edges[1] + step[1], edges[2] + step[2]];
             }
+            row_start = std::array::from_fn(|k| row_start[k] + step_down[k]);
         }
     }
 }
@@ -1090,12 +1098,18 @@ impl ShownPixels<'_> {
             (self.area.x0 - rect.x0) as usize,
             (self.area.x1 - rect.x0) as usize,
         );
-        let step = edge_steps_x(self.raster);
+        let (step, step_down) = (edge_steps_x(self.raster), edge_steps_y(self.raster));
         let lane_steps = LaneSteps::over(self.raster, self.area);
+        let mut row_start = edge_values(
+            self.raster,
+            pixel_centre(self.area.x0),
+            pixel_centre(self.area.y0),
+        );
         for py in self.area.y0..self.area.y1 {
             let row = (py - rect.y0) as usize;
             let ids = &self.visibility.triangle[row * tile_width..][first..last];
-            let mut start = edge_values(self.raster, pixel_centre(self.area.x0), pixel_centre(py));
+            let mut start = row_start;
+            row_start = std::array::from_fn(|k| row_start[k] + step_down[k]);
             for (group, ids) in ids.chunks(LANES).enumerate() {
                 let shown = Mask::from_bools(std::array::from_fn(|lane| ids.get(lane) == Some(&self.local)));
                 if shown.any() {
