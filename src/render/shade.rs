@@ -202,13 +202,17 @@ impl GouraudPlane {
     }
 
     /// [`GouraudPlane::color_at`] of the [`LANES`] pixels of row `row` from column `column`
-    /// on (within the tile's row), lane-wise and bit for bit; `None` where the edge values are
-    /// not held exactly in `f64` lanes (a triangle reaching far off the tile).
+    /// on (within the tile's row), lane-wise and bit for bit, written into `colors`; false
+    /// (and nothing written) where the edge values are not held exactly in `f64` lanes (a
+    /// triangle reaching far off the tile).
     #[inline]
-    fn group_colors(&self, column: i64, row: i64) -> Option<[Vec3; LANES]> {
-        let lane_steps = self.lane_steps.as_ref()?;
+    fn write_group_colors(&self, column: i64, row: i64, colors: &mut [Vec3; LANES]) -> bool {
+        let Some(lane_steps) = self.lane_steps.as_ref() else {
+            return false;
+        };
         let first = std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row);
-        Some(self.colors.at_lanes(lane_steps.edges(first)).to_array())
+        self.colors.at_lanes(lane_steps.edges(first)).write_to(colors);
+        true
     }
 }
 
@@ -997,15 +1001,14 @@ fn shade_single_sample<'f>(
                             colors.fill(fills[entry(id)]);
                             true
                         }
-                        PixelSource::Gouraud(plane) => {
-                            match gouraud[usize::from(plane)].group_colors(first_column as i64, row as i64) {
-                                Some(group_colors) => {
-                                    colors.copy_from_slice(&group_colors);
-                                    true
-                                }
-                                None => false,
-                            }
-                        }
+                        PixelSource::Gouraud(plane) => match <&mut [Vec3; LANES]>::try_from(&mut *colors) {
+                            Ok(group) => gouraud[usize::from(plane)].write_group_colors(
+                                first_column as i64,
+                                row as i64,
+                                group,
+                            ),
+                            Err(_) => false,
+                        },
                         PixelSource::Shaded => true,
                     };
                     if done {
