@@ -276,6 +276,16 @@ pub fn samples_showing<const S: usize>(ids: &[u32; S], id: u32) -> u32 {
     backend::samples_showing(ids, id)
 }
 
+/// Sets every entry of `out` to `value`, as four entries' worth of floats twice: six 16-byte
+/// stores of the three patterns (`x y z x`, `y z x y`, `z x y z`) that four `Vec3`s make,
+/// where the backend has them. `slice::fill` (and the compiler, given the patterns in plain
+/// code) writes each `Vec3` as an 8-byte and a 4-byte store: a fifth of a flat close-up's
+/// frame went there.
+#[inline(always)]
+pub fn fill_vec3s(out: &mut [Vec3; LANES], value: Vec3) {
+    backend::fill_vec3s(out, value)
+}
+
 #[cfg(target_arch = "x86_64")]
 use sse as backend;
 
@@ -287,7 +297,9 @@ use portable as backend;
 /// it).
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 mod portable {
-    use super::{Floats, Ints, Mask, Wides};
+    use glam::Vec3;
+
+    use super::{Floats, Ints, LANES, Mask, Wides};
 
     #[inline(always)]
     pub fn add_wides(a: Wides, b: Wides) -> Wides {
@@ -422,6 +434,11 @@ mod portable {
     pub fn samples_showing<const S: usize>(ids: &[u32; S], id: u32) -> u32 {
         (0..S).fold(0, |mask, sample| mask | (u32::from(ids[sample] == id) << sample))
     }
+
+    #[inline(always)]
+    pub fn fill_vec3s(out: &mut [Vec3; LANES], value: Vec3) {
+        out.fill(value);
+    }
 }
 
 /// The lane operations as SSE instructions on the two four-lane halves of the arrays. SSE and
@@ -437,8 +454,9 @@ mod sse {
         _mm_andnot_ps, _mm_castpd_ps, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmpeq_ps, _mm_cmpgt_epi32,
         _mm_cmpgt_pd, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps, _mm_cvtpd_ps,
         _mm_cvttps_epi32, _mm_div_ps, _mm_movelh_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_epi32,
-        _mm_shuffle_ps, _mm_sqrt_ps, _mm_sub_epi32, _mm_sub_ps,
+        _mm_setr_ps, _mm_shuffle_ps, _mm_sqrt_ps, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps,
     };
+    use glam::Vec3;
 
     use super::{Floats, Ints, LANES, Mask, Wides};
 
@@ -535,6 +553,21 @@ mod sse {
             let equal = unsafe { _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(ids, wanted))) };
             mask | ((equal as u32) << (4 * quad))
         })
+    }
+
+    /// Six `movups` of the three patterns four `Vec3`s make.
+    #[inline(always)]
+    pub fn fill_vec3s(out: &mut [Vec3; LANES], value: Vec3) {
+        let [x, y, z] = value.to_array();
+        // SAFETY: SSE is enabled on every x86-64 target (see the module), and the six stores
+        // of four floats each lie within `out`'s 24 floats (`LANES` is 8).
+        unsafe {
+            let patterns = [_mm_setr_ps(x, y, z, x), _mm_setr_ps(y, z, x, y), _mm_setr_ps(z, x, y, z)];
+            let floats = out.as_mut_ptr().cast::<f32>();
+            for quad in 0..3 * LANES / 4 {
+                _mm_storeu_ps(floats.add(4 * quad), patterns[quad % 3]);
+            }
+        }
     }
 
     /// `cvtdq2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's `as f32`.

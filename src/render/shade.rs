@@ -19,7 +19,7 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
-use crate::render::lanes::{Floats, LANES, Mask, Vec3s, Wides, samples_showing};
+use crate::render::lanes::{fill_vec3s, Floats, LANES, Mask, Vec3s, Wides, samples_showing};
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
     Corners, EdgePlanes, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility,
@@ -809,7 +809,9 @@ fn shade_single_sample<'f>(
     let entry = |id: u32| (id as usize).min(count);
 
     // Coverage, and which triangles are seen.
-    // (Separate loops: the first vectorises, the second is one store per pixel.)
+    // (Separate loops: the first vectorises, the second is one store per pixel.) The covered
+    // pixels are counted from the triangle numbers, not from the flags just stored: wide loads
+    // of those narrow stores could not be forwarded from them, and stalled.
     let mut shaded = 0;
     for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
         let row_start = row * stride + rect.x0 as usize;
@@ -819,10 +821,7 @@ fn shade_single_sample<'f>(
         {
             *covered = id != NO_TRIANGLE;
         }
-        shaded += target.covered[row_start..row_start + tile_width]
-            .iter()
-            .filter(|&&covered| covered)
-            .count();
+        shaded += ids.iter().filter(|&&id| id != NO_TRIANGLE).count();
     }
     // A group of pixels showing one triangle (inside a large one, or the background) marks it
     // once.
@@ -998,7 +997,7 @@ fn shade_single_sample<'f>(
                     let id = group_ids[0];
                     let done = match sources[entry(id)] {
                         PixelSource::Fill => {
-                            colors.fill(fills[entry(id)]);
+                            fill_group(colors, fills[entry(id)]);
                             true
                         }
                         PixelSource::Gouraud(plane) => match <&mut [Vec3; LANES]>::try_from(&mut *colors) {
@@ -1031,7 +1030,7 @@ fn shade_single_sample<'f>(
                 if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
                     && samples_showing(group_ids, group_ids[0]) == ALL_LANES
                 {
-                    colors.fill(fills[entry(group_ids[0])]);
+                    fill_group(colors, fills[entry(group_ids[0])]);
                     continue;
                 }
                 for (color, &id) in colors.iter_mut().zip(ids) {
@@ -1127,6 +1126,16 @@ impl ShownPixels<'_> {
                 start = std::array::from_fn(|k| start[k] + step[k] * LANES as i64);
             }
         }
+    }
+}
+
+/// Fills a group of pixels (at most [`LANES`]) with one colour: a whole group in wide stores
+/// ([`fill_vec3s`]).
+#[inline(always)]
+fn fill_group(colors: &mut [Vec3], value: Vec3) {
+    match <&mut [Vec3; LANES]>::try_from(&mut *colors) {
+        Ok(group) => fill_vec3s(group, value),
+        Err(_) => colors.fill(value),
     }
 }
 
