@@ -449,6 +449,7 @@ mod portable {
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod sse {
+    use glam::Vec3;
     use std::arch::x86_64::{
         __m128, __m128d, __m128i, _mm_add_epi32, _mm_add_pd, _mm_add_ps, _mm_and_ps, _mm_and_si128,
         _mm_andnot_ps, _mm_castpd_ps, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmpeq_ps, _mm_cmpgt_epi32,
@@ -456,7 +457,6 @@ mod sse {
         _mm_cvttps_epi32, _mm_div_ps, _mm_movelh_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_epi32,
         _mm_setr_ps, _mm_shuffle_ps, _mm_sqrt_ps, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps,
     };
-    use glam::Vec3;
 
     use super::{Floats, Ints, LANES, Mask, Wides};
 
@@ -562,7 +562,11 @@ mod sse {
         // SAFETY: SSE is enabled on every x86-64 target (see the module), and the six stores
         // of four floats each lie within `out`'s 24 floats (`LANES` is 8).
         unsafe {
-            let patterns = [_mm_setr_ps(x, y, z, x), _mm_setr_ps(y, z, x, y), _mm_setr_ps(z, x, y, z)];
+            let patterns = [
+                _mm_setr_ps(x, y, z, x),
+                _mm_setr_ps(y, z, x, y),
+                _mm_setr_ps(z, x, y, z),
+            ];
             let floats = out.as_mut_ptr().cast::<f32>();
             for quad in 0..3 * LANES / 4 {
                 _mm_storeu_ps(floats.add(4 * quad), patterns[quad % 3]);
