@@ -445,7 +445,8 @@ mod portable {
 /// SSE2 are part of the x86-64 baseline, enabled on every x86-64 target, so their intrinsics
 /// are sound to call anywhere; Rust still asks for `unsafe` around them because the functions
 /// calling them do not name the features themselves (and cannot while they are
-/// `#[inline(always)]`). That is the only `unsafe` here.
+/// `#[inline(always)]`). That is the only `unsafe` here but for `fill_vec3s`'s stores,
+/// through a pointer into the array it is given, within its bounds.
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod sse {
