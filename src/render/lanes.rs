@@ -1178,6 +1178,32 @@ mod tests {
         assert_eq!(Floats::gather(&items, |&n| n as f32).0, items.map(|n| n as f32));
     }
 
+    /// Filling eight `Vec3`s in wide stores and writing lanes straight into an array give the
+    /// values, bit for bit, that `[value; 8]` and `to_array` give, on every backend.
+    #[test]
+    fn filled_and_written_vec3s_equal_the_plain_arrays() {
+        let values = [
+            Vec3::new(0.25, -1.5, 3.0),
+            Vec3::new(f32::NAN, -0.0, f32::INFINITY),
+            Vec3::new(f32::MIN_POSITIVE / 2.0, f32::MAX, 1.0e-30),
+        ];
+        let bits = |vs: &[Vec3; LANES]| vs.map(|v| v.to_array().map(f32::to_bits));
+        for value in values {
+            let mut out = [Vec3::splat(7.0); LANES];
+            fill_vec3s(&mut out, value);
+            assert_eq!(bits(&out), bits(&[value; LANES]));
+            let mut out = [Vec3::splat(7.0); LANES];
+            portable::fill_vec3s(&mut out, value);
+            assert_eq!(bits(&out), bits(&[value; LANES]));
+        }
+        let lanes = Vec3s::from_array(&std::array::from_fn(|i| {
+            Vec3::new(i as f32, -(i as f32) * 0.5, values[i % 3].x)
+        }));
+        let mut out = [Vec3::ZERO; LANES];
+        lanes.write_to(&mut out);
+        assert_eq!(bits(&out), bits(&lanes.to_array()));
+    }
+
     /// Wide lanes add, compare and convert to `f32` as the scalar operations do, per backend;
     /// whole numbers below 2⁵³ convert as the same `i64` does (ties to even included).
     #[test]
