@@ -170,6 +170,19 @@ impl ObjText {
     pub fn triangle_count(&self) -> usize {
         self.ranges.iter().map(|range| range.triangles.len()).sum()
     }
+
+    /// Every `v`, divided by its `w`, in file order.
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// The triangles' position indices, range by range, in file order.
+    pub fn triangle_positions(&self) -> Vec<&[[u32; 3]]> {
+        self.ranges
+            .iter()
+            .map(|range| range.triangles.positions.as_slice())
+            .collect()
+    }
 }
 
 /// What the first pass learns about a range of lines.
