@@ -1530,6 +1530,27 @@ mod tests {
         }
     }
 
+    /// The lines against `str::split_terminator` (`str::lines` without taking the `\r` of a
+    /// `\r\n` off), on every text of up to 10 bytes from a line end, a carriage return, a blank
+    /// and a letter, and on longer ones with every byte value.
+    #[test]
+    fn ascii_lines_are_cut_at_every_line_end() {
+        let alphabet = ['\n', '\r', ' ', 'v'];
+        for length in 0..=10u32 {
+            for code in 0..4usize.pow(length) {
+                let text: String = (0..length).map(|k| alphabet[code / 4usize.pow(k) % 4]).collect();
+                let lines: Vec<&str> = AsciiLines::new(&text).collect();
+                assert_eq!(lines, text.split_terminator('\n').collect::<Vec<_>>(), "{text:?}");
+            }
+        }
+        let every_byte: String = (0..128u8).cycle().take(1000).map(char::from).collect();
+        for start in 0..20 {
+            let text = &every_byte[start..];
+            let lines: Vec<&str> = AsciiLines::new(text).collect();
+            assert_eq!(lines, text.split_terminator('\n').collect::<Vec<_>>());
+        }
+    }
+
     /// The eight-bytes-at-a-time digit runs against a loop over the bytes, for runs of every
     /// length up to 24 followed by every byte, at every distance from the end of the text.
     #[test]
