@@ -833,12 +833,14 @@ fn fast_f32_prefix(bytes: &[u8]) -> Option<(f32, usize)> {
         fraction_digits = end - 1 - integer_digits;
         i = start + end;
         // A number of eight bytes after its sign (`0.777853`) fills the word: the fraction
-        // goes on only if a digit follows.
-        if end == 8 && bytes.get(i).is_some_and(u8::is_ascii_digit) {
-            let (more, with_more) = leading_digits(bytes, i, mantissa);
-            mantissa = with_more;
-            fraction_digits += more;
-            i += more;
+        // goes on only if a digit follows, usually one or two (`74.009689`, six decimals with
+        // two before the point), read one at a time (cheaper than another word for so few).
+        if end == 8 {
+            while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
+                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
+                fraction_digits += 1;
+                i += 1;
+            }
         }
     } else {
         mantissa = digits_value(digits, integer_digits);
