@@ -29,7 +29,15 @@ use super::normals::{WordMap, word_map};
 /// few edges leaving its end (a handful on a scan). Sorting every directed edge, as this once
 /// did, took a third of the koala scan's load.
 pub fn is_closed(positions: &[Vec3], triangles: &[[u32; 3]]) -> bool {
-    let Some((corners, position_count)) = welded_corners(positions, triangles) else {
+    is_closed_in_parts(positions, &[triangles])
+}
+
+/// [`is_closed`] on the triangles of `parts` one after the other (the ranges of an OBJ file's
+/// lines, tested before they are assembled into one list).
+pub fn is_closed_in_parts(positions: &[Vec3], parts: &[&[[u32; 3]]]) -> bool {
+    let triangles = || parts.iter().flat_map(|part| part.iter().copied());
+    let triangle_count = parts.iter().map(|part| part.len()).sum();
+    let Some((corners, position_count)) = welded_corners(positions, triangles(), triangle_count) else {
         return false;
     };
     let edges = OutgoingEdges::new(&corners, position_count);
@@ -41,7 +49,7 @@ pub fn is_closed(positions: &[Vec3], triangles: &[[u32; 3]]) -> bool {
     // edge's other triangle runs the other way. With no edge twice, it is enough that each edge
     // running up (`from < to`) finds its reverse and that as many run down: the reverses found
     // are then every edge running down. An edge and its reverse join their triangles' pieces.
-    let mut pieces = Pieces::new(triangles.len());
+    let mut pieces = Pieces::new(triangle_count);
     let mut edges_up = 0;
     for from in 0..position_count {
         let leaving = edges.leaving(from);
@@ -63,14 +71,14 @@ pub fn is_closed(positions: &[Vec3], triangles: &[[u32; 3]]) -> bool {
     }
     // Six times each piece's signed volume: the sum of `p_a · (p_b × p_c)` over its triangles,
     // added in triangle order into its piece's root (the piece's first triangle).
-    let mut volumes = vec![0.0f64; triangles.len()];
-    for (triangle, vertices) in triangles.iter().enumerate() {
+    let mut volumes = vec![0.0f64; triangle_count];
+    for (triangle, vertices) in triangles().enumerate() {
         if corners[triangle].is_some() {
             let [pa, pb, pc] = vertices.map(|v| positions[v as usize].as_dvec3());
             volumes[pieces.root(triangle)] += pa.dot(pb.cross(pc));
         }
     }
-    (0..triangles.len())
+    (0..triangle_count)
         .filter(|&triangle| corners[triangle].is_some() && pieces.root(triangle) == triangle)
         .all(|root| volumes[root] > 0.0)
 }
@@ -78,7 +86,11 @@ pub fn is_closed(positions: &[Vec3], triangles: &[[u32; 3]]) -> bool {
 /// Per triangle, its corners as position ids (equal positions, equal ids), or `None` when two
 /// corners are one position; and how many ids there are. `None` for the whole when an index is
 /// out of range or a position is not finite.
-fn welded_corners(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<(Vec<Option<[u32; 3]>>, usize)> {
+fn welded_corners(
+    positions: &[Vec3],
+    triangles: impl Iterator<Item = [u32; 3]>,
+    triangle_count: usize,
+) -> Option<(Vec<Option<[u32; 3]>>, usize)> {
     if positions.iter().any(|p| !p.is_finite()) {
         return None;
     }
@@ -92,14 +104,13 @@ fn welded_corners(positions: &[Vec3], triangles: &[[u32; 3]]) -> Option<(Vec<Opt
             *id_by_position.entry(key(position)).or_insert(next)
         })
         .collect();
-    let corners = triangles
-        .iter()
-        .map(|triangle| {
-            let [a, b, c] = triangle.map(|v| id_of_index.get(v as usize).copied());
-            let [a, b, c] = [a?, b?, c?];
-            Some((a != b && b != c && c != a).then_some([a, b, c]))
-        })
-        .collect::<Option<_>>()?;
+    // Sized up front: collecting from the parts' chained triangles would grow it by doubling.
+    let mut corners = Vec::with_capacity(triangle_count);
+    for triangle in triangles {
+        let [a, b, c] = triangle.map(|v| id_of_index.get(v as usize).copied());
+        let [a, b, c] = [a?, b?, c?];
+        corners.push((a != b && b != c && c != a).then_some([a, b, c]));
+    }
     Some((corners, id_by_position.len()))
 }
 
@@ -242,6 +253,23 @@ mod tests {
         let (positions, triangles) = cube();
         assert!(is_closed(&positions, &triangles));
         assert!(!is_closed(&positions, &inside_out(&triangles)));
+    }
+
+    #[test]
+    fn triangles_in_parts_are_tested_as_one_list() {
+        let (positions, triangles) = cube();
+        let reversed = inside_out(&triangles);
+        for split in 0..triangles.len() {
+            let (first, second) = triangles.split_at(split);
+            assert!(is_closed_in_parts(&positions, &[first, &[], second]));
+            assert!(
+                !is_closed_in_parts(&positions, &[first, &second[1..]]),
+                "one face missing"
+            );
+            let (first, second) = reversed.split_at(split);
+            assert!(!is_closed_in_parts(&positions, &[first, second]), "inside out");
+        }
+        assert!(!is_closed_in_parts(&positions, &[]));
     }
 
     #[test]

@@ -435,9 +435,27 @@ impl ParsedMeshFile {
         })
     }
 
+    /// [`ParsedMeshFile::parse`] and then [`ParsedMeshFile::build`] for `crease_angle_degrees`:
+    /// an OBJ file's closedness is then tested beside its assembly ([`obj::parse_and_build_obj`]).
+    pub fn parse_and_build(
+        path: &Path,
+        is_obj: bool,
+        access: &FileAccess,
+        crease_angle_degrees: f32,
+    ) -> Result<(Self, Result<LoadedMesh, MeshError>), MeshError> {
+        if is_obj {
+            let (parsed, loaded) = obj::parse_and_build_obj(path, access, crease_angle_degrees)?;
+            Ok((ParsedMeshFile::Obj(Box::new(parsed)), Ok(loaded)))
+        } else {
+            let parsed = Self::parse(path, is_obj, access)?;
+            let loaded = parsed.build(crease_angle_degrees);
+            Ok((parsed, loaded))
+        }
+    }
+
     /// The mesh with normals computed (where the file has none) with this crease angle, and
-    /// [`Mesh::closed`] tested once per mesh built (whether its back faces may be culled:
-    /// `render::geometry`).
+    /// [`Mesh::closed`] (whether its back faces may be culled: `render::geometry`), tested once
+    /// per mesh built, or for an OBJ file once at parse.
     pub fn build(&self, crease_angle_degrees: f32) -> Result<LoadedMesh, MeshError> {
         match self {
             ParsedMeshFile::Obj(parsed) => Ok(parsed.build(crease_angle_degrees)),

@@ -830,11 +830,16 @@ fn split_vertices(
 ) -> Mesh {
     let attribute_group_of_vertex = attribute_groups(positions.len(), attributes);
     let key_of_slot = |slot: usize| {
-        let vertex = corners.vertex_at(triangles, slot);
-        let attribute_group = attribute_group_of_vertex
-            .get(vertex as usize)
-            .copied()
-            .unwrap_or(0);
+        // Without attributes every vertex is in group 0: the corner's vertex is not looked up.
+        let attribute_group = if attribute_group_of_vertex.is_empty() {
+            0
+        } else {
+            let vertex = corners.vertex_at(triangles, slot);
+            attribute_group_of_vertex
+                .get(vertex as usize)
+                .copied()
+                .unwrap_or(0)
+        };
         (attribute_group, exact_key(normal_of_slot(slot)))
     };
     // For each slot, the slot of the first corner at its position with the same key (a group's
@@ -843,6 +848,18 @@ fn split_vertices(
     corners.for_each_group(
         &mut first_slots,
         |first_slot, group_corners, firsts, seen: &mut FirstSlots| {
+            // A position no triangle uses has no corners (and `first_slot` is the next one's).
+            if group_corners.is_empty() {
+                return;
+            }
+            // Usually every corner at a position has one key (a smooth surface away from seams):
+            // the first slot is then every slot's first, found without the search.
+            let first_key = key_of_slot(first_slot);
+            let mut others = first_slot + 1..first_slot + group_corners.len();
+            if others.all(|slot| key_of_slot(slot) == first_key) {
+                firsts.fill(first_slot as u32);
+                return;
+            }
             seen.clear();
             for (slot, first) in (first_slot..first_slot + group_corners.len()).zip(firsts) {
                 *first = seen.first_with(key_of_slot(slot), slot as u32);
@@ -1292,6 +1309,23 @@ mod tests {
         keys.sort_unstable();
         keys.dedup();
         keys.len()
+    }
+
+    #[test]
+    fn positions_no_triangle_uses_are_dropped_first_middle_or_last() {
+        let positions = [
+            Vec3::splat(5.0),
+            Vec3::ZERO,
+            Vec3::splat(7.0),
+            Vec3::X,
+            Vec3::Y,
+            Vec3::splat(9.0),
+        ];
+        let triangles = [[1, 3, 4]];
+        let mesh = compute_vertex_normals(&positions, VertexAttributes::default(), &triangles, 60.0);
+        assert_eq!(mesh.positions, vec![Vec3::ZERO, Vec3::X, Vec3::Y]);
+        assert_eq!(mesh.normals, vec![Vec3::Z; 3]);
+        assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
     }
 
     #[test]

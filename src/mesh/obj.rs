@@ -70,7 +70,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::closed::is_closed;
+use super::closed::is_closed_in_parts;
 use super::normals::VertexAttributes;
 use super::obj_parse::{FileNormals, ObjGeometry, ObjText, assemble, parse_obj_text};
 use super::{FileContent, LoadedMesh, MeshError, MeshOptions, USE_GLTF_HINT, first_bytes, normals};
@@ -103,7 +103,7 @@ pub fn default_material() -> Material {
 /// Loads an OBJ file and the MTL files it names into one [`Mesh`]; see the module
 /// documentation for what is checked, computed and defaulted.
 pub fn load_obj(path: &Path, options: &MeshOptions) -> Result<LoadedMesh, MeshError> {
-    Ok(parse_obj(path, &options.access)?.build(options.crease_angle_degrees))
+    Ok(parse_and_build_obj(path, &options.access, options.crease_angle_degrees)?.1)
 }
 
 /// [`load_obj`] on the bytes of the file at `path`, already read (MTL files and textures are
@@ -113,19 +113,73 @@ pub fn load_obj_from_bytes(
     bytes: &[u8],
     options: &MeshOptions,
 ) -> Result<LoadedMesh, MeshError> {
-    Ok(parse_obj_bytes(path, bytes, &options.access)?.build(options.crease_angle_degrees))
+    let text = parse_text(path, bytes)?;
+    let crease = options.crease_angle_degrees;
+    let (parsed, loaded) = finish_load(path, text, &options.access, Some(crease))?;
+    Ok(loaded.unwrap_or_else(|| parsed.build(crease)))
 }
 
 /// Reads and parses an OBJ file, its MTL files and its textures: everything of a load that
 /// does not depend on the crease angle (module documentation, steps 1 to 3 and 5).
 pub fn parse_obj(path: &Path, access: &FileAccess) -> Result<ParsedObj, MeshError> {
+    Ok(finish_load(path, read_and_parse_text(path, access)?, access, None)?.0)
+}
+
+/// [`parse_obj`] and then [`ParsedObj::build`] for `crease_angle_degrees`, with the first core
+/// free for the build sooner (see [`finish_load`]).
+pub fn parse_and_build_obj(
+    path: &Path,
+    access: &FileAccess,
+    crease_angle_degrees: f32,
+) -> Result<(ParsedObj, LoadedMesh), MeshError> {
+    let text = read_and_parse_text(path, access)?;
+    let (parsed, loaded) = finish_load(path, text, access, Some(crease_angle_degrees))?;
+    let loaded = loaded.unwrap_or_else(|| parsed.build(crease_angle_degrees));
+    Ok((parsed, loaded))
+}
+
+/// Reads the OBJ file at `path` and parses its text (module documentation, step 1).
+fn read_and_parse_text(path: &Path, access: &FileAccess) -> Result<ObjText, MeshError> {
     let bytes = access
         .read(path)
         .map_err(|error| MeshError::new(path, format!("cannot read mesh file: {error}")))?;
-    let text = parse_text(path, &bytes)?;
-    // Freed before the rest of the load allocates (`obj_parse`'s documentation: memory).
-    drop(bytes);
-    finish_parse(path, text, access)
+    // The bytes are freed before the rest of the load allocates (`obj_parse`'s
+    // documentation: memory).
+    parse_text(path, &bytes)
+}
+
+/// The rest of a load once the text is parsed: [`finish_parse`], and the mesh built for the
+/// crease angle if one is given, on one core; on the other, whether the surface is closed,
+/// tested on the parsed text.
+///
+/// Closedness depends only on the triangles' positions by value, in file order, which the
+/// assembly and the build keep (vertices are only split or merged, triangles keep their order),
+/// so the text's faces, resolved to position indices, give the mesh's answer. Testing it there
+/// lets it start before the faces are assembled: the assembly and the serial stretches of the
+/// normals (grouping positions, numbering the vertices) then have the second core busy beside
+/// them rather than idle. The price is that the parsed text (positions and face indices, about
+/// 2 MB for a scan of 100k triangles) stays allocated until the build ends instead of being
+/// freed after the assembly.
+fn finish_load(
+    path: &Path,
+    text: ObjText,
+    access: &FileAccess,
+    crease_angle_degrees: Option<f32>,
+) -> Result<(ParsedObj, Option<LoadedMesh>), MeshError> {
+    let (finished, closed) = rayon::join(
+        || {
+            let parsed = finish_parse(path, &text, access)?;
+            let loaded = crease_angle_degrees.map(|crease| parsed.build_surface(crease));
+            Ok::<_, MeshError>((parsed, loaded))
+        },
+        || is_closed_in_parts(text.positions(), &text.triangle_positions()),
+    );
+    let (mut parsed, mut loaded) = finished?;
+    parsed.closed = closed;
+    if let Some(loaded) = &mut loaded {
+        loaded.mesh.closed = closed;
+    }
+    Ok((parsed, loaded))
 }
 
 /// An OBJ file read and parsed with its materials and textures; [`ParsedObj::build`] makes
@@ -142,21 +196,17 @@ pub struct ParsedObj {
     /// (the build's normals warnings come between them).
     text_warnings: Vec<String>,
     material_warnings: Vec<String>,
+    /// Whether the surface is closed ([`Mesh::closed`](super::Mesh::closed)): the same for
+    /// every crease angle.
+    closed: bool,
 }
 
 impl ParsedObj {
     /// The mesh, with its normals as the module documentation says (step 4), and whether it
-    /// is closed ([`Mesh::closed`](super::Mesh::closed)).
-    ///
-    /// Building keeps the file's triangles in order and its positions by value (vertices are
-    /// only split or merged), so closedness is tested on the parsed geometry, on the second
-    /// core while the first computes normals (whose serial stretches would leave it idle).
+    /// is closed ([`Mesh::closed`](super::Mesh::closed), tested once at parse).
     pub fn build(&self, crease_angle_degrees: f32) -> LoadedMesh {
-        let (mut loaded, closed) = rayon::join(
-            || self.build_surface(crease_angle_degrees),
-            || is_closed(&self.geometry.positions, &self.geometry.triangles),
-        );
-        loaded.mesh.closed = closed;
+        let mut loaded = self.build_surface(crease_angle_degrees);
+        loaded.mesh.closed = self.closed;
         loaded
     }
 
@@ -214,11 +264,6 @@ impl ParsedObj {
     }
 }
 
-/// [`parse_obj`] on the bytes of the file at `path`, already read.
-fn parse_obj_bytes(path: &Path, bytes: &[u8], access: &FileAccess) -> Result<ParsedObj, MeshError> {
-    finish_parse(path, parse_text(path, bytes)?, access)
-}
-
 /// The text of the OBJ file at `path`, parsed and checked (module documentation, step 1).
 fn parse_text(path: &Path, bytes: &[u8]) -> Result<ObjText, MeshError> {
     // A glTF or binary file named as `Obj(...)` would otherwise give "contains no triangles"
@@ -247,7 +292,7 @@ fn parse_text(path: &Path, bytes: &[u8]) -> Result<ObjText, MeshError> {
 }
 
 /// The rest of [`parse_obj`] once the text is parsed: models, materials, textures.
-fn finish_parse(path: &Path, mut parsed: ObjText, access: &FileAccess) -> Result<ParsedObj, MeshError> {
+fn finish_parse(path: &Path, parsed: &ObjText, access: &FileAccess) -> Result<ParsedObj, MeshError> {
     let mut text_warnings = Vec::new();
     if let Some(&first) = parsed.polyline_lines.first() {
         text_warnings.push(format!(
@@ -265,10 +310,8 @@ fn finish_parse(path: &Path, mut parsed: ObjText, access: &FileAccess) -> Result
         materials: Vec::new(),
         material_directories: Vec::new(),
     };
-    let geometry = assemble(&parsed, |file, line| libraries.load(file, line))
+    let geometry = assemble(parsed, |file, line| libraries.load(file, line))
         .map_err(|message| MeshError::new(path, message))?;
-    let material_uses = std::mem::take(&mut parsed.material_uses);
-    drop(parsed);
     // A library outside the sandbox is an error, not the warning of a missing one: the
     // sandbox must never be silently worked around.
     if let Some((library, line, problem)) = libraries.refused {
@@ -323,7 +366,7 @@ fn finish_parse(path: &Path, mut parsed: ObjText, access: &FileAccess) -> Result
     files_read.extend(textures.files_read);
     if !library_materials.is_empty() {
         let mut reported: Vec<&str> = Vec::new();
-        for (name, line) in &material_uses {
+        for (name, line) in &parsed.material_uses {
             let defined = library_materials.iter().any(|material| &material.name == name);
             if !defined && !reported.contains(&name.as_str()) {
                 reported.push(name);
@@ -342,6 +385,8 @@ fn finish_parse(path: &Path, mut parsed: ObjText, access: &FileAccess) -> Result
         files_read,
         text_warnings,
         material_warnings,
+        // Tested beside the assembly and set by `finish_load`.
+        closed: false,
     })
 }
 

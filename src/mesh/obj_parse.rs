@@ -19,7 +19,8 @@
 //!    face line looks like); `usemtl` without a name. The first error in file order is the
 //!    error. Polygons are fanned from their first corner; polyline (`l`) and point (`p`)
 //!    lines are skipped. Numbers are parsed by [`parse_f32`], whose results are `str::parse`'s
-//!    bit for bit.
+//!    bit for bit. The plain `v` and `f` lines of a scan are read in one pass
+//!    ([`RangeParser::plain_statement`]), their digits eight bytes at a time.
 //! 3. **Assemble** ([`assemble`], in file order). As `tobj` did with `triangulate` and
 //!    `single_index`: faces are grouped into models, a new one at each `o` or `g` and at each
 //!    `usemtl` that changes the material (when the current model has faces); within a model
@@ -33,7 +34,7 @@
 //! a million triangles once spent more than half its time there. So the arrays that live
 //! only during a load are kept small: face corners as `u32` indices, texture coordinate and
 //! normal indices only from the first face that has them ([`RangeTriangles`]), materials as
-//! runs, and the file's bytes freed before the faces are assembled (`obj::parse_obj`).
+//! runs, and the file's bytes freed before the faces are assembled (`obj::read_and_parse_text`).
 //!
 //! Statement names (`mtllib`, `usemtl`, `o`, `g`) are the rest of the line after the keyword,
 //! trimmed, so they may contain spaces. `tobj` took the text after the line's first space
@@ -168,6 +169,19 @@ impl ObjText {
     /// How many triangles the faces make.
     pub fn triangle_count(&self) -> usize {
         self.ranges.iter().map(|range| range.triangles.len()).sum()
+    }
+
+    /// Every `v`, divided by its `w`, in file order.
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// The triangles' position indices, range by range, in file order.
+    pub fn triangle_positions(&self) -> Vec<&[[u32; 3]]> {
+        self.ranges
+            .iter()
+            .map(|range| range.triangles.positions.as_slice())
+            .collect()
     }
 }
 
@@ -407,7 +421,9 @@ fn parse_range(
     };
     if range.is_ascii() {
         for (index, line) in AsciiLines::new(range).enumerate() {
-            if parser.plain_statement(line.as_bytes()) {
+            // The line and the rest of the range after it.
+            let start = line.as_ptr() as usize - range.as_ptr() as usize;
+            if parser.plain_statement(&range.as_bytes()[start..], line.len()) {
                 continue;
             }
             let mut words = AsciiWords::new(line);
@@ -442,34 +458,44 @@ impl RangeParser {
     /// these do not read exactly as [`RangeParser::statement`] would (an index out of range, a
     /// number [`fast_f32`] leaves to `str::parse`, a `w`, fewer than three corners): it then
     /// takes the general path, which also makes its errors.
-    fn plain_statement(&mut self, line: &[u8]) -> bool {
+    ///
+    /// The line is `text[..end]`; the rest of `text` is what follows it in the range (its line
+    /// end first, if it has one), so that numbers are read eight bytes at a time up to the
+    /// line's end without copying its last bytes. A line end is not part of a number, so the
+    /// numbers read are the line's.
+    fn plain_statement(&mut self, text: &[u8], end: usize) -> bool {
+        let Some(line) = text.get(..end) else {
+            return false;
+        };
         match line {
-            [b'v', blank, rest @ ..] if is_blank(*blank) => match plain_numbers(rest) {
+            [b'v', blank, ..] if is_blank(*blank) => match plain_numbers(text, 2, end) {
                 Some(position) => {
                     self.parsed.positions.push(Vec3::from_array(position));
                     true
                 }
                 None => false,
             },
-            [b'f', blank, rest @ ..] if is_blank(*blank) => {
+            [b'f', blank, ..] if is_blank(*blank) => {
                 let defined = self.defined[0] + self.parsed.positions.len();
                 self.corners.clear();
-                let mut at = 0;
+                let mut at = 2;
                 loop {
-                    while at < rest.len() && is_blank(rest[at]) {
+                    while at < end && is_blank(text[at]) {
                         at += 1;
                     }
-                    if at == rest.len() {
+                    if at == end {
                         break;
                     }
-                    let start = at;
-                    let mut index = 0usize;
-                    while at < rest.len() && rest[at].is_ascii_digit() && at - start < 18 {
-                        index = 10 * index + usize::from(rest[at] - b'0');
-                        at += 1;
-                    }
-                    let ends_word = at == rest.len() || is_blank(rest[at]);
-                    if at == start || !ends_word || !(1..=defined).contains(&index) {
+                    // One word holds an index of up to seven digits and what ends it.
+                    let word = word_at(text, at) ^ (0x30 * ONES);
+                    let (digits, index) = match (non_digit_bytes(word).trailing_zeros() / 8) as usize {
+                        8 => leading_digits(text, at, 0),
+                        digits => (digits, digits_value(word, digits)),
+                    };
+                    at += digits;
+                    let ends_word = at == end || (at < end && is_blank(text[at]));
+                    // Longer runs (leading zeros) are left to the general path.
+                    if digits == 0 || digits > 18 || !ends_word || !(1..=defined as u64).contains(&index) {
                         return false;
                     }
                     self.corners.push([(index - 1) as u32, ABSENT, ABSENT]);
@@ -615,23 +641,27 @@ fn parse_numbers<'a, const N: usize>(
     }
 }
 
-/// Exactly three numbers separated by blanks (and blanks around them), as [`fast_f32`] reads
-/// them; `None` for anything else.
-fn plain_numbers(text: &[u8]) -> Option<[f32; 3]> {
+/// Exactly three numbers separated by blanks (and blanks around them) in `text[start..end]`, as
+/// [`fast_f32`] reads them; `None` for anything else. What follows `end` is read only as
+/// [`RangeParser::plain_statement`] says.
+fn plain_numbers(text: &[u8], start: usize, end: usize) -> Option<[f32; 3]> {
     let mut numbers = [0.0f32; 3];
-    let mut at = 0;
+    let mut at = start;
     for number in &mut numbers {
-        while at < text.len() && is_blank(text[at]) {
+        while at < end && is_blank(text[at]) {
             at += 1;
         }
-        let (value, length) = fast_f32_prefix(&text[at..])?;
+        let (value, length) = fast_f32_prefix(text.get(at..)?)?;
         at += length;
-        if at < text.len() && !is_blank(text[at]) {
+        if at > end || (at < end && !is_blank(text[at])) {
             return None;
         }
         *number = value;
     }
-    text[at..].iter().all(|&byte| is_blank(byte)).then_some(numbers)
+    text.get(at..end)?
+        .iter()
+        .all(|&byte| is_blank(byte))
+        .then_some(numbers)
 }
 
 /// One `v`, `v/vt`, `v//vn` or `v/vt/vn` word of a face, resolved against the element counts
@@ -765,7 +795,10 @@ fn fast_f32(bytes: &[u8]) -> Option<f32> {
 }
 
 /// [`fast_f32`] on the number `bytes` start with: its value and how many bytes it took (the
-/// caller checks what follows). `None` when those bytes are not a number the shortcut reads.
+/// caller checks what follows, which may be the rest of the line and the lines after it).
+/// `None` when those bytes are not a number the shortcut reads. Inlined: as a call, saving and
+/// restoring registers and returning the pair through memory took a sixth of its time.
+#[inline(always)]
 fn fast_f32_prefix(bytes: &[u8]) -> Option<(f32, usize)> {
     const POWERS_OF_TEN: [f64; 23] = [
         1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
@@ -776,24 +809,55 @@ fn fast_f32_prefix(bytes: &[u8]) -> Option<(f32, usize)> {
         Some(b'+') => (false, 1),
         _ => (false, 0),
     };
-    // Up to 19 digits fit in a u64 (more, leading zeros included, are left to `str::parse`).
-    let mut mantissa: u64 = 0;
-    let mut i = start;
-    while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
-        mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
-        i += 1;
-    }
-    let integer_digits = i - start;
-    let mut exponent: i64 = 0;
-    if bytes.get(i) == Some(&b'.') {
-        i += 1;
-        let fraction_start = i;
-        while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
-            mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
-            i += 1;
+    // Up to 19 digits fit in a u64 (more, leading zeros included, are left to `str::parse`;
+    // the wrapped value of longer runs is never used). The first eight bytes are read as one
+    // word: an exporter's `-0.777853` or `74.009689` has its point and all or most of its
+    // digits there, read with one conversion.
+    let word = word_at(bytes, start);
+    let digits = word ^ (0x30 * ONES);
+    let non_digits = non_digit_bytes(digits);
+    let mut integer_digits = (non_digits.trailing_zeros() / 8) as usize;
+    let mut mantissa;
+    let mut fraction_digits = 0;
+    let mut i;
+    if integer_digits < 8 && (word >> (8 * integer_digits)) as u8 == b'.' {
+        // The point adds no carry to the bytes above it (`non_digit_bytes`), so the first
+        // non-digit after it is found in the same word.
+        let after_point = non_digits & ((u64::MAX << (8 * integer_digits)) << 8);
+        let end = (after_point.trailing_zeros() / 8) as usize;
+        // The digits with the point taken out: those below it as they are, those above it
+        // one byte down.
+        let below = (1u64 << (8 * integer_digits)) - 1;
+        let joined = (digits & below) | ((digits >> 8) & !below);
+        mantissa = digits_value(joined, end - 1);
+        fraction_digits = end - 1 - integer_digits;
+        i = start + end;
+        // A number of eight bytes after its sign (`0.777853`) fills the word: the fraction
+        // goes on only if a digit follows, usually one or two (`74.009689`, six decimals with
+        // two before the point), read one at a time (cheaper than another word for so few).
+        if end == 8 {
+            while let Some(&digit @ b'0'..=b'9') = bytes.get(i) {
+                mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
+                fraction_digits += 1;
+                i += 1;
+            }
         }
-        exponent = -((i - fraction_start) as i64);
+    } else {
+        mantissa = digits_value(digits, integer_digits);
+        if integer_digits == 8 && bytes.get(start + 8).is_some_and(u8::is_ascii_digit) {
+            let (more, with_more) = leading_digits(bytes, start + 8, mantissa);
+            mantissa = with_more;
+            integer_digits += more;
+        }
+        i = start + integer_digits;
+        if bytes.get(i) == Some(&b'.') {
+            let (more, with_fraction) = leading_digits(bytes, i + 1, mantissa);
+            mantissa = with_fraction;
+            fraction_digits = more;
+            i += 1 + more;
+        }
     }
+    let mut exponent = -(fraction_digits as i64);
     let digit_count = integer_digits + exponent.unsigned_abs() as usize;
     if digit_count == 0 || digit_count > 19 {
         return None;
@@ -839,6 +903,81 @@ fn fast_f32_prefix(bytes: &[u8]) -> Option<(f32, usize)> {
     }
     let value = value as f32;
     Some((if negative { -value } else { value }, i))
+}
+
+/// A byte of ones, for bytewise arithmetic on a word of eight bytes.
+const ONES: u64 = 0x0101_0101_0101_0101;
+
+/// The run of decimal digits at `bytes[at..]`: how many there are, and `value` with them
+/// appended (`10ⁿ · value +` the run's value, wrapping modulo 2⁶⁴ as a digit-by-digit loop
+/// would). Read eight bytes at a time.
+#[inline(always)]
+fn leading_digits(bytes: &[u8], at: usize, mut value: u64) -> (usize, u64) {
+    const POWERS_OF_TEN: [u64; 9] = [
+        1,
+        10,
+        100,
+        1_000,
+        10_000,
+        100_000,
+        1_000_000,
+        10_000_000,
+        100_000_000,
+    ];
+    let mut count = 0;
+    loop {
+        let digits = word_at(bytes, at + count) ^ (0x30 * ONES);
+        let run = (non_digit_bytes(digits).trailing_zeros() / 8) as usize;
+        value = value
+            .wrapping_mul(POWERS_OF_TEN[run])
+            .wrapping_add(digits_value(digits, run));
+        count += run;
+        if run < 8 {
+            return (count, value);
+        }
+    }
+}
+
+/// The eight bytes at `bytes[at..]` as a little-endian word (the first byte lowest), zeros
+/// past the end (a zero byte is not a digit).
+#[inline(always)]
+fn word_at(bytes: &[u8], at: usize) -> u64 {
+    match bytes.get(at..at.saturating_add(8)) {
+        Some(eight) => u64::from_le_bytes(eight.try_into().unwrap_or_default()),
+        None => {
+            let rest = bytes.get(at..).unwrap_or_default();
+            let mut word = [0u8; 8];
+            word[..rest.len()].copy_from_slice(rest);
+            u64::from_le_bytes(word)
+        }
+    }
+}
+
+/// For a word of bytes with `0x30` taken out of each (digits 0 to 9), the top bit of each
+/// byte that is not a digit: set when the byte is 10 or more (adding 0x76 carries into the top
+/// bit) or already has it. The addition carries into the next byte only from a byte at 0x8A or
+/// above, already a non-digit, so the bytes up to and including the first non-digit are right
+/// (and those after a non-digit below 0x8A, such as a point or a blank).
+#[inline(always)]
+fn non_digit_bytes(digits: u64) -> u64 {
+    (digits.wrapping_add(0x76 * ONES) | digits) & (0x80 * ONES)
+}
+
+/// The value of the first `count` (0 to 8) bytes of `digits`, each a digit 0 to 9, the first
+/// byte (lowest) the most significant.
+#[inline(always)]
+fn digits_value(digits: u64, count: usize) -> u64 {
+    if count == 0 {
+        return 0;
+    }
+    // The digits as the last `count` of an eight-digit number with leading zeros, then pairs,
+    // fours and eights combined with multiplications (as in simdjson and fast_float).
+    let digits = digits << (8 * (8 - count));
+    let pairs = digits.wrapping_mul(10).wrapping_add(digits >> 8);
+    let mask = 0x0000_00FF_0000_00FF;
+    ((pairs & mask).wrapping_mul(100 + (1_000_000 << 32)))
+        .wrapping_add(((pairs >> 16) & mask).wrapping_mul(1 + (10_000 << 32)))
+        >> 32
 }
 
 /// Which vertices of the assembled geometry came with a normal.
@@ -1378,9 +1517,73 @@ mod tests {
     }
 
     /// `parse_f32` against `str::parse`, bit for bit (or both failing).
+    /// Also the shortcut on the text followed by more of a line and the next line, as the
+    /// plain lines read it: the same number, ending where the text does.
     fn check_f32(text: &str) {
         let expected = text.parse::<f32>().ok().map(f32::to_bits);
         assert_eq!(parse_f32(text).map(f32::to_bits), expected, "{text:?}");
+        let alone = fast_f32(text.as_bytes()).map(f32::to_bits);
+        for after in [" 12345678", "\n12345678", "\r\n1", "\t-7.5e3"] {
+            let followed = format!("{text}{after}");
+            let prefix = fast_f32_prefix(followed.as_bytes())
+                .filter(|&(_, length)| length == text.len())
+                .map(|(value, _)| value.to_bits());
+            assert_eq!(prefix, alone, "{followed:?}");
+        }
+    }
+
+    /// The lines against `str::split_terminator` (`str::lines` without taking the `\r` of a
+    /// `\r\n` off), on every text of up to 10 bytes from a line end, a carriage return, a blank
+    /// and a letter, and on longer ones with every byte value.
+    #[test]
+    fn ascii_lines_are_cut_at_every_line_end() {
+        let alphabet = ['\n', '\r', ' ', 'v'];
+        for length in 0..=10u32 {
+            for code in 0..4usize.pow(length) {
+                let text: String = (0..length).map(|k| alphabet[code / 4usize.pow(k) % 4]).collect();
+                let lines: Vec<&str> = AsciiLines::new(&text).collect();
+                assert_eq!(lines, text.split_terminator('\n').collect::<Vec<_>>(), "{text:?}");
+            }
+        }
+        let every_byte: String = (0..128u8).cycle().take(1000).map(char::from).collect();
+        for start in 0..20 {
+            let text = &every_byte[start..];
+            let lines: Vec<&str> = AsciiLines::new(text).collect();
+            assert_eq!(lines, text.split_terminator('\n').collect::<Vec<_>>());
+        }
+    }
+
+    /// The eight-bytes-at-a-time digit runs against a loop over the bytes, for runs of every
+    /// length up to 24 followed by every byte, at every distance from the end of the text.
+    #[test]
+    fn digit_runs_read_as_a_byte_loop_reads_them() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut random = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for length in 0..=24 {
+            for stop in 0..=255u8 {
+                let mut text: Vec<u8> = (0..length).map(|_| b'0' + (random() % 10) as u8).collect();
+                text.push(stop);
+                text.extend((0..random() % 12).map(|_| random() as u8));
+                for at in 0..=text.len() {
+                    let start = random();
+                    let (mut count, mut value) = (0, start);
+                    while let Some(&digit @ b'0'..=b'9') = text.get(at + count) {
+                        value = value.wrapping_mul(10).wrapping_add(u64::from(digit - b'0'));
+                        count += 1;
+                    }
+                    assert_eq!(
+                        leading_digits(&text, at, start),
+                        (count, value),
+                        "{text:?} at {at}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
@@ -1417,6 +1620,16 @@ mod tests {
             "f 1 2 3a",
             "f 1 2 0000000000000000003",
             "f 1 2 000000000000000003",
+            "f 1 2 00000003",
+            "f 12345678 1 2",
+            "f 1 2 3 1\t",
+            "v -0.777853 2.740647 3.930020",
+            "v 12345678.123456789 -123456789.5 0.000000001",
+            "v 1234567890123456789 0 0",
+            "v 12345678901234567890 0 0",
+            "v 1 2 3.",
+            "v 1 2 3e",
+            "v 1 2 -",
             "g f 1 2 3",
             "",
         ] {
@@ -1426,8 +1639,20 @@ mod tests {
                 Some(keyword) => general.statement(keyword, &mut words, 1, || line),
                 None => Ok(()),
             };
+            // Alone, and followed by the next line as in a range (the numbers are read
+            // eight bytes at a time across the line end).
             let mut plain = parser();
-            if plain.plain_statement(line.as_bytes()) {
+            let mut followed = parser();
+            let taken_alone = plain.plain_statement(line.as_bytes(), line.len());
+            let with_next = format!("{line}\n12345678 -0.5 f 1 2 3\n");
+            let taken_followed = followed.plain_statement(with_next.as_bytes(), line.len());
+            assert_eq!(taken_alone, taken_followed, "{line:?}");
+            assert_eq!(plain.parsed.positions, followed.parsed.positions, "{line:?}");
+            assert_eq!(
+                plain.parsed.triangles.positions, followed.parsed.triangles.positions,
+                "{line:?}"
+            );
+            if taken_alone {
                 taken += 1;
                 assert!(general_result.is_ok(), "{line:?}");
                 let bits = |positions: &[Vec3]| {
@@ -1453,7 +1678,7 @@ mod tests {
                 );
             }
         }
-        assert_eq!(taken, 8);
+        assert_eq!(taken, 12);
     }
 
     #[test]
@@ -1508,6 +1733,36 @@ mod tests {
             "0.3",
         ] {
             check_f32(text);
+        }
+        // Every split of up to 12 digits around the point (and none), so that the point
+        // falls at every byte of the first eight and past them, with and without a sign and
+        // an exponent.
+        let mut state = 0x5DEE_CE66_D1CE_4E5Bu64;
+        for integer_length in 0..=12 {
+            for fraction_length in 0..=12 {
+                for _ in 0..20 {
+                    state ^= state << 13;
+                    state ^= state >> 7;
+                    state ^= state << 17;
+                    let mut digits = state;
+                    let mut digit = || {
+                        let next = char::from(b'0' + (digits % 10) as u8);
+                        digits /= 10;
+                        next
+                    };
+                    let integer: String = (0..integer_length).map(|_| digit()).collect();
+                    let fraction: String = (0..fraction_length).map(|_| digit()).collect();
+                    for text in [
+                        format!("{integer}.{fraction}"),
+                        format!("-{integer}.{fraction}"),
+                        format!("{integer}{fraction}"),
+                        format!("+{integer}.{fraction}e-{}", state % 25),
+                        format!("{integer}.{fraction}E{}", state % 25),
+                    ] {
+                        check_f32(&text);
+                    }
+                }
+            }
         }
         // Halfway cases between f32 neighbours written with few digits, and many values in
         // the formats exporters write.

@@ -1670,26 +1670,32 @@ impl Loader<'_> {
                 // before failing (its MTL, `.bin`, images): the recording access keeps them, so
                 // that a watcher follows them and sees a missing one come back.
                 let (access, attempted) = self.access.recording();
-                let parsed = match self.parsed_files.get(&canonical_path) {
-                    Some(parsed) => parsed.clone(),
+                let failure = |error| {
+                    let attempted = attempted.paths();
+                    Arc::new(MeshFailure { error, attempted })
+                };
+                // A file parsed for the first time is built in the same go (an OBJ file's
+                // closedness is tested beside its assembly then); one parsed before is built
+                // from its parse.
+                let loaded = match self.parsed_files.get(&canonical_path) {
+                    Some(Ok(parsed)) => parsed.build(crease_angle).map_err(failure),
+                    Some(Err(parse_failure)) => Err(parse_failure.clone()),
                     None => {
                         self.cache.files_parsed += 1;
-                        let parsed = ParsedMeshFile::parse(path, is_obj, &access)
-                            .map(Arc::new)
-                            .map_err(|error| {
-                                let attempted = attempted.paths();
-                                Arc::new(MeshFailure { error, attempted })
-                            });
-                        self.parsed_files.insert(canonical_path.clone(), parsed.clone());
-                        parsed
+                        match ParsedMeshFile::parse_and_build(path, is_obj, &access, crease_angle) {
+                            Ok((parsed, loaded)) => {
+                                self.parsed_files
+                                    .insert(canonical_path.clone(), Ok(Arc::new(parsed)));
+                                loaded.map_err(failure)
+                            }
+                            Err(error) => {
+                                let parse_failure = failure(error);
+                                self.parsed_files
+                                    .insert(canonical_path.clone(), Err(parse_failure.clone()));
+                                Err(parse_failure)
+                            }
+                        }
                     }
-                };
-                let loaded = match parsed {
-                    Ok(parsed) => parsed.build(crease_angle).map_err(|error| {
-                        let attempted = attempted.paths();
-                        Arc::new(MeshFailure { error, attempted })
-                    }),
-                    Err(failure) => Err(failure),
                 };
                 match loaded {
                     Ok(LoadedMesh {
