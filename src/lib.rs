@@ -19,6 +19,8 @@
 // First, so that its printing macros are in scope in every module below.
 #[macro_use]
 pub mod console;
+#[cfg(test)]
+mod test_support;
 
 pub mod bench;
 pub mod check;

@@ -253,11 +253,9 @@ mod tests {
     /// `y` and `x` (NaN, infinities, zeros and subnormals among them), and a million pairs
     /// from the vertex normals' domain, `y = |u × v| ∈ [0, 1]`, `x = u · v ∈ [−1, 1]`.
     fn sample_pairs() -> impl Iterator<Item = (f32, f32)> {
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut rng = crate::test_support::XorShift64::new(0x2545_F491_4F6C_DD1Du64);
         (0..1_000_000).flat_map(move |_| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
+            let state = rng.next_u64();
             let any = (f32::from_bits((state >> 32) as u32), f32::from_bits(state as u32));
             let domain = (
                 (state >> 40) as f32 / 16_777_216.0,

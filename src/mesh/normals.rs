@@ -1096,11 +1096,9 @@ mod tests {
 
     #[test]
     fn face_normals_have_no_dot_product_below_the_least() {
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rng = crate::test_support::XorShift64::new(0x9E37_79B9_7F4A_7C15u64);
         let mut coordinate = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
+            let state = rng.next_u64();
             (state >> 11) as f32 / (1u64 << 53) as f32 * 2.0 - 1.0
         };
         for _ in 0..200_000 {
@@ -1121,11 +1119,9 @@ mod tests {
     fn angles_of_a_triangle_have_the_bits_of_one_corner_at_a_time() {
         // Random triangles on a coarse grid (shared coordinates give zero components, coincident
         // corners and collinear triangles), scaled from tiny to huge, overflowing edges included.
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut rng = crate::test_support::XorShift64::new(0x2545_F491_4F6C_DD1Du64);
         let mut coordinate = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
+            let state = rng.next_u64();
             ((state >> 40) % 5) as f32 - 2.0
         };
         for scale in [1e-30, 1e-3, 1.0, 7.3, 1e30, 1.5e38] {
@@ -1150,13 +1146,8 @@ mod tests {
         // Corners on a coarse grid (zero components, coincident corners, collinear and
         // sliver triangles) and anywhere in a cube, scaled from subnormal to overflowing, and a
         // few positions that are not finite; 8·k + 5 triangles, so that some are left over.
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = crate::test_support::XorShift64::new(0x2545_F491_4F6C_DD1Du64);
+        let mut next = || rng.next_u64();
         let mut positions = vec![
             Vec3::INFINITY,
             Vec3::new(0.0, f32::NAN, 1.0),
@@ -1680,11 +1671,9 @@ mod tests {
     fn crease_sums_of_smooth_and_creased_positions_follow_the_definition() {
         // Fans of 3 to 12 faces around one position, nearly flat (smooth: one sum for all),
         // folded (creased) and with degenerate faces, at crease angles from 0° to 180°.
-        let mut state = 0x9E37_79B9u32;
+        let mut rng = crate::test_support::XorShift32::new(0x9E37_79B9u32);
         let mut random = || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
+            let state = rng.next_u32();
             state as f32 / u32::MAX as f32
         };
         for case in 0..2000 {

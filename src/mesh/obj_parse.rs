@@ -1557,13 +1557,8 @@ mod tests {
     /// length up to 24 followed by every byte, at every distance from the end of the text.
     #[test]
     fn digit_runs_read_as_a_byte_loop_reads_them() {
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut random = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = crate::test_support::XorShift64::new(0x9E37_79B9_7F4A_7C15u64);
+        let mut random = || rng.next_u64();
         for length in 0..=24 {
             for stop in 0..=255u8 {
                 let mut text: Vec<u8> = (0..length).map(|_| b'0' + (random() % 10) as u8).collect();
@@ -1737,13 +1732,11 @@ mod tests {
         // Every split of up to 12 digits around the point (and none), so that the point
         // falls at every byte of the first eight and past them, with and without a sign and
         // an exponent.
-        let mut state = 0x5DEE_CE66_D1CE_4E5Bu64;
+        let mut rng = crate::test_support::XorShift64::new(0x5DEE_CE66_D1CE_4E5Bu64);
         for integer_length in 0..=12 {
             for fraction_length in 0..=12 {
                 for _ in 0..20 {
-                    state ^= state << 13;
-                    state ^= state >> 7;
-                    state ^= state << 17;
+                    let state = rng.next_u64();
                     let mut digits = state;
                     let mut digit = || {
                         let next = char::from(b'0' + (digits % 10) as u8);
@@ -1766,13 +1759,8 @@ mod tests {
         }
         // Halfway cases between f32 neighbours written with few digits, and many values in
         // the formats exporters write.
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut random = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = crate::test_support::XorShift64::new(0x2545_F491_4F6C_DD1Du64);
+        let mut random = || rng.next_u64();
         for _ in 0..200_000 {
             let bits = random();
             let value = f32::from_bits(bits as u32);

@@ -235,12 +235,10 @@ mod tests {
 
     /// A deterministic byte pattern: xorshift.
     fn noise(len: usize, seed: u64) -> Vec<u8> {
-        let mut state = seed | 1;
+        let mut rng = crate::test_support::XorShift64::new(seed | 1);
         (0..len)
             .map(|_| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
+                let state = rng.next_u64();
                 state as u8
             })
             .collect()

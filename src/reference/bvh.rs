@@ -441,11 +441,9 @@ mod tests {
     /// every box.
     #[test]
     fn finds_what_testing_every_primitive_finds() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rng = crate::test_support::XorShift64::new(0x2545_f491_4f6c_dd1du64);
         let mut random = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
+            let state = rng.next_u64();
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         let boxes: Vec<Aabb> = (0..3000)

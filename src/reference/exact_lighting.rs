@@ -304,15 +304,12 @@ mod tests {
     use crate::lighting::{ShadingLightKind, illuminate};
     use crate::scene::MaterialTextures;
 
-    /// A small deterministic generator (xorshift), so the cross-check is the same on every run.
-    struct Random(u64);
+    /// Uniform values from a fixed xorshift sequence, so the cross-check is the same on every run.
+    struct Random(crate::test_support::XorShift64);
 
     impl Random {
         fn next(&mut self) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+            (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
         }
         fn range(&mut self, lo: f64, hi: f64) -> f64 {
             lo + (hi - lo) * self.next()
@@ -342,7 +339,7 @@ mod tests {
     /// another exponent, a swapped vector) misses it by orders of magnitude.
     #[test]
     fn agrees_with_the_f32_lighting_everywhere_but_at_gates() {
-        let mut random = Random(0x9e37_79b9_7f4a_7c15);
+        let mut random = Random(crate::test_support::XorShift64::new(0x9e37_79b9_7f4a_7c15));
         let mut compared = 0;
         for case in 0..20_000 {
             let model = match case % 6 {

@@ -2004,11 +2004,9 @@ mod tests {
     #[test]
     fn row_spans_hold_every_inside_pixel_and_little_more() {
         let columns = 64;
-        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rng = crate::test_support::XorShift64::new(0x2545_f491_4f6c_dd1du64);
         let mut next = move |range: i64| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
+            let state = rng.next_u64();
             (state % (2 * range as u64 + 1)) as i64 - range
         };
         let (mut empty, mut partial, mut inner_rows) = (0, 0, 0);

@@ -743,11 +743,9 @@ pub(crate) mod tests {
             maps.clone(),
         );
         // A fixed pseudo-random sequence in [0, 1).
-        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut rng = crate::test_support::XorShift64::new(0x2545_f491_4f6c_dd1du64);
         let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
+            let state = rng.next_u64();
             (state >> 40) as f32 / (1u64 << 24) as f32
         };
         for (light, map) in frame.lights.iter().zip(&maps) {

@@ -520,11 +520,9 @@ mod tests {
     /// all lanes share their levels, on powers of two and not, a single texel column.
     #[test]
     fn lanes_at_one_level_equal_the_scalar_sampler() {
-        let mut state = 0x2545_f491_u32;
+        let mut rng = crate::test_support::XorShift32::new(0x2545_f491_u32);
         let mut random = move || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
+            let state = rng.next_u32();
             state as f32 / u32::MAX as f32
         };
         for (width, height) in [(64, 32), (4, 256), (2, 2), (1, 8)] {
