@@ -763,9 +763,11 @@ fn sample_edge_offsets<const S: usize>(edges: &[Edge; 3], pattern: &[(i32, i32)]
 /// offsets once per triangle, with the fill rule's bias folded into a second copy, so the inside
 /// test is one sign check of a bitwise or; depth comes from the unbiased values, exactly as the
 /// general loop computes it, and the buffers are walked as slices a row at a time instead of
-/// indexed per sample. At 4, 8 and 16 samples a triangle whose edge values over the tile fit in
-/// `i32` (nearly every triangle of a mesh) is tested in lanes instead
-/// ([`rasterize_sample_lanes`]); the loop here takes the others and two samples.
+/// indexed per sample. At 4, 8 and 16 samples a triangle is tested in lanes instead
+/// ([`rasterize_sample_lanes`]): in `i32` lanes where its edge values over the tile fit them
+/// (nearly every triangle of a mesh), else in `f64` lanes where they stay below 2⁵³ (a ground
+/// plane of two triangles, a close-up's large ones); the loop here takes two samples, areas of
+/// an odd tile width and triangles reaching past that.
 fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibility: &mut Visibility) {
     let rect = visibility.rect;
     let Some(area) = triangle.bounds.intersect(&rect) else {
@@ -773,20 +775,18 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
     };
     debug_assert_eq!(visibility.pattern.len(), S);
     let pattern = visibility.pattern.offsets();
-    // Most triangles of a mesh: eight samples at a time in `i32`.
+    // Eight samples at a time: in `i32` for most triangles of a mesh, in `f64` for large ones.
     if S.is_multiple_of(LANES / 2)
-        && let Some(lane_area) = LaneEdges::whole_blocks::<S>(area, rect)
-        && let Some(lane_edges) = LaneEdges::new::<S>(triangle, pattern, lane_area)
+        && let Some(lane_area) = whole_blocks::<S>(area, rect)
     {
-        rasterize_sample_lanes::<S>(
-            &lane_edges,
-            triangle.depth,
-            triangle.inv_area,
-            lane_area,
-            id,
-            visibility,
-        );
-        return;
+        if let Some(lane_edges) = LaneEdges::<Ints>::new::<S>(triangle, pattern, lane_area) {
+            rasterize_sample_lanes::<S, Ints>(&lane_edges, triangle, lane_area, id, visibility);
+            return;
+        }
+        if let Some(lane_edges) = LaneEdges::<Wides>::new::<S>(triangle, pattern, lane_area) {
+            rasterize_sample_lanes::<S, Wides>(&lane_edges, triangle, lane_area, id, visibility);
+            return;
+        }
     }
     let mut edges = triangle_edges(triangle, area.x0, area.y0);
     let [d0, d1, d2] = triangle.depth;
@@ -835,23 +835,51 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
     }
 }
 
-/// A triangle's edge functions over one tile area in `i32`, laid out for
+/// A triangle's edge functions over one tile area in lanes `E` (`i32` or `f64`), laid out for
 /// [`rasterize_sample_lanes`]: a block of pixels (two at four samples, one at eight or more)
-/// whose samples fill whole groups of [`LANES`] slots of the visibility buffer.
-struct LaneEdges {
+/// whose samples fill whole groups of [`LANES`] slots of the visibility buffer. The rows and
+/// blocks are stepped in exact scalars as wide as the lanes ([`EdgeLanes::Whole`]), splatted
+/// once per group.
+struct LaneEdges<E: EdgeLanes> {
     /// Each edge's value at the centre of the area's first pixel.
-    row_start: [i32; 3],
-    step_x: [i32; 3],
-    step_y: [i32; 3],
+    row_start: [E::Whole; 3],
+    step_x: [E::Whole; 3],
+    step_y: [E::Whole; 3],
     /// Per group of a block and edge, each lane's offset from the block's first pixel centre:
     /// its sample's offset plus its pixel's steps.
-    offsets: [[Ints; 3]; 2],
+    offsets: [[E; 3]; 2],
     /// The same minus the fill rule's bias (`min_inside`): the lane's sample is inside where
     /// all three are ≥ 0 once the centre is added.
-    biased: [[Ints; 3]; 2],
+    biased: [[E; 3]; 2],
     /// Per pixel of a block and edge, the bias of the sample nearest the edge's inside (from
     /// the block's first pixel centre): no sample of the pixel is inside if one is negative.
-    nearest: [[i32; 3]; LANES / 4],
+    nearest: [[E::Whole; 3]; LANES / 4],
+}
+
+/// `area` (the triangle's part of the tile `rect`) widened, at four samples, by one pixel
+/// where its rows have an odd number of pixels, so that they are whole blocks of two for
+/// [`rasterize_sample_lanes`]: on the right where the tile goes on, else on the left. Either
+/// way the pixel added lies outside the triangle's bounds (the side widened is the bounds' own
+/// edge), so none of its samples is inside and the lanes leave it as it was. `None` where the
+/// area spans a tile of odd width (the `i64` loop takes the triangle).
+#[inline(always)]
+fn whole_blocks<const S: usize>(area: PixelRect, rect: PixelRect) -> Option<PixelRect> {
+    let block_pixels = (LANES / S).max(1) as u32;
+    if (area.x1 - area.x0).is_multiple_of(block_pixels) {
+        Some(area)
+    } else if area.x1 < rect.x1 {
+        Some(PixelRect {
+            x1: area.x1 + 1,
+            ..area
+        })
+    } else if area.x0 > rect.x0 {
+        Some(PixelRect {
+            x0: area.x0 - 1,
+            ..area
+        })
+    } else {
+        None
+    }
 }
 
 /// The largest span, in 1/256 pixel, of a box holding a triangle's corners and every point
@@ -860,33 +888,7 @@ struct LaneEdges {
 /// `2·span² < 2³¹ − 1` in magnitude (the fill rule's bias adds one).
 const LANE_SPAN: i64 = 32_767;
 
-impl LaneEdges {
-    /// `area` (the triangle's part of the tile `rect`) widened, at four samples, by one pixel
-    /// where its rows have an odd number of pixels, so that they are whole blocks of two: on
-    /// the right where the tile goes on, else on the left. Either way the pixel added lies
-    /// outside the triangle's bounds (the side widened is the bounds' own edge), so none of
-    /// its samples is inside and the lanes leave it as it was. `None` where the area spans a
-    /// tile of odd width (the `i64` loop takes the triangle).
-    #[inline(always)]
-    fn whole_blocks<const S: usize>(area: PixelRect, rect: PixelRect) -> Option<PixelRect> {
-        let block_pixels = (LANES / S).max(1) as u32;
-        if (area.x1 - area.x0).is_multiple_of(block_pixels) {
-            Some(area)
-        } else if area.x1 < rect.x1 {
-            Some(PixelRect {
-                x1: area.x1 + 1,
-                ..area
-            })
-        } else if area.x0 > rect.x0 {
-            Some(PixelRect {
-                x0: area.x0 - 1,
-                ..area
-            })
-        } else {
-            None
-        }
-    }
-
+impl<E: EdgeLanes> LaneEdges<E> {
     /// Whether a box no wider or taller than [`LANE_SPAN`] holds the triangle's corners and
     /// every point the lane loop evaluates over `area`: the pixel centres, one block past the
     /// last column and one row past the last, each with its samples' offsets (at most half a
@@ -907,9 +909,9 @@ impl LaneEdges {
     }
 
     /// Whether every value the lane loop forms over `area`, for `S` samples per pixel with
-    /// edge-function offsets `sample_offsets`, fits in `i32`; where not (large triangles) the
-    /// `i64` loop takes the triangle. Converting an `i32` to `f32` rounds exactly as converting
-    /// the same value held in an `i64`, so the depths keep their bits.
+    /// edge-function offsets `sample_offsets`, is held exactly by the lanes `E` (at most
+    /// [`EdgeLanes::LIMIT`] in magnitude). Converting such a lane to `f32` rounds exactly as
+    /// converting the same value held in an `i64`, so the depths keep their bits.
     #[inline(always)]
     fn fit<const S: usize>(edges: &[Edge; 3], sample_offsets: &[[i64; 3]; S], area: PixelRect) -> bool {
         let block_pixels = (LANES / S).max(1);
@@ -928,13 +930,14 @@ impl LaneEdges {
                 + (rows + 1) * edge.step_y.abs()
                 + reach
                 + 1;
-            bound <= i64::from(i32::MAX)
+            bound <= E::LIMIT
         })
     }
 
-    /// The layout of `triangle` over `area` (whole blocks: [`LaneEdges::whole_blocks`]) for
-    /// `S` samples per pixel at the offsets `pattern`, where its values fit in `i32`
-    /// ([`LaneEdges::small`], else [`LaneEdges::fit`]).
+    /// The layout of `triangle` over `area` (whole blocks: [`whole_blocks`]) for `S` samples
+    /// per pixel at the offsets `pattern`, where the lanes `E` hold its values exactly
+    /// ([`LaneEdges::small`], which suffices for `i32` and so for `f64`, else
+    /// [`LaneEdges::fit`]).
     #[inline(always)]
     fn new<const S: usize>(
         triangle: &RasterTriangle,
@@ -948,30 +951,29 @@ impl LaneEdges {
         }
         let groups = (S * (LANES / S).max(1)) / LANES;
         // Every value below is among those `small` or `fit` bounds.
-        let narrow = |value: i64| value as i32;
-        let sample_offsets = sample_offsets.map(|offset| offset.map(narrow));
-        let step_x = edges.map(|edge| narrow(edge.step_x));
-        let min_inside = edges.map(|edge| narrow(edge.min_inside));
-        let mut offsets = [[Ints::splat(0); 3]; 2];
-        let mut biased = [[Ints::splat(0); 3]; 2];
+        let step_x = edges.map(|edge| edge.step_x);
+        let min_inside = edges.map(|edge| edge.min_inside);
+        let mut offsets = [[E::splat_whole(0); 3]; 2];
+        let mut biased = [[E::splat_whole(0); 3]; 2];
         for group in 0..groups {
             for k in 0..3 {
-                let lanes = Ints(std::array::from_fn(|lane| {
+                let offset = |lane: usize| {
                     let slot = group * LANES + lane;
-                    sample_offsets[slot % S][k] + (slot / S) as i32 * step_x[k]
-                }));
-                offsets[group][k] = lanes;
-                biased[group][k] = lanes - Ints::splat(min_inside[k]);
+                    sample_offsets[slot % S][k] + (slot / S) as i64 * step_x[k]
+                };
+                offsets[group][k] = E::from_whole(offset);
+                biased[group][k] = offsets[group][k] + E::splat_whole(-min_inside[k]);
             }
         }
-        let best: [i32; 3] = std::array::from_fn(|k| {
+        let best: [i64; 3] = std::array::from_fn(|k| {
             sample_offsets.iter().map(|offset| offset[k]).max().unwrap_or(0) - min_inside[k]
         });
+        let narrow = E::Whole::narrow;
         let nearest =
-            std::array::from_fn(|pixel| std::array::from_fn(|k| best[k] + pixel as i32 * step_x[k]));
+            std::array::from_fn(|pixel| std::array::from_fn(|k| narrow(best[k] + pixel as i64 * step_x[k])));
         Some(LaneEdges {
             row_start: edges.map(|edge| narrow(edge.row_start)),
-            step_x,
+            step_x: step_x.map(narrow),
             step_y: edges.map(|edge| narrow(edge.step_y)),
             offsets,
             biased,
@@ -981,18 +983,18 @@ impl LaneEdges {
 }
 
 /// [`rasterize_samples`]'s loop in lanes for `S` = 4, 8 or 16 samples per pixel, over a
-/// triangle whose edge values fit in `i32` ([`LaneEdges::new`]) and an area of whole blocks
-/// ([`LaneEdges::whole_blocks`]): a block's samples (two pixels at four samples, else one
+/// triangle whose edge values the lanes `E` hold exactly ([`LaneEdges::new`]) and an area of
+/// whole blocks ([`whole_blocks`]): a block's samples (two pixels at four samples, else one
 /// pixel) are tested and their depths interpolated eight at a time, in the same operations as
 /// the scalar loop, and the nearer ones written with a select.
-fn rasterize_sample_lanes<const S: usize>(
-    edges: &LaneEdges,
-    [d0, d1, d2]: [f32; 3],
-    inv_area: f32,
+fn rasterize_sample_lanes<const S: usize, E: EdgeLanes>(
+    edges: &LaneEdges<E>,
+    triangle: &RasterTriangle,
     area: PixelRect,
     id: u32,
     visibility: &mut Visibility,
 ) {
+    let ([d0, d1, d2], inv_area) = (triangle.depth, triangle.inv_area);
     let rect = visibility.rect;
     let block_pixels = (LANES / S).max(1);
     let block_slots = block_pixels * S;
@@ -1001,8 +1003,9 @@ fn rasterize_sample_lanes<const S: usize>(
     let columns = (area.x1 - area.x0) as usize;
     debug_assert!(columns.is_multiple_of(block_pixels));
     let [weight0, weight1, weight2, inv_area_lanes] = [d0, d1, d2, inv_area].map(Floats::splat);
-    let not_negative = Ints::splat(-1);
+    let not_negative = E::splat_whole(-1);
     let id_lanes = Ints::splat(id as i32);
+    let (zero, block_step) = (E::Whole::narrow(0), E::Whole::narrow(block_pixels as i64));
     let mut row_start = edges.row_start;
     for py in area.y0..area.y1 {
         let row = ((py - rect.y0) as usize * tile_width + (area.x0 - rect.x0) as usize) * S;
@@ -1013,11 +1016,11 @@ fn rasterize_sample_lanes<const S: usize>(
         let id_blocks = ids.chunks_exact_mut(block_slots);
         for (block_depths, block_ids) in depth_blocks.zip(id_blocks) {
             let some_inside = edges.nearest[..block_pixels].iter().any(|nearest| {
-                ((centre[0] + nearest[0]) | (centre[1] + nearest[1]) | (centre[2] + nearest[2])) >= 0
+                ((centre[0] + nearest[0]) | (centre[1] + nearest[1]) | (centre[2] + nearest[2])) >= zero
             });
             if some_inside {
                 for group in 0..groups {
-                    let at = |k: usize| Ints::splat(centre[k]);
+                    let at = |k: usize| E::splat(centre[k]);
                     let [o0, o1, o2] = edges.offsets[group];
                     let [b0, b1, b2] = edges.biased[group];
                     let inside = (at(0) + b0)
@@ -1043,7 +1046,7 @@ fn rasterize_sample_lanes<const S: usize>(
                     }
                 }
             }
-            centre = std::array::from_fn(|k| centre[k] + block_pixels as i32 * edges.step_x[k]);
+            centre = std::array::from_fn(|k| centre[k] + block_step * edges.step_x[k]);
         }
         row_start = std::array::from_fn(|k| row_start[k] + edges.step_y[k]);
     }
@@ -1186,6 +1189,11 @@ fn depth_test_single_sample<const IDS: bool>(
 trait EdgeLanes: Copy + std::ops::Add<Output = Self> {
     /// The largest magnitude a lane holds exactly.
     const LIMIT: i64;
+    /// The scalar beside the lanes, as wide as they are: a loop over `i32` lanes steps its rows
+    /// and tests its blocks in `i32` too.
+    type Whole: Whole;
+    /// `value` in every lane.
+    fn splat(value: Self::Whole) -> Self;
     /// `value` in every lane (`|value| ≤ LIMIT`).
     fn splat_whole(value: i64) -> Self;
     /// Each lane's `value(lane)` (`|value| ≤ LIMIT`).
@@ -1197,6 +1205,11 @@ trait EdgeLanes: Copy + std::ops::Add<Output = Self> {
 
 impl EdgeLanes for Ints {
     const LIMIT: i64 = i32::MAX as i64;
+    type Whole = i32;
+    #[inline(always)]
+    fn splat(value: i32) -> Self {
+        Ints::splat(value)
+    }
     #[inline(always)]
     fn splat_whole(value: i64) -> Self {
         Ints::splat(value as i32)
@@ -1217,6 +1230,11 @@ impl EdgeLanes for Ints {
 
 impl EdgeLanes for Wides {
     const LIMIT: i64 = 1 << 53;
+    type Whole = i64;
+    #[inline(always)]
+    fn splat(value: i64) -> Self {
+        Wides::splat(value as f64)
+    }
     #[inline(always)]
     fn splat_whole(value: i64) -> Self {
         Wides::splat(value as f64)
@@ -1232,6 +1250,32 @@ impl EdgeLanes for Wides {
     #[inline(always)]
     fn to_floats(self) -> Floats {
         Wides::to_floats(self)
+    }
+}
+
+/// A whole number of an [`EdgeLanes`] type's scalar: `i32` or `i64`.
+trait Whole:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::BitOr<Output = Self>
+    + PartialOrd
+{
+    /// `value`, which the caller's bounds keep within the type.
+    fn narrow(value: i64) -> Self;
+}
+
+impl Whole for i32 {
+    #[inline(always)]
+    fn narrow(value: i64) -> Self {
+        value as i32
+    }
+}
+
+impl Whole for i64 {
+    #[inline(always)]
+    fn narrow(value: i64) -> Self {
+        value
     }
 }
 
@@ -2075,9 +2119,10 @@ mod tests {
     }
 
     /// The multisample depth test takes its `i32` lanes where a triangle's edge values over the
-    /// tile fit (a small triangle, by its span; a larger one, by the bound per edge) and its
-    /// `i64` loop where they do not (one reaching far off screen, or an area of odd width that
-    /// cannot be widened to whole blocks); both give the general loop's depths and triangles,
+    /// tile fit (a small triangle, by its span; a larger one, by the bound per edge), its `f64`
+    /// lanes where they stay below 2⁵³ (a triangle thousands of pixels across), and its `i64`
+    /// loop where neither holds them (one reaching far off screen, or an area of odd width that
+    /// cannot be widened to whole blocks); all give the general loop's depths and triangles,
     /// bit for bit, and the lanes leave the pixel they add to an odd row as it was.
     #[test]
     fn multisample_lanes_and_the_wide_loop_equal_the_general_loop() {
@@ -2099,23 +2144,34 @@ mod tests {
         let odd_left = [at(1.3, 0.7, 0.21), at(11.9, 2.2, 0.53), at(4.1, 11.4, 0.97)];
         let odd_tile = [at(0.2, 0.7, 0.21), at(11.9, 2.2, 0.53), at(4.1, 11.4, 0.97)];
         let large = [at(1.3, 0.7, 0.21), at(150.6, 2.2, 0.53), at(4.1, 130.4, 0.97)];
+        // Edge values of about 10¹², beyond `i32`, well within `f64`'s whole numbers.
+        let big = [
+            at(-3_000.0, -2_000.0, 0.21),
+            at(4_000.0, 5.5, 0.53),
+            at(6.5, 5_000.0, 0.97),
+        ];
+        // Edge values of about 10¹⁷, beyond `f64`'s whole numbers.
         let huge = [
             at(-500_000.0, -400_000.0, 0.21),
             at(600_000.0, 5.5, 0.53),
             at(6.5, 700_000.0, 0.97),
         ];
-        // (corners, tile width, small, lanes at four samples, lanes at eight and sixteen)
+        // (corners, tile width, small, `i32` lanes at four samples, at eight and sixteen,
+        // `f64` lanes where the area is whole blocks)
         let cases = [
-            (small, 12, true, true, true),
-            (odd_right, 12, true, true, true),
-            (odd_left, 12, true, true, true),
-            (odd_tile, 11, true, false, true),
-            (large, 12, false, true, true),
-            (huge, 12, false, false, false),
+            (small, 12, true, true, true, true),
+            (odd_right, 12, true, true, true, true),
+            (odd_left, 12, true, true, true, true),
+            (odd_tile, 11, true, false, true, true),
+            (large, 12, false, true, true, true),
+            (big, 12, false, false, false, true),
+            (huge, 12, false, false, false, false),
         ];
         for samples in [4, 8, 16] {
             let pattern = SamplePattern::new(samples).expect("a sample count");
-            for (case, &(corners, width, small, lanes_at_4, lanes_wider)) in cases.iter().enumerate() {
+            for (case, &(corners, width, small, lanes_at_4, lanes_wider, wide_lanes)) in
+                cases.iter().enumerate()
+            {
                 let rect = tile(width);
                 let slots = (width * 12 * samples) as usize;
                 let triangle = setup_triangle(
@@ -2129,19 +2185,40 @@ mod tests {
                 .expect("a triangle");
                 let area = triangle.bounds.intersect(&rect).expect("in the tile");
                 let lane_area = match samples {
-                    4 => LaneEdges::whole_blocks::<4>(area, rect),
-                    8 => LaneEdges::whole_blocks::<8>(area, rect),
-                    _ => LaneEdges::whole_blocks::<16>(area, rect),
+                    4 => whole_blocks::<4>(area, rect),
+                    8 => whole_blocks::<8>(area, rect),
+                    _ => whole_blocks::<16>(area, rect),
                 };
-                let lanes = lane_area.is_some_and(|lane_area| match samples {
-                    4 => LaneEdges::new::<4>(&triangle, pattern.offsets(), lane_area).is_some(),
-                    8 => LaneEdges::new::<8>(&triangle, pattern.offsets(), lane_area).is_some(),
-                    _ => LaneEdges::new::<16>(&triangle, pattern.offsets(), lane_area).is_some(),
+                fn lanes<E: EdgeLanes>(
+                    triangle: &RasterTriangle,
+                    pattern: SamplePattern,
+                    area: PixelRect,
+                ) -> bool {
+                    match pattern.len() {
+                        4 => LaneEdges::<E>::new::<4>(triangle, pattern.offsets(), area).is_some(),
+                        8 => LaneEdges::<E>::new::<8>(triangle, pattern.offsets(), area).is_some(),
+                        _ => LaneEdges::<E>::new::<16>(triangle, pattern.offsets(), area).is_some(),
+                    }
+                }
+                let (narrow, wide) = lane_area.map_or((false, false), |lane_area| {
+                    (
+                        lanes::<Ints>(&triangle, pattern, lane_area),
+                        lanes::<Wides>(&triangle, pattern, lane_area),
+                    )
                 });
                 let expected = if samples == 4 { lanes_at_4 } else { lanes_wider };
-                assert_eq!(lanes, expected, "{samples} samples, case {case}");
+                assert_eq!(narrow, expected, "{samples} samples, case {case}: i32 lanes");
+                assert_eq!(
+                    wide,
+                    wide_lanes && lane_area.is_some(),
+                    "{samples} samples, case {case}: f64 lanes"
+                );
                 if let Some(lane_area) = lane_area {
-                    assert_eq!(LaneEdges::small(&triangle, lane_area), small, "case {case}");
+                    assert_eq!(
+                        LaneEdges::<Ints>::small(&triangle, lane_area),
+                        small,
+                        "case {case}"
+                    );
                 }
                 let empty = || Visibility {
                     rect,
