@@ -72,6 +72,7 @@ FEATURE_SCENES = [
     Feature("s1_shadow2", "scenes/bench/shadow2.ron", SHADED, "s1_ground", "anchor", None),
     Feature("s1_shadow_noplane", "scenes/bench/shadow-noplane.ron", SHADED, None, "anchor", None),
     Feature("s1_textured", "scenes/bench/textured.ron", MODES, None, "anchor", None),
+    Feature("s1_studio", "scenes/bench/studio.ron", SHADED, "s1_ground", "benches/anchors/s1_studio.json", None),
     Feature("s1_slerp", "scenes/bench/slerp.ron", SHADED, None, None, None),
     Feature("s1_textured_slerp", "scenes/bench/textured-slerp.ron", SHADED, None, None, None),
     Feature("s1_cook_torrance", "scenes/bench/cook-torrance.ron", ["phong"], None, None, "scene"),

@@ -207,6 +207,25 @@ fn every_bundled_scene_loads_without_warnings_except_unsampled_gltf_textures() {
     }
 }
 
+/// The benchmark scenes are what `bench` and benches/llvmpipe.py time: a scene that no longer
+/// loads (a renamed field, a moved asset) would turn a benchmark row into an error.
+#[test]
+fn every_bench_scene_loads_without_warnings() {
+    let scenes = crate::ron_files(&repo().join("scenes/bench"));
+    assert!(scenes.len() >= 20, "{} bench scenes", scenes.len());
+    for scene in scenes {
+        let loaded = load_scene(&scene, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{}: {e:?}", scene.display()));
+        assert!(
+            loaded.warnings.is_empty(),
+            "{}: {:?}",
+            scene.display(),
+            loaded.warnings
+        );
+        assert!(loaded.scene.triangle_count() > 0, "{}", scene.display());
+    }
+}
+
 /// The mistakes a new user makes, applied to every complete scene of the docs: each must give
 /// an error with a location, a hint, and no word of ron's or serde's internals.
 #[test]
