@@ -130,6 +130,13 @@ impl Floats {
     pub fn to_bits(self) -> Ints {
         Ints(bytemuck::cast(self.0))
     }
+
+    /// Each lane rounded towards zero to an `i32` (`as i32` for |x| < 2³¹; −2³¹ beyond that
+    /// and for NaN, as [`truncate`]).
+    #[inline(always)]
+    pub fn truncate_to_ints(self) -> Ints {
+        backend::truncate_to_ints(self)
+    }
 }
 
 impl Ints {
@@ -361,6 +368,17 @@ mod portable {
     #[inline(always)]
     pub fn trunc(a: Floats) -> Floats {
         Floats(a.0.map(super::truncate))
+    }
+
+    #[inline(always)]
+    pub fn truncate_to_ints(a: Floats) -> Ints {
+        Ints(a.0.map(|x| {
+            if x.abs() < 2_147_483_648.0 {
+                x as i32
+            } else {
+                i32::MIN
+            }
+        }))
     }
 
     #[inline(always)]
@@ -616,6 +634,15 @@ mod sse {
         // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
         let truncated = |half: __m128| unsafe { _mm_cvtepi32_ps(_mm_cvttps_epi32(half)) };
         Floats(bytemuck::cast(halves.map(truncated)))
+    }
+
+    /// `cvttps2dq`: towards zero, −2³¹ out of range ([`super::truncate`]).
+    #[inline(always)]
+    pub fn truncate_to_ints(a: Floats) -> Ints {
+        let halves: [__m128; 2] = bytemuck::cast(a.0);
+        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+        let truncated = |half: __m128| unsafe { _mm_cvttps_epi32(half) };
+        Ints(bytemuck::cast(halves.map(truncated)))
     }
 
     /// An ordered compare, as Rust's `>`: false where either side is NaN.
@@ -1283,6 +1310,11 @@ mod tests {
             assert_eq!(bits(x / y), bits(portable::div(x, y)), "div");
             assert_eq!(bits(x.sqrt()), bits(portable::sqrt(x)), "sqrt");
             assert_eq!(bits(Real::trunc(x)), bits(portable::trunc(x)), "trunc");
+            assert_eq!(
+                x.truncate_to_ints(),
+                portable::truncate_to_ints(x),
+                "truncate_to_ints"
+            );
             assert_eq!(x.gt(y), portable::gt(x, y), "gt");
             assert_eq!(x.le(y), portable::le(x, y), "le");
             assert_eq!(x.eq(y), portable::eq(x, y), "eq");
@@ -1328,8 +1360,10 @@ mod tests {
         ];
         for values in edges {
             let truncated = Real::trunc(Floats(values));
+            let integers = Floats(values).truncate_to_ints();
             for (lane, &x) in values.iter().enumerate() {
                 assert_eq!(truncated.0[lane].to_bits(), truncate(x).to_bits(), "{x}");
+                assert_eq!(integers.0[lane] as f32, truncate(x), "{x}");
                 if x.abs() < 2_147_483_648.0 {
                     assert_eq!(truncate(x), x.trunc(), "{x}");
                 }

@@ -459,6 +459,44 @@ pub struct SamplePattern {
     /// [`SamplePattern::subset`] of every mask, for patterns of up to eight samples (a table of
     /// 2^16 entries for sixteen would not stay in cache); empty for sixteen.
     subsets: &'static [SampleSubset],
+    /// The samples as the multisample lanes lay them out ([`SampleLanes`]).
+    lanes: &'static SampleLanes,
+}
+
+/// A pattern's samples in the slots of [`rasterize_sample_lanes`]' groups: slot `s` of the
+/// two groups (`s = group·LANES + lane`) holds sample `s mod S` of the block's pixel `s / S`.
+/// Per group, each slot's sample offset from its pixel's centre (1/256 pixel) and its pixel.
+/// From these `LaneEdges::new` forms a triangle's lane offsets with a few lane operations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SampleLanes {
+    x: [[i32; LANES]; 2],
+    y: [[i32; LANES]; 2],
+    pixel: [[i32; LANES]; 2],
+}
+
+/// The [`SampleLanes`] of the `N` samples of `offsets`.
+const fn sample_lanes<const N: usize>(offsets: &[(i32, i32); N]) -> SampleLanes {
+    let mut lanes = SampleLanes {
+        x: [[0; LANES]; 2],
+        y: [[0; LANES]; 2],
+        pixel: [[0; LANES]; 2],
+    };
+    let mut sample = 0;
+    while sample < N {
+        let (x, y) = offsets[sample];
+        // `LaneEdges::new` forms its lane offsets in `f32` on this bound.
+        assert!(x.abs() <= SUBPIXEL_HALF as i32 && y.abs() <= SUBPIXEL_HALF as i32);
+        sample += 1;
+    }
+    let mut slot = 0;
+    while slot < 2 * LANES {
+        let (group, lane) = (slot / LANES, slot % LANES);
+        lanes.x[group][lane] = offsets[slot % N].0;
+        lanes.y[group][lane] = offsets[slot % N].1;
+        lanes.pixel[group][lane] = (slot / N) as i32;
+        slot += 1;
+    }
+    lanes
 }
 
 /// Some of a pixel's samples: how many, and the mean of their offsets from the pixel's centre
@@ -562,24 +600,35 @@ const SUBSETS_2: [SampleSubset; 4] = subset_table(&PATTERN_2);
 const SUBSETS_4: [SampleSubset; 16] = subset_table(&PATTERN_4);
 const SUBSETS_8: [SampleSubset; 256] = subset_table(&PATTERN_8);
 
+const LANES_1: SampleLanes = sample_lanes(&PATTERN_1);
+const LANES_2: SampleLanes = sample_lanes(&PATTERN_2);
+const LANES_4: SampleLanes = sample_lanes(&PATTERN_4);
+const LANES_8: SampleLanes = sample_lanes(&PATTERN_8);
+const LANES_16: SampleLanes = sample_lanes(&PATTERN_16);
+
 impl SamplePattern {
     /// One sample at the pixel centre: no anti-aliasing.
     pub const SINGLE: SamplePattern = SamplePattern {
         offsets: &PATTERN_1,
         subsets: &SUBSETS_1,
+        lanes: &LANES_1,
     };
 
     /// The pattern with `samples` samples per pixel: 1, 2, 4, 8 or 16.
     pub fn new(samples: u32) -> Option<SamplePattern> {
-        let (offsets, subsets): (&'static [(i32, i32)], &'static [SampleSubset]) = match samples {
-            1 => (&PATTERN_1, &SUBSETS_1),
-            2 => (&PATTERN_2, &SUBSETS_2),
-            4 => (&PATTERN_4, &SUBSETS_4),
-            8 => (&PATTERN_8, &SUBSETS_8),
-            16 => (&PATTERN_16, &[]),
+        let (offsets, subsets, lanes): (&'static [(i32, i32)], &'static [SampleSubset], _) = match samples {
+            1 => (&PATTERN_1, &SUBSETS_1, &LANES_1),
+            2 => (&PATTERN_2, &SUBSETS_2, &LANES_2),
+            4 => (&PATTERN_4, &SUBSETS_4, &LANES_4),
+            8 => (&PATTERN_8, &SUBSETS_8, &LANES_8),
+            16 => (&PATTERN_16, &[], &LANES_16),
             _ => return None,
         };
-        Some(SamplePattern { offsets, subsets })
+        Some(SamplePattern {
+            offsets,
+            subsets,
+            lanes,
+        })
     }
 
     /// The samples whose bits are set in `mask` (bit `i` for sample `i`): their count and mean
@@ -779,11 +828,12 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
     if S.is_multiple_of(LANES / 2)
         && let Some(lane_area) = whole_blocks::<S>(area, rect)
     {
-        if let Some(lane_edges) = LaneEdges::<Ints>::new::<S>(triangle, pattern, lane_area) {
+        let samples = visibility.pattern;
+        if let Some(lane_edges) = LaneEdges::<Ints>::new::<S>(triangle, &samples, lane_area) {
             rasterize_sample_lanes::<S, Ints>(&lane_edges, triangle, lane_area, id, visibility);
             return;
         }
-        if let Some(lane_edges) = LaneEdges::<Wides>::new::<S>(triangle, pattern, lane_area) {
+        if let Some(lane_edges) = LaneEdges::<Wides>::new::<S>(triangle, &samples, lane_area) {
             rasterize_sample_lanes::<S, Wides>(&lane_edges, triangle, lane_area, id, visibility);
             return;
         }
@@ -887,6 +937,8 @@ fn whole_blocks<const S: usize>(area: PixelRect, rect: PixelRect) -> Option<Pixe
 /// `dx·(y − a_y) − dy·(x − a_x)` with all four factors within the span, so at most
 /// `2·span² < 2³¹ − 1` in magnitude (the fill rule's bias adds one).
 const LANE_SPAN: i64 = 32_767;
+// `LaneEdges::new` forms a small triangle's lane offsets in `f32`, exact below 2²⁴.
+const _: () = assert!(2 * LANE_SPAN * SUBPIXEL_HALF + LANE_SPAN * SUBPIXEL_ONE < 1 << 24);
 
 impl<E: EdgeLanes> LaneEdges<E> {
     /// Whether a box no wider or taller than [`LANE_SPAN`] holds the triangle's corners and
@@ -935,39 +987,65 @@ impl<E: EdgeLanes> LaneEdges<E> {
     }
 
     /// The layout of `triangle` over `area` (whole blocks: [`whole_blocks`]) for `S` samples
-    /// per pixel at the offsets `pattern`, where the lanes `E` hold its values exactly
+    /// per pixel at the offsets of `samples`, where the lanes `E` hold its values exactly
     /// ([`LaneEdges::small`], which suffices for `i32` and so for `f64`, else
     /// [`LaneEdges::fit`]).
     #[inline(always)]
     fn new<const S: usize>(
         triangle: &RasterTriangle,
-        pattern: &[(i32, i32)],
+        samples: &SamplePattern,
         area: PixelRect,
     ) -> Option<Self> {
         let edges = triangle_edges(triangle, area.x0, area.y0);
-        let sample_offsets: [[i64; 3]; S] = sample_edge_offsets(&edges, pattern);
-        if !(Self::small(triangle, area) || Self::fit(&edges, &sample_offsets, area)) {
-            return None;
-        }
         let groups = (S * (LANES / S).max(1)) / LANES;
-        // Every value below is among those `small` or `fit` bounds.
         let step_x = edges.map(|edge| edge.step_x);
         let min_inside = edges.map(|edge| edge.min_inside);
         let mut offsets = [[E::splat_whole(0); 3]; 2];
-        let mut biased = [[E::splat_whole(0); 3]; 2];
-        for group in 0..groups {
-            for k in 0..3 {
-                let offset = |lane: usize| {
-                    let slot = group * LANES + lane;
-                    sample_offsets[slot % S][k] + (slot / S) as i64 * step_x[k]
-                };
-                offsets[group][k] = E::from_whole(offset);
-                biased[group][k] = offsets[group][k] + E::splat_whole(-min_inside[k]);
+        // Per edge, the largest offset of a sample of the block's first pixel.
+        let largest: [i64; 3];
+        if Self::small(triangle, area) {
+            // Each lane's offset `along_x·x + along_y·y + step_x·pixel` is formed in `f32`
+            // lanes, exactly: the edge's deltas are within the triangle's span (below 2¹⁵), the
+            // samples' offsets at most half a pixel (2⁷, `sample_lanes`) and `pixel` 0 or 1,
+            // so every product, sum and the result is a whole number below
+            // `2·2¹⁵·2⁷ + 2¹⁵·2⁸ < 2²⁴` in magnitude ([`LANE_SPAN`]).
+            let lanes = samples.lanes;
+            let mut most = [f32::NEG_INFINITY; 3];
+            for (group, group_offsets) in offsets.iter_mut().enumerate().take(groups) {
+                let [x, y, pixel] =
+                    [lanes.x[group], lanes.y[group], lanes.pixel[group]].map(|l| Ints(l).to_floats());
+                for (k, edge) in edges.iter().enumerate() {
+                    let [along_x, along_y, step] =
+                        [edge.along_x, edge.along_y, edge.step_x].map(|value| Floats::splat(value as f32));
+                    let offset = along_x * x + along_y * y + step * pixel;
+                    group_offsets[k] = E::from_whole_floats(offset);
+                    for (lane, &value) in offset.0.iter().enumerate() {
+                        if group * LANES + lane < S && value > most[k] {
+                            most[k] = value;
+                        }
+                    }
+                }
             }
+            largest = most.map(|value| value as i64);
+        } else {
+            let sample_offsets: [[i64; 3]; S] = sample_edge_offsets(&edges, samples.offsets());
+            if !Self::fit(&edges, &sample_offsets, area) {
+                return None;
+            }
+            // Every value below is among those `fit` bounds.
+            for (group, offsets) in offsets.iter_mut().enumerate().take(groups) {
+                for (k, offset) in offsets.iter_mut().enumerate() {
+                    *offset = E::from_whole(|lane| {
+                        let slot = group * LANES + lane;
+                        sample_offsets[slot % S][k] + (slot / S) as i64 * step_x[k]
+                    });
+                }
+            }
+            largest =
+                std::array::from_fn(|k| sample_offsets.iter().map(|offset| offset[k]).max().unwrap_or(0));
         }
-        let best: [i64; 3] = std::array::from_fn(|k| {
-            sample_offsets.iter().map(|offset| offset[k]).max().unwrap_or(0) - min_inside[k]
-        });
+        let biased = offsets.map(|group| std::array::from_fn(|k| group[k] + E::splat_whole(-min_inside[k])));
+        let best: [i64; 3] = std::array::from_fn(|k| largest[k] - min_inside[k]);
         let narrow = E::Whole::narrow;
         let nearest =
             std::array::from_fn(|pixel| std::array::from_fn(|k| narrow(best[k] + pixel as i64 * step_x[k])));
@@ -1198,6 +1276,8 @@ trait EdgeLanes: Copy + std::ops::Add<Output = Self> {
     fn splat_whole(value: i64) -> Self;
     /// Each lane's `value(lane)` (`|value| ≤ LIMIT`).
     fn from_whole(value: impl Fn(usize) -> i64) -> Self;
+    /// Each lane of `whole`, whose lanes hold whole numbers below 2²⁴ in magnitude.
+    fn from_whole_floats(whole: Floats) -> Self;
     fn gt(self, other: Self) -> Mask;
     /// Each lane as `f32`, rounded as converting the same `i64` rounds.
     fn to_floats(self) -> Floats;
@@ -1217,6 +1297,10 @@ impl EdgeLanes for Ints {
     #[inline(always)]
     fn from_whole(value: impl Fn(usize) -> i64) -> Self {
         Ints(std::array::from_fn(|lane| value(lane) as i32))
+    }
+    #[inline(always)]
+    fn from_whole_floats(whole: Floats) -> Self {
+        whole.truncate_to_ints()
     }
     #[inline(always)]
     fn gt(self, other: Self) -> Mask {
@@ -1242,6 +1326,10 @@ impl EdgeLanes for Wides {
     #[inline(always)]
     fn from_whole(value: impl Fn(usize) -> i64) -> Self {
         Wides(std::array::from_fn(|lane| value(lane) as f64))
+    }
+    #[inline(always)]
+    fn from_whole_floats(whole: Floats) -> Self {
+        Wides(whole.0.map(f64::from))
     }
     #[inline(always)]
     fn gt(self, other: Self) -> Mask {
@@ -2144,6 +2232,9 @@ mod tests {
         let odd_left = [at(1.3, 0.7, 0.21), at(11.9, 2.2, 0.53), at(4.1, 11.4, 0.97)];
         let odd_tile = [at(0.2, 0.7, 0.21), at(11.9, 2.2, 0.53), at(4.1, 11.4, 0.97)];
         let large = [at(1.3, 0.7, 0.21), at(150.6, 2.2, 0.53), at(4.1, 130.4, 0.97)];
+        // Corners spanning almost `LANE_SPAN`, the most a small triangle's `f32` lane offsets
+        // are formed for (the largest edge deltas, times the samples' largest offsets).
+        let widest_small = [at(0.3, 0.2, 0.21), at(127.7, 5.1, 0.53), at(3.2, 127.6, 0.97)];
         // Edge values of about 10¹², beyond `i32`, well within `f64`'s whole numbers.
         let big = [
             at(-3_000.0, -2_000.0, 0.21),
@@ -2163,6 +2254,7 @@ mod tests {
             (odd_right, 12, true, true, true, true),
             (odd_left, 12, true, true, true, true),
             (odd_tile, 11, true, false, true, true),
+            (widest_small, 12, true, true, true, true),
             (large, 12, false, true, true, true),
             (big, 12, false, false, false, true),
             (huge, 12, false, false, false, false),
@@ -2195,9 +2287,9 @@ mod tests {
                     area: PixelRect,
                 ) -> bool {
                     match pattern.len() {
-                        4 => LaneEdges::<E>::new::<4>(triangle, pattern.offsets(), area).is_some(),
-                        8 => LaneEdges::<E>::new::<8>(triangle, pattern.offsets(), area).is_some(),
-                        _ => LaneEdges::<E>::new::<16>(triangle, pattern.offsets(), area).is_some(),
+                        4 => LaneEdges::<E>::new::<4>(triangle, &pattern, area).is_some(),
+                        8 => LaneEdges::<E>::new::<8>(triangle, &pattern, area).is_some(),
+                        _ => LaneEdges::<E>::new::<16>(triangle, &pattern, area).is_some(),
                     }
                 }
                 let (narrow, wide) = lane_area.map_or((false, false), |lane_area| {
