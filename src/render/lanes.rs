@@ -283,6 +283,14 @@ pub fn samples_showing<const S: usize>(ids: &[u32; S], id: u32) -> u32 {
     backend::samples_showing(ids, id)
 }
 
+/// Whether each of a group's triangle numbers names a triangle (is not `none`), into
+/// `shown`; returns how many do. One compare, two packs and one 8-byte store where the backend
+/// has them: as a loop of `bool` stores it was a tenth of a flat close-up's frame.
+#[inline(always)]
+pub fn mark_shown(ids: &[u32; LANES], none: u32, shown: &mut [bool; LANES]) -> usize {
+    backend::mark_shown(ids, none, shown)
+}
+
 /// Sets every entry of `out` to `value`, as four entries' worth of floats twice: six 16-byte
 /// stores of the three patterns (`x y z x`, `y z x y`, `z x y z`) that four `Vec3`s make,
 /// where the backend has them. `slice::fill` (and the compiler, given the patterns in plain
@@ -454,6 +462,14 @@ mod portable {
     }
 
     #[inline(always)]
+    pub fn mark_shown(ids: &[u32; LANES], none: u32, shown: &mut [bool; LANES]) -> usize {
+        for (shown, &id) in shown.iter_mut().zip(ids) {
+            *shown = id != none;
+        }
+        ids.iter().filter(|&&id| id != none).count()
+    }
+
+    #[inline(always)]
     pub fn fill_vec3s(out: &mut [Vec3; LANES], value: Vec3) {
         out.fill(value);
     }
@@ -471,10 +487,11 @@ mod sse {
     use glam::Vec3;
     use std::arch::x86_64::{
         __m128, __m128d, __m128i, _mm_add_epi32, _mm_add_pd, _mm_add_ps, _mm_and_ps, _mm_and_si128,
-        _mm_andnot_ps, _mm_castpd_ps, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmpeq_ps, _mm_cmpgt_epi32,
-        _mm_cmpgt_pd, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps, _mm_cvtpd_ps,
-        _mm_cvttps_epi32, _mm_div_ps, _mm_movelh_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_epi32,
-        _mm_setr_ps, _mm_shuffle_ps, _mm_sqrt_ps, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps,
+        _mm_andnot_ps, _mm_andnot_si128, _mm_castpd_ps, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmpeq_ps,
+        _mm_cmpgt_epi32, _mm_cmpgt_pd, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps,
+        _mm_cvtpd_ps, _mm_cvttps_epi32, _mm_div_ps, _mm_movelh_ps, _mm_movemask_epi8, _mm_movemask_ps,
+        _mm_mul_ps, _mm_or_ps, _mm_packs_epi16, _mm_packs_epi32, _mm_set1_epi8, _mm_set1_epi32, _mm_setr_ps,
+        _mm_shuffle_ps, _mm_sqrt_ps, _mm_storel_epi64, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps,
     };
 
     use super::{Floats, Ints, LANES, Mask, Wides};
@@ -572,6 +589,23 @@ mod sse {
             let equal = unsafe { _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(ids, wanted))) };
             mask | ((equal as u32) << (4 * quad))
         })
+    }
+
+    /// `pcmpeqd` on each half, the masks packed to bytes (`packssdw`, `packsswb`: −1 stays
+    /// −1), turned to 0 or 1 (`pandn`) and stored as eight `bool`s (`movq`).
+    #[inline(always)]
+    pub fn mark_shown(ids: &[u32; LANES], none: u32, shown: &mut [bool; LANES]) -> usize {
+        let [low, high]: [__m128i; 2] = bytemuck::cast(*ids);
+        // SAFETY: SSE2 is enabled on every x86-64 target (see the module); the store writes
+        // eight bytes, `shown`'s eight `bool`s, each 0 or 1.
+        unsafe {
+            let none = _mm_set1_epi32(none as i32);
+            let words = _mm_packs_epi32(_mm_cmpeq_epi32(low, none), _mm_cmpeq_epi32(high, none));
+            let bytes = _mm_packs_epi16(words, words);
+            let flags = _mm_andnot_si128(bytes, _mm_set1_epi8(1));
+            _mm_storel_epi64(shown.as_mut_ptr().cast::<__m128i>(), flags);
+            LANES - (_mm_movemask_epi8(bytes) as u32 & 0xff).count_ones() as usize
+        }
     }
 
     /// Six `movups` of the three patterns four `Vec3`s make.
@@ -1286,6 +1320,30 @@ mod tests {
         check::<4>();
         check::<8>();
         check::<16>();
+    }
+
+    /// Coverage flags and counts, per backend, against a plain comparison: every number of
+    /// shown lanes, in scattered places, with ids that agree with `none` in their low or
+    /// high halves only (so a narrower compare would be caught).
+    #[test]
+    fn mark_shown_flags_and_counts_the_lanes_that_name_a_triangle() {
+        let none = u32::MAX;
+        for pattern in 0..=u8::MAX {
+            let ids: [u32; LANES] = std::array::from_fn(|lane| {
+                if pattern & (1 << lane) == 0 {
+                    none
+                } else {
+                    [0, 0xffff, 0xffff_0000, 0x7fff_ffff, 5][lane % 5]
+                }
+            });
+            let expected: [bool; LANES] = std::array::from_fn(|lane| pattern & (1 << lane) != 0);
+            for mark in [mark_shown, portable::mark_shown] {
+                let mut shown = expected.map(|lane| !lane);
+                let count = mark(&ids, none, &mut shown);
+                assert_eq!(shown, expected, "pattern {pattern:08b}");
+                assert_eq!(count, pattern.count_ones() as usize, "pattern {pattern:08b}");
+            }
+        }
     }
 
     /// The backend in use against the portable loops, operation by operation, on awkward

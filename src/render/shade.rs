@@ -19,7 +19,7 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
-use crate::render::lanes::{Floats, LANES, Mask, Vec3s, Wides, fill_vec3s, samples_showing};
+use crate::render::lanes::{Floats, LANES, Mask, Vec3s, Wides, fill_vec3s, mark_shown, samples_showing};
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
     Corners, EdgePlanes, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility,
@@ -136,6 +136,15 @@ struct ShadingPoints {
     triangle_start: Vec<u32>,
     /// Per point, its shaded colour.
     colors: Vec<Vec3>,
+    /// Per triangle of the tile: whether it shows one colour; see [`PointTables`].
+    one_colour: Vec<bool>,
+    /// Per pixel without points: see [`PointTables`].
+    whole: Vec<u32>,
+    /// Per triangle of the tile: see [`PointTables`].
+    whole_seen: Vec<bool>,
+    /// Per triangle of the tile, the resolved colour of a pixel it covers at every sample (for
+    /// one-colour triangles that `whole_seen` marks); the last entry is the background.
+    whole_colors: Vec<Vec3>,
 }
 
 /// A triangle as seen by one pixel's samples.
@@ -229,6 +238,8 @@ impl GouraudPlane {
 struct GouraudColors {
     over_w: [Vec3A; 3],
     inv_w: [f32; 3],
+    /// The colour where the denominator is not positive (see [`GouraudColors::at`]).
+    degenerate: Vec3,
 }
 
 impl GouraudColors {
@@ -237,9 +248,12 @@ impl GouraudColors {
     #[inline]
     fn new(raster: &RasterTriangle, corners: &Corners, colors: [Vec3; 3]) -> Self {
         let corner_colors = corners.corner_values(colors);
+        let over_w: [Vec3A; 3] = std::array::from_fn(|k| Vec3A::from(corner_colors[k]) * raster.inv_w[k]);
+        let [w0, w1, w2] = raster.inv_w;
         GouraudColors {
-            over_w: std::array::from_fn(|k| Vec3A::from(corner_colors[k]) * raster.inv_w[k]),
+            over_w,
             inv_w: raster.inv_w,
+            degenerate: Vec3::from((over_w[0] + over_w[1] + over_w[2]) / (w0 + w1 + w2)),
         }
     }
 
@@ -253,12 +267,11 @@ impl GouraudColors {
         let [w0, w1, w2] = self.inv_w;
         let [c0, c1, c2] = self.over_w;
         let denominator = e0 * w0 + e1 * w1 + e2 * w2;
-        let color = if denominator > 0.0 {
-            (c0 * e0 + c1 * e1 + c2 * e2) / denominator
+        if denominator > 0.0 {
+            Vec3::from((c0 * e0 + c1 * e1 + c2 * e2) / denominator)
         } else {
-            (c0 + c1 + c2) / (w0 + w1 + w2)
-        };
-        Vec3::from(color)
+            self.degenerate
+        }
     }
 
     /// [`GouraudColors::at`] for eight points, the edge functions' values (already `f32`)
@@ -272,10 +285,13 @@ impl GouraudColors {
         let denominator = e0 * w0 + e1 * w1 + e2 * w2;
         let inside = denominator.gt(Floats::splat(0.0));
         let interpolated = (c0.scale(e0) + c1.scale(e1) + c2.scale(e2)).divide(denominator);
-        let [c0, c1, c2] = self.over_w;
-        let [w0, w1, w2] = self.inv_w;
-        let degenerate = Vec3::from((c0 + c1 + c2) / (w0 + w1 + w2));
-        inside.select3(interpolated, Vec3s::splat(degenerate))
+        // Inside a triangle every lane's denominator is positive: the select is for degenerate
+        // input only.
+        if inside.all() {
+            interpolated
+        } else {
+            inside.select3(interpolated, Vec3s::splat(self.degenerate))
+        }
     }
 }
 
@@ -309,13 +325,20 @@ pub(crate) fn pixel_shading_points(visibility: &Visibility, x: u32, y: u32) -> V
     let pixel_count = (rect.width() * rect.height()) as usize;
     let mut points = vec![ShadingPoint::default(); pixel_count * samples];
     let mut pixel_start = vec![0; pixel_count + 1];
-    let mut triangle_start = vec![0; visibility.raster_ids.len() + 2];
+    let count = visibility.raster_ids.len();
+    let mut triangle_start = vec![0; count + 2];
+    // Every triangle's whole pixels get their point (none is taken as one colour).
     let point_count = find_points_of_pattern(
         samples,
         visibility,
-        &mut points,
-        &mut pixel_start,
-        &mut triangle_start,
+        PointTables {
+            one_colour: &vec![false; count],
+            points: &mut points,
+            pixel_start: &mut pixel_start,
+            triangle_start: &mut triangle_start,
+            whole: &mut vec![0; pixel_count],
+            whole_seen: &mut vec![false; count],
+        },
     );
     pixel_start[pixel_count] = point_count as u32;
     points[pixel_start[pixel] as usize..pixel_start[pixel + 1] as usize]
@@ -477,7 +500,10 @@ fn fill_background(rect: PixelRect, background: Vec3, target: &mut TileTarget) {
 /// Phong lanes, and the general [`shade_sample`] only where a single sample takes it too), so
 /// each point has the bits `shade_sample` gives there. The last resolves each pixel: its
 /// points' colours weighted by their sample counts and added in the order of their first
-/// samples, the background for the samples nothing covers, over the sample count.
+/// samples, the background for the samples nothing covers, over the sample count. A pixel
+/// that a triangle of one colour (flat or constant, no colour texture) covers at every sample
+/// has no point: it takes the triangle's resolved colour, formed once per triangle by the
+/// same operations.
 fn shade_multisampled<'f>(
     frame: &'f Frame,
     visibility: &Visibility,
@@ -507,6 +533,10 @@ fn shade_multisampled<'f>(
         by_triangle,
         triangle_start,
         colors,
+        one_colour,
+        whole,
+        whole_seen,
+        whole_colors,
     } = tile;
 
     // Each pixel's points. The buffers only grow: every entry up to `point_count` is written below before it is
@@ -517,7 +547,30 @@ fn shade_multisampled<'f>(
     pixel_start.resize(pixel_count + 1, 0);
     triangle_start.clear();
     triangle_start.resize(count + 2, 0);
-    let point_count = find_points_of_pattern(samples, visibility, points, pixel_start, triangle_start);
+    one_colour.clear();
+    one_colour.extend((0..count as u32).map(|local| {
+        TriangleShader::is_one_colour(frame, frame.raster_triangle(visibility.raster_id(local)))
+    }));
+    // Like `pixel_start`, `whole` is written for every pixel that reads it.
+    if whole.len() < pixel_count {
+        whole.resize(pixel_count, 0);
+    }
+    whole_seen.clear();
+    whole_seen.resize(count, false);
+    whole_colors.resize(count + 1, Vec3::ZERO);
+    whole_colors[count] = background;
+    let point_count = find_points_of_pattern(
+        samples,
+        visibility,
+        PointTables {
+            one_colour,
+            points,
+            pixel_start,
+            triangle_start,
+            whole,
+            whole_seen,
+        },
+    );
     pixel_start[pixel_count] = point_count as u32;
     let points = &points[..point_count];
 
@@ -549,14 +602,21 @@ fn shade_multisampled<'f>(
     let mut modulated = ModulatedBatch::default();
     for local in 0..count {
         let mine = &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize];
-        if mine.is_empty() {
+        if mine.is_empty() && !whole_seen[local] {
             continue;
         }
         let id = visibility.raster_id(local as u32);
         let raster = frame.raster_triangle(id);
         let point_at = |index: u32| points[index as usize].at;
-        match TriangleShader::new(frame, raster, caches, flat, lightings) {
+        let shader = TriangleShader::new(frame, raster, caches, flat, lightings);
+        debug_assert_eq!(
+            matches!(shader, TriangleShader::Solid(_) | TriangleShader::FlatWaiting(_)),
+            one_colour[local],
+            "`TriangleShader::is_one_colour` agrees with `TriangleShader::new`"
+        );
+        match shader {
             TriangleShader::Solid(color) => {
+                whole_colors[local] = resolve_whole(color, samples, background);
                 for &index in mine {
                     colors[index as usize] = color;
                 }
@@ -615,6 +675,7 @@ fn shade_multisampled<'f>(
     for &(local, batch_index) in flat_waiting.iter() {
         let (_, color) = flat.colors[usize::from(batch_index)];
         let local = local as usize;
+        whole_colors[local] = resolve_whole(color, samples, background);
         for &index in &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize] {
             colors[index as usize] = color;
         }
@@ -643,50 +704,77 @@ fn shade_multisampled<'f>(
     }
     modulated.flush(frame, colors);
 
-    // The resolve, in the order of operations of one pixel at a time.
-    let resolve = |first: usize, last: usize| {
-        let mut sum = Vec3::ZERO;
-        let mut covered_samples = 0;
-        for (point, &color) in points[first..last].iter().zip(&colors[first..last]) {
-            sum += color * point.count as f32;
-            covered_samples += point.count;
-        }
-        (sum, covered_samples)
-    };
+    // The resolve, in the order of operations of one pixel at a time; a pixel without points
+    // takes its whole colour, resolved the same way once per triangle.
     let depth_view = frame.debug_view == Some(DebugView::Depth);
+    let mut whole_pixels = 0;
     for row in 0..rect.height() as usize {
         let row_start = row * stride + rect.x0 as usize;
         let starts = &pixel_start[row * tile_width..=(row + 1) * tile_width];
         let pixels = target.color[row_start..row_start + tile_width]
             .iter_mut()
-            .zip(&mut target.covered[row_start..row_start + tile_width]);
-        for ((color, covered), start) in pixels.zip(starts.windows(2)) {
+            .zip(&mut target.covered[row_start..row_start + tile_width])
+            .zip(&whole[row * tile_width..(row + 1) * tile_width]);
+        for (((color, covered), &whole), start) in pixels.zip(starts.windows(2)) {
             let (first, last) = (start[0] as usize, start[1] as usize);
-            *covered = first != last;
-            *color = if first == last {
-                background
-            } else {
-                let (sum, covered_samples) = resolve(first, last);
-                if depth_view {
-                    // Distances are averaged over covered samples only: the background has none.
-                    sum / covered_samples as f32
-                } else {
-                    (sum + background * (samples as u32 - covered_samples) as f32) / samples as f32
-                }
-            };
+            if first == last {
+                let shows_one = whole as usize != count;
+                whole_pixels += usize::from(shows_one);
+                *covered = shows_one;
+                *color = whole_colors[whole as usize];
+                continue;
+            }
+            *covered = true;
+            let shown = points[first..last].iter().zip(&colors[first..last]);
+            *color = resolve_pixel(
+                shown.map(|(point, &color)| (color, point.count)),
+                samples,
+                background,
+                depth_view,
+            );
         }
     }
-    points.len()
+    points.len() + whole_pixels
+}
+
+/// A multisampled pixel's colour from its points' colours and sample counts, in order: their
+/// sum weighted by the counts, plus the background for the samples nothing covers, over the
+/// sample count (in the depth view, distances over the covered samples only: the background
+/// has none).
+#[inline(always)]
+fn resolve_pixel(
+    shown: impl Iterator<Item = (Vec3, u32)>,
+    samples: usize,
+    background: Vec3,
+    depth_view: bool,
+) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    let mut covered_samples = 0;
+    for (color, count) in shown {
+        sum += color * count as f32;
+        covered_samples += count;
+    }
+    if depth_view {
+        sum / covered_samples as f32
+    } else {
+        (sum + background * (samples as u32 - covered_samples) as f32) / samples as f32
+    }
+}
+
+/// [`resolve_pixel`] of a pixel whose every sample shows one triangle of colour `color`: the
+/// same operations, so the same bits, as a point covering all the samples.
+#[inline]
+fn resolve_whole(color: Vec3, samples: usize, background: Vec3) -> Vec3 {
+    resolve_pixel(
+        std::iter::once((color, samples as u32)),
+        samples,
+        background,
+        false,
+    )
 }
 
 /// [`find_points`] for the tile's pattern of `samples` samples a pixel.
-fn find_points_of_pattern(
-    samples: usize,
-    visibility: &Visibility,
-    points: &mut [ShadingPoint],
-    pixel_start: &mut [u32],
-    triangle_start: &mut [u32],
-) -> usize {
+fn find_points_of_pattern(samples: usize, visibility: &Visibility, found: PointTables) -> usize {
     let find = match samples {
         2 => find_points::<2>,
         4 => find_points::<4>,
@@ -694,33 +782,62 @@ fn find_points_of_pattern(
         16 => find_points::<16>,
         _ => unreachable!("sample patterns have 1, 2, 4, 8 or 16 samples (`SamplePattern::new`)"),
     };
-    find(visibility, points, pixel_start, triangle_start)
+    find(visibility, found)
+}
+
+/// What [`find_points`] reads and writes, each indexed as [`ShadingPoints`] is.
+struct PointTables<'a> {
+    /// Per triangle of the tile: whether it shows one colour ([`TriangleShader::is_one_colour`]).
+    /// Pixels such a triangle covers at every sample get no point: `whole` names it.
+    one_colour: &'a [bool],
+    points: &'a mut [ShadingPoint],
+    pixel_start: &'a mut [u32],
+    /// Per triangle of the tile, two entries on (see [`shade_multisampled`]): its count of points.
+    triangle_start: &'a mut [u32],
+    /// Per pixel without points: the one-colour triangle covering all its samples, or the
+    /// tile's triangle count for none (the background). Not written for pixels with points.
+    whole: &'a mut [u32],
+    /// Per triangle of the tile: set where a pixel is wholly the triangle's and has no point.
+    whole_seen: &'a mut [bool],
 }
 
 /// The first pass of [`shade_multisampled`] for `S` samples per pixel (a constant, so that the
 /// comparisons of a pixel's samples unroll): each pixel's points into `points` from its entry
 /// of `pixel_start` on, and each triangle's count of points into `triangle_start[t + 2]`.
 /// Returns the number of points. Most pixels of a mesh lie inside one triangle: all their
-/// samples show it, shaded at the mean of the whole pattern, with no search. In the others each
-/// distinct triangle, taken in the order of its first sample, is compared with all samples at
-/// once into a mask of the samples it covers, and the mask names its count and shading point
-/// in the pattern's table ([`SamplePattern::subset`]).
-fn find_points<const S: usize>(
-    visibility: &Visibility,
-    points: &mut [ShadingPoint],
-    pixel_start: &mut [u32],
-    triangle_start: &mut [u32],
-) -> usize {
+/// samples show it, with no search; a one-colour triangle's such pixel is named in `whole`
+/// (resolved from the triangle's colour), another's gets one point at the mean of the whole
+/// pattern. In the other pixels each distinct triangle, taken in the order of its first
+/// sample, is compared with all samples at once into a mask of the samples it covers, and the
+/// mask names its count and shading point in the pattern's table ([`SamplePattern::subset`]).
+fn find_points<const S: usize>(visibility: &Visibility, found: PointTables) -> usize {
+    let PointTables {
+        one_colour,
+        points,
+        pixel_start,
+        triangle_start,
+        whole,
+        whole_seen,
+    } = found;
     let rect = visibility.rect;
     let tile_width = rect.width() as usize;
     let pattern = visibility.pattern;
+    let background = visibility.raster_ids.len() as u32;
     let all_samples = (1u32 << S) - 1;
     let whole_pixel = pattern.subset(all_samples);
     let mut point_count = 0;
     let rows = visibility.triangle.chunks_exact(S * tile_width);
-    for ((row, row_ids), row_starts) in rows.enumerate().zip(pixel_start.chunks_exact_mut(tile_width)) {
+    let pixels = pixel_start
+        .chunks_exact_mut(tile_width)
+        .zip(whole.chunks_exact_mut(tile_width));
+    for ((row, row_ids), (row_starts, row_whole)) in rows.enumerate().zip(pixels) {
         let centre_y = pixel_centre(rect.y0 + row as u32);
-        for ((column, ids), start) in row_ids.as_chunks::<S>().0.iter().enumerate().zip(row_starts) {
+        let columns = row_ids
+            .as_chunks::<S>()
+            .0
+            .iter()
+            .zip(row_starts.iter_mut().zip(row_whole));
+        for (column, (ids, (start, whole))) in columns.enumerate() {
             *start = point_count as u32;
             let centre_x = pixel_centre(rect.x0 + column as u32);
             let mut push = |local: u32, subset: SampleSubset| {
@@ -737,7 +854,12 @@ fn find_points<const S: usize>(
             };
             let first = ids[0];
             if samples_showing(ids, first) == all_samples {
-                if first != NO_TRIANGLE {
+                if first == NO_TRIANGLE {
+                    *whole = background;
+                } else if one_colour[first as usize] {
+                    *whole = first;
+                    whole_seen[first as usize] = true;
+                } else {
                     push(first, whole_pixel);
                 }
                 continue;
@@ -809,19 +931,19 @@ fn shade_single_sample<'f>(
     let entry = |id: u32| (id as usize).min(count);
 
     // Coverage, and which triangles are seen.
-    // (Separate loops: the first vectorises, the second is one store per pixel.) The covered
-    // pixels are counted from the triangle numbers, not from the flags just stored: wide loads
-    // of those narrow stores could not be forwarded from them, and stalled.
     let mut shaded = 0;
     for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
         let row_start = row * stride + rect.x0 as usize;
-        for (covered, &id) in target.covered[row_start..row_start + tile_width]
-            .iter_mut()
-            .zip(ids)
-        {
-            *covered = id != NO_TRIANGLE;
+        let covered = &mut target.covered[row_start..row_start + tile_width];
+        let (covered_groups, covered_rest) = covered.as_chunks_mut::<LANES>();
+        let (id_groups, id_rest) = ids.as_chunks::<LANES>();
+        for (covered, ids) in covered_groups.iter_mut().zip(id_groups) {
+            shaded += mark_shown(ids, NO_TRIANGLE, covered);
         }
-        shaded += ids.iter().filter(|&&id| id != NO_TRIANGLE).count();
+        for (covered, &id) in covered_rest.iter_mut().zip(id_rest) {
+            *covered = id != NO_TRIANGLE;
+            shaded += usize::from(*covered);
+        }
     }
     // A group of pixels showing one triangle (inside a large one, or the background) marks it
     // once.
@@ -1362,6 +1484,25 @@ enum VaryingShader<'f> {
 }
 
 impl<'f> TriangleShader<'f> {
+    /// Whether [`TriangleShader::new`] gives `raster` one colour for all its pixels (`Solid` or
+    /// `FlatWaiting`), decided without lighting it: the same match on the debug view, the
+    /// shading mode and the colour texture. Multisampled tiles resolve the pixels such a
+    /// triangle covers at every sample straight from that colour.
+    #[inline]
+    fn is_one_colour(frame: &Frame, raster: &RasterTriangle) -> bool {
+        let triangle = &raster.triangle;
+        let shading = frame.objects[triangle.object as usize].shading;
+        match (frame.debug_view, shading) {
+            (Some(DebugView::Depth), _) | (Some(DebugView::Normals), Shading::Gouraud | Shading::Phong) => {
+                false
+            }
+            (Some(DebugView::Normals), Shading::Flat | Shading::Constant) => true,
+            (_, Shading::Constant) => true,
+            (_, Shading::Flat) => !has_color_texture(&frame.materials[triangle.material as usize]),
+            (_, Shading::Gouraud | Shading::Phong) => false,
+        }
+    }
+
     fn new(
         frame: &'f Frame,
         raster: &'f RasterTriangle,
