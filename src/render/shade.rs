@@ -930,35 +930,29 @@ fn shade_single_sample<'f>(
     // `NO_TRIANGLE` (u32::MAX) becomes `count`: the background's entry.
     let entry = |id: u32| (id as usize).min(count);
 
-    // Coverage, and which triangles are seen.
+    // Coverage, and which triangles are seen: a group of pixels showing one triangle (inside a
+    // large one, or the background) marks it once.
     let mut shaded = 0;
     for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
         let row_start = row * stride + rect.x0 as usize;
         let covered = &mut target.covered[row_start..row_start + tile_width];
         let (covered_groups, covered_rest) = covered.as_chunks_mut::<LANES>();
         let (id_groups, id_rest) = ids.as_chunks::<LANES>();
-        for (covered, ids) in covered_groups.iter_mut().zip(id_groups) {
-            shaded += mark_shown(ids, NO_TRIANGLE, covered);
+        for (covered, group) in covered_groups.iter_mut().zip(id_groups) {
+            shaded += mark_shown(group, NO_TRIANGLE, covered);
+            if samples_showing(group, group[0]) == ALL_LANES {
+                seen[entry(group[0])] = true;
+            } else {
+                for &id in group {
+                    seen[entry(id)] = true;
+                }
+            }
         }
         for (covered, &id) in covered_rest.iter_mut().zip(id_rest) {
             *covered = id != NO_TRIANGLE;
             shaded += usize::from(*covered);
-        }
-    }
-    // A group of pixels showing one triangle (inside a large one, or the background) marks it
-    // once.
-    let (groups, rest) = visibility.triangle.as_chunks::<LANES>();
-    for group in groups {
-        if samples_showing(group, group[0]) == ALL_LANES {
-            seen[entry(group[0])] = true;
-            continue;
-        }
-        for &id in group {
             seen[entry(id)] = true;
         }
-    }
-    for &id in rest {
-        seen[entry(id)] = true;
     }
 
     // One shader per seen triangle, in the order they were rasterized. Triangles shaded pixel by
