@@ -112,6 +112,8 @@ pub struct TileScratch<'f> {
     sources: Vec<PixelSource>,
     /// The Gouraud triangles the last pass interpolates, numbered by `PixelSource::Gouraud`.
     gouraud: Vec<GouraudPlane>,
+    /// The small Phong triangles the last pass shades, numbered by `PixelSource::Phong`.
+    phong: Vec<PhongPlane<'f>>,
     /// Triangles whose colours wait in `flat`: (triangle, index in the batch).
     flat_waiting: Vec<(u32, u16)>,
     /// Triangles with a colour texture whose colours wait in `flat`: (triangle, what
@@ -168,17 +170,63 @@ enum PixelSource {
     /// Interpolated from `TileScratch::gouraud[i]` (a tile shows at most `TILE_SIZE²`
     /// triangles, so `u16` numbers them).
     Gouraud(u16),
+    /// Shaded from `TileScratch::phong[i]`, through the tile's Phong batch.
+    Phong(u16),
+}
+
+/// A triangle's edge functions over a tile's pixel centres, as planes: exact integers, the
+/// values `edge_values` gives, at any pixel in two products and two sums per edge.
+#[derive(Clone, Copy)]
+struct TileEdges {
+    /// The edge functions at the tile's first pixel centre, and their steps one pixel right
+    /// and one pixel down.
+    origin: [i64; 3],
+    step_x: [i64; 3],
+    step_y: [i64; 3],
+}
+
+impl TileEdges {
+    #[inline]
+    fn new(raster: &RasterTriangle, rect: PixelRect) -> Self {
+        TileEdges {
+            origin: edge_values(raster, pixel_centre(rect.x0), pixel_centre(rect.y0)),
+            step_x: edge_steps_x(raster),
+            step_y: edge_steps_y(raster),
+        }
+    }
+
+    /// The edge functions at the centre of the tile's pixel `(column, row)`.
+    #[inline(always)]
+    fn at(&self, column: i64, row: i64) -> [i64; 3] {
+        std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row)
+    }
+}
+
+/// A Phong triangle narrower than a group of lanes in its tile, for the last pass over the
+/// tile's pixels, which queues its pixels in the tile's Phong batch in pixel order: walked
+/// triangle by triangle, most of a small triangle's bounds are pixels of other triangles, and
+/// each costs a mispredicted branch.
+struct PhongPlane<'f> {
+    edges: TileEdges,
+    raster: &'f RasterTriangle,
+    corners: Corners,
+    shader: FastPhong<'f>,
+}
+
+impl PhongPlane<'_> {
+    /// The source-triangle weights at the centre of the tile's pixel `(column, row)`: what
+    /// [`source_weights`] gives there.
+    #[inline(always)]
+    fn weights_at(&self, column: i64, row: i64) -> Vec3 {
+        weights_from_edges(self.raster, &self.corners, self.edges.at(column, row))
+    }
 }
 
 /// A Gouraud triangle of a tile, for the interpolation of its colours in pixel order: its edge
 /// functions as planes over the tile's pixel centres (exact integers: the values
 /// `edge_values` gives) and its colours, in one record.
 struct GouraudPlane {
-    /// The edge functions at the tile's first pixel centre, and their steps one pixel right
-    /// and one pixel down.
-    origin: [i64; 3],
-    step_x: [i64; 3],
-    step_y: [i64; 3],
+    edges: TileEdges,
     colors: GouraudColors,
     /// The lanes' steps along a row (for [`GouraudPlane::group_colors`]), formed once per
     /// triangle and tile: where the triangle is a group of lanes wide in the tile and its edge
@@ -189,9 +237,7 @@ struct GouraudPlane {
 impl GouraudPlane {
     fn new(raster: &RasterTriangle, rect: PixelRect, colors: GouraudColors) -> Self {
         GouraudPlane {
-            origin: edge_values(raster, pixel_centre(rect.x0), pixel_centre(rect.y0)),
-            step_x: edge_steps_x(raster),
-            step_y: edge_steps_y(raster),
+            edges: TileEdges::new(raster, rect),
             colors,
             // Only a triangle a group wide can show in a whole group.
             lane_steps: raster
@@ -206,8 +252,7 @@ impl GouraudPlane {
     /// bit for bit.
     #[inline]
     fn color_at(&self, column: i64, row: i64) -> Vec3 {
-        let edges = std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row);
-        self.colors.at(edges)
+        self.colors.at(self.edges.at(column, row))
     }
 
     /// [`GouraudPlane::color_at`] of the [`LANES`] pixels of row `row` from column `column`
@@ -219,8 +264,9 @@ impl GouraudPlane {
         let Some(lane_steps) = self.lane_steps.as_ref() else {
             return false;
         };
-        let first = std::array::from_fn(|k| self.origin[k] + self.step_x[k] * column + self.step_y[k] * row);
-        self.colors.at_lanes(lane_steps.edges(first)).write_to(colors);
+        self.colors
+            .at_lanes(lane_steps.edges(self.edges.at(column, row)))
+            .write_to(colors);
         true
     }
 }
@@ -910,6 +956,7 @@ fn shade_single_sample<'f>(
         fills,
         sources,
         gouraud,
+        phong: phong_planes,
         flat_waiting,
         flat_modulated,
         points: _,
@@ -918,6 +965,7 @@ fn shade_single_sample<'f>(
     flat_waiting.clear();
     flat_modulated.clear();
     gouraud.clear();
+    phong_planes.clear();
     sources.clear();
     // Unseen triangles keep `Fill`: no pixel reads it, and the last pass can then take its
     // fill-only form when every seen triangle is one colour.
@@ -996,10 +1044,32 @@ fn shade_single_sample<'f>(
             ));
             continue;
         }
-        sources[local] = PixelSource::Shaded;
         let Some(area) = raster.bounds.intersect(&rect) else {
+            sources[local] = PixelSource::Shaded;
             continue;
         };
+        // A Phong triangle narrower than a group of lanes waits for the last pass, if its
+        // pixels can share a batch with the others waiting (one material of one object: a
+        // mesh's, nearly always), so that the batch fills its lanes in pixel order.
+        let shader = match shader {
+            TriangleShader::Phong(fast)
+                if (area.width() as usize) < LANES
+                    && phong_planes
+                        .first()
+                        .is_none_or(|first| first.shader.shares_batch(&fast)) =>
+            {
+                sources[local] = PixelSource::Phong(phong_planes.len() as u16);
+                phong_planes.push(PhongPlane {
+                    edges: TileEdges::new(raster, rect),
+                    raster,
+                    corners,
+                    shader: fast,
+                });
+                continue;
+            }
+            shader => shader,
+        };
+        sources[local] = PixelSource::Shaded;
         let pixels = ShownPixels {
             visibility,
             local: local as u32,
@@ -1102,45 +1172,54 @@ fn shade_single_sample<'f>(
     let per_pixel = sources.iter().any(|&source| source != PixelSource::Fill);
     for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
         let row_start = row * stride + rect.x0 as usize;
-        let colors = &mut target.color[row_start..row_start + tile_width];
         if per_pixel {
-            for (group, (colors, ids)) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)).enumerate() {
+            for (group, ids) in ids.chunks(LANES).enumerate() {
                 let first_column = group * LANES;
                 // A group showing one triangle (inside a large one) takes its source once.
                 if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
                     && samples_showing(group_ids, group_ids[0]) == ALL_LANES
                 {
                     let id = group_ids[0];
+                    let first = row_start + first_column;
+                    let colors: &mut [Vec3; LANES] = (&mut target.color[first..first + LANES])
+                        .try_into()
+                        .expect("a group of lanes");
                     let done = match sources[entry(id)] {
                         PixelSource::Fill => {
                             fill_group(colors, fills[entry(id)]);
                             true
                         }
-                        PixelSource::Gouraud(plane) => match <&mut [Vec3; LANES]>::try_from(&mut *colors) {
-                            Ok(group) => gouraud[usize::from(plane)].write_group_colors(
-                                first_column as i64,
-                                row as i64,
-                                group,
-                            ),
-                            Err(_) => false,
-                        },
+                        PixelSource::Gouraud(plane) => gouraud[usize::from(plane)].write_group_colors(
+                            first_column as i64,
+                            row as i64,
+                            colors,
+                        ),
+                        PixelSource::Phong(_) => false,
                         PixelSource::Shaded => true,
                     };
                     if done {
                         continue;
                     }
                 }
-                for (column, (color, &id)) in (first_column..).zip(colors.iter_mut().zip(ids)) {
+                for (column, &id) in (first_column..).zip(ids) {
+                    let offset = row_start + column;
                     match sources[entry(id)] {
-                        PixelSource::Fill => *color = fills[entry(id)],
+                        PixelSource::Fill => target.color[offset] = fills[entry(id)],
                         PixelSource::Gouraud(plane) => {
-                            *color = gouraud[usize::from(plane)].color_at(column as i64, row as i64)
+                            target.color[offset] =
+                                gouraud[usize::from(plane)].color_at(column as i64, row as i64)
+                        }
+                        PixelSource::Phong(plane) => {
+                            let plane = &phong_planes[usize::from(plane)];
+                            let weights = plane.weights_at(column as i64, row as i64);
+                            phong.push(&plane.shader, weights, offset, target.color);
                         }
                         PixelSource::Shaded => {}
                     }
                 }
             }
         } else {
+            let colors = &mut target.color[row_start..row_start + tile_width];
             for (colors, ids) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)) {
                 // A group showing one triangle takes its colour once.
                 if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
@@ -1155,6 +1234,7 @@ fn shade_single_sample<'f>(
             }
         }
     }
+    phong.flush(target.color);
     shaded
 }
 
@@ -1208,7 +1288,7 @@ impl ShownPixels<'_> {
 impl ShownPixels<'_> {
     /// Calls `visit` for each group of [`LANES`] neighbouring pixels of a row of the area,
     /// from its first column, where at least one shows the triangle (see [`PixelGroup`]).
-    #[inline]
+    #[inline(always)]
     fn for_each_group(&self, mut visit: impl FnMut(PixelGroup<'_>)) {
         let rect = self.visibility.rect;
         let tile_width = rect.width() as usize;

@@ -1182,6 +1182,12 @@ impl<'f> PhongRows<'f> {
 }
 
 impl<'f> FastPhong<'f> {
+    /// Whether this triangle's pixels and `other`'s can wait in one [`PhongBatch`].
+    #[inline]
+    pub fn shares_batch(&self, other: &FastPhong<'_>) -> bool {
+        self.batch_key == other.batch_key
+    }
+
     /// The per-pixel shading of `triangle` seen from the front or the back, or `None` when it
     /// needs the general path: a lit pixel whose lighting does not take lanes (see
     /// [`FastLighting::new`]). The debug views of normals and
