@@ -788,16 +788,16 @@ impl Vec3s {
         std::array::from_fn(|i| Vec3::new(self.x.0[i], self.y.0[i], self.z.0[i]))
     }
 
-    /// [`Vec3s::to_array`] written straight into `out`. Building the array and copying it
-    /// into a frame's row instead left the copy to `memcpy`, whose wide loads of the lanes
-    /// just stored cannot be forwarded from those stores: a quarter of the time of a
-    /// Gouraud close-up, in a call that counts as a few instructions.
     /// Lane `lane` as a `Vec3`.
     #[inline(always)]
     pub fn lane(&self, lane: usize) -> Vec3 {
         Vec3::new(self.x.0[lane], self.y.0[lane], self.z.0[lane])
     }
 
+    /// [`Vec3s::to_array`] written straight into `out`. Building the array and copying it
+    /// into a frame's row instead left the copy to `memcpy`, whose wide loads of the lanes
+    /// just stored cannot be forwarded from those stores: a quarter of the time of a
+    /// Gouraud close-up, in a call that counts as a few instructions.
     #[inline(always)]
     pub fn write_to(self, out: &mut [Vec3; LANES]) {
         for (lane, v) in out.iter_mut().enumerate() {
