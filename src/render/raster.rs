@@ -1214,17 +1214,28 @@ fn depth_test_single_sample<const IDS: bool>(
     // per pixel on whether it is inside, which mispredicts on a scan's small triangles (the
     // koala's raster and a shadow map's pass take about 0.9 of the time they took in the
     // scalar loop); narrower triangles, a pixel or two wide, stay scalar.
-    if columns >= LANE_COLUMNS {
+    // Rows of one or two groups (most of a mesh's triangles) are tested whole, without a
+    // `RowSpan`: finding a row's span costs about as much as testing a group.
+    if (LANE_COLUMNS..=2 * LANES).contains(&columns) && RowLanes::<Ints>::fit(&edges, area) {
+        let lanes = RowLanes::<Ints>::new::<false>(&edges, triangle.depth, inv_area);
+        lanes.depth_test::<IDS, false>(rect, area, rows, depth, ids, id);
+        return;
+    }
+    if columns > 2 * LANES {
         if RowLanes::<Ints>::fit(&edges, area) {
-            let lanes = RowLanes::<Ints>::new(&edges, triangle.depth, inv_area);
-            lanes.depth_test::<IDS>(rect, area, rows, depth, ids, id);
+            let lanes = RowLanes::<Ints>::new::<true>(&edges, triangle.depth, inv_area);
+            lanes.depth_test::<IDS, true>(rect, area, rows, depth, ids, id);
             return;
         }
         if RowLanes::<Wides>::fit(&edges, area) {
-            let lanes = RowLanes::<Wides>::new(&edges, triangle.depth, inv_area);
-            lanes.depth_test::<IDS>(rect, area, rows, depth, ids, id);
+            let lanes = RowLanes::<Wides>::new::<true>(&edges, triangle.depth, inv_area);
+            lanes.depth_test::<IDS, true>(rect, area, rows, depth, ids, id);
             return;
         }
+    } else if columns >= LANE_COLUMNS && RowLanes::<Wides>::fit(&edges, area) {
+        let lanes = RowLanes::<Wides>::new::<false>(&edges, triangle.depth, inv_area);
+        lanes.depth_test::<IDS, false>(rect, area, rows, depth, ids, id);
+        return;
     }
     let [m0, m1, m2] = edges.map(|e| e.min_inside);
     // The depth where the edge values put a pixel centre inside the triangle.
@@ -1411,6 +1422,13 @@ struct RowSpan {
 }
 
 impl RowSpan {
+    /// No span, for lanes whose rows are tested whole.
+    const NONE: RowSpan = RowSpan {
+        min_inside: [0; 3],
+        step_x: [0; 3],
+        inv_step_x: [0.0; 3],
+    };
+
     fn new(edges: &[Edge; 3]) -> Self {
         RowSpan {
             min_inside: edges.map(|edge| edge.min_inside),
@@ -1505,7 +1523,9 @@ impl<E: EdgeLanes> RowLanes<E> {
     /// The lanes of a triangle whose edges [`RowLanes::fit`] the area, with corner depths
     /// `depths` and `1/A` `inv_area`.
     #[inline(always)]
-    fn new(edges: &[Edge; 3], depths: [f32; 3], inv_area: f32) -> Self {
+    /// `SPANS`: whether rows are narrowed to their [`RowSpan`] (areas of more than two groups);
+    /// else it is not formed.
+    fn new<const SPANS: bool>(edges: &[Edge; 3], depths: [f32; 3], inv_area: f32) -> Self {
         RowLanes {
             row_start: edges.map(|edge| edge.row_start),
             step_y: edges.map(|edge| edge.step_y),
@@ -1514,7 +1534,7 @@ impl<E: EdgeLanes> RowLanes<E> {
             above: edges.map(|edge| E::splat_whole(edge.min_inside - 1)),
             corner_depths: depths.map(Floats::splat),
             inv_area: Floats::splat(inv_area),
-            span: RowSpan::new(edges),
+            span: if SPANS { RowSpan::new(edges) } else { RowSpan::NONE },
         }
     }
 
@@ -1528,7 +1548,7 @@ impl<E: EdgeLanes> RowLanes<E> {
     /// place, its extra lanes outside the triangle's bounds and so outside the triangle (the
     /// edge functions are exact).
     #[inline(always)]
-    fn depth_test<const IDS: bool>(
+    fn depth_test<const IDS: bool, const SPANS: bool>(
         &self,
         rect: PixelRect,
         area: PixelRect,
@@ -1551,7 +1571,7 @@ impl<E: EdgeLanes> RowLanes<E> {
             // Only the groups that reach the row's span: the others are outside the triangle.
             // A row of one or two groups is tested whole: finding its span costs about as
             // much as testing a group.
-            let span = if groups > 2 {
+            let span = if SPANS && groups > 2 {
                 self.span.of_row(start, columns)
             } else {
                 Some(RowRange {
@@ -2064,6 +2084,13 @@ mod tests {
                 at(55.0, 70.3, 0.6),
                 at(-100.0, 600.0, 0.4),
             ],
+            // Narrow in the rect but reaching far above and below it: rows of one or two
+            // groups in `f64` lanes.
+            [
+                at(44.0, -5000.0, 0.3),
+                at(52.5, 5000.0, 0.5),
+                at(47.0, -5000.0, 0.4),
+            ],
             // Slivers across the rect, whose rows' spans leave groups out on both sides.
             [at(30.0, 60.0, 0.4), at(72.0, 80.0, 0.5), at(31.5, 60.0, 0.45)],
             [at(70.0, 58.0, 0.4), at(35.0, 82.0, 0.5), at(72.5, 58.5, 0.45)],
@@ -2111,7 +2138,7 @@ mod tests {
             }
         }
         assert!(
-            lanes > 20 && wide_lanes == 1 && wide == 1 && narrow > 5,
+            lanes > 20 && wide_lanes == 2 && wide == 1 && narrow > 5,
             "{lanes} in lanes, {wide_lanes} in wide lanes, {wide} wide, {narrow} narrow"
         );
         let empty = || Visibility {
