@@ -1521,10 +1521,9 @@ impl<E: EdgeLanes> RowLanes<E> {
     }
 
     /// The lanes of a triangle whose edges [`RowLanes::fit`] the area, with corner depths
-    /// `depths` and `1/A` `inv_area`.
-    #[inline(always)]
-    /// `SPANS`: whether rows are narrowed to their [`RowSpan`] (areas of more than two groups);
+    /// `depths` and `1/A` `inv_area`. `SPANS`: whether rows are narrowed to their [`RowSpan`] (areas of more than two groups);
     /// else it is not formed.
+    #[inline(always)]
     fn new<const SPANS: bool>(edges: &[Edge; 3], depths: [f32; 3], inv_area: f32) -> Self {
         RowLanes {
             row_start: edges.map(|edge| edge.row_start),
