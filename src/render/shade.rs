@@ -926,12 +926,13 @@ fn find_points<const S: usize>(visibility: &Visibility, found: PointTables) -> u
 /// entry at offset zero, and the same result bit for bit, computed triangle by triangle instead
 /// of pixel by pixel. A pass over the pixels finds the triangles they show (the rasterizer
 /// numbered the tile's triangles, so tables indexed by that number replace caches); each of
-/// those gets its shader once; a Phong triangle shades the pixels of its bounds that show it,
-/// at once; the triangles of one colour (flat, constant) are lit eight at a time, and they, the
-/// background and the Gouraud triangles' interpolated colours are written in one last pass
-/// over the pixels, in pixel order (a small triangle's bounds hold more pixels that do not show
-/// it than pixels that do, and each costs a mispredicted branch when walked triangle by
-/// triangle). No decision is taken per run of pixels (runs are two or three pixels long on
+/// those gets its shader once; a Phong triangle at least a group of lanes wide shades the
+/// pixels of its bounds that show it, at once; the triangles of one colour (flat, constant) are
+/// lit eight at a time, and they, the background, the Gouraud triangles' interpolated colours
+/// and the narrower Phong triangles' pixels (queued in the Phong batch) are written in one
+/// last pass over the pixels, in pixel order (a small triangle's bounds hold more pixels that
+/// do not show it than pixels that do, and each costs a mispredicted branch when walked
+/// triangle by triangle). No decision is taken per run of pixels (runs are two or three pixels long on
 /// dense meshes).
 fn shade_single_sample<'f>(
     frame: &'f Frame,
