@@ -385,6 +385,35 @@ impl Edge {
             min_inside: if is_top_left { 0 } else { 1 },
         }
     }
+
+    /// Whether this edge's values from the row start over `columns` steps along x and `rows`
+    /// along y, each plus up to `margin` in magnitude, are at most `limit` in magnitude. The
+    /// sum of each term's magnitude bounds them in a few instructions and suffices for a
+    /// mesh's small triangles; where it does not, the exact bound: the function is linear, so
+    /// its largest magnitude over the box is at a corner, and the sum can be up to twice that,
+    /// which sent triangles of a hundred pixels or so (a close-up's) to wider lanes for
+    /// nothing. A step the lanes hold on its own (a lane's offset, a block's steps) is at most
+    /// half the box's width of steps, so at most the largest value at its corners.
+    #[inline(always)]
+    fn within(&self, columns: i64, rows: i64, margin: i64, limit: i64) -> bool {
+        let (far_x, far_y) = (columns * self.step_x, rows * self.step_y);
+        if self.row_start.abs() + far_x.abs() + far_y.abs() + margin <= limit {
+            return true;
+        }
+        self.largest_at_corners(far_x, far_y) + margin <= limit
+    }
+
+    /// The largest magnitude of the edge's values at the corners of the box from the row
+    /// start to `far_x` and `far_y` further (out of line: only large triangles ask).
+    #[cold]
+    #[inline(never)]
+    fn largest_at_corners(&self, far_x: i64, far_y: i64) -> i64 {
+        let corner = |x: i64, y: i64| (self.row_start + x + y).abs();
+        corner(0, 0)
+            .max(corner(far_x, 0))
+            .max(corner(0, far_y))
+            .max(corner(far_x, far_y))
+    }
 }
 
 /// The three edge functions of `triangle` at the fixed-point point `(x, y)` (1/256 pixel):
@@ -977,12 +1006,7 @@ impl<E: EdgeLanes> LaneEdges<E> {
                 .map(|offset| offset[k].abs())
                 .max()
                 .unwrap_or(0);
-            let bound = edge.row_start.abs()
-                + (columns + 2 * block_pixels as i64) * edge.step_x.abs()
-                + (rows + 1) * edge.step_y.abs()
-                + reach
-                + 1;
-            bound <= E::LIMIT
+            edge.within(columns + 2 * block_pixels as i64, rows + 1, reach + 1, E::LIMIT)
         })
     }
 
@@ -1511,13 +1535,9 @@ impl<E: EdgeLanes> RowLanes<E> {
     #[inline(always)]
     fn fit(edges: &[Edge; 3], area: PixelRect) -> bool {
         let (columns, rows) = (i64::from(area.x1 - area.x0), i64::from(area.y1 - area.y0));
-        edges.iter().all(|edge| {
-            let bound = edge.row_start.abs()
-                + (columns + 2 * LANES as i64) * edge.step_x.abs()
-                + (rows + 1) * edge.step_y.abs()
-                + 1;
-            bound <= E::LIMIT
-        })
+        edges
+            .iter()
+            .all(|edge| edge.within(columns + 2 * LANES as i64, rows + 1, 1, E::LIMIT))
     }
 
     /// The lanes of a triangle whose edges [`RowLanes::fit`] the area, with corner depths
@@ -1983,6 +2003,44 @@ mod tests {
         .unwrap();
         let [e0, e1, e2] = edge_values(&t, 3 * 256 + 128, 3 * 256 + 128);
         assert!(((e0 + e1 + e2) as f32 * t.inv_area - 1.0).abs() < 1e-6);
+    }
+
+    /// `Edge::within`, which picks the lanes that hold a triangle's values, against every value
+    /// of its box, for edges from a pixel to a few thousand pixels long: it must never pass a
+    /// box whose values outgrow the limit (the lanes would wrap), and it passes every box that
+    /// fits, the large triangles the loose bound alone turned away among them.
+    #[test]
+    fn edge_bounds_are_the_largest_value_of_their_box() {
+        let mut rng = crate::test_support::XorShift64::new(0x9e37_79b9_7f4a_7c15);
+        let limit = i64::from(i32::MAX);
+        let (mut fitting, mut only_exact) = (0, 0);
+        for _ in 0..4000 {
+            let reach = [8, 300, 3000][(rng.next_u64() % 3) as usize] * SUBPIXEL_ONE;
+            let mut coordinate = || (rng.next_u64() % (2 * reach as u64)) as i32 - reach as i32;
+            let (ax, ay, bx, by) = (coordinate(), coordinate(), coordinate(), coordinate());
+            let (px, py) = ((rng.next_u64() % 40) as u32, (rng.next_u64() % 40) as u32);
+            let edge = Edge::new(ax, ay, bx, by, px, py);
+            let (columns, rows) = (1 + (rng.next_u64() % 80) as i64, 1 + (rng.next_u64() % 65) as i64);
+            let margin = (rng.next_u64() % 64) as i64;
+            let largest = (0..=columns)
+                .flat_map(|x| (0..=rows).map(move |y| (x, y)))
+                .map(|(x, y)| (edge.row_start + x * edge.step_x + y * edge.step_y).abs())
+                .max()
+                .unwrap();
+            let fits = largest + margin <= limit;
+            assert_eq!(
+                edge.within(columns, rows, margin, limit),
+                fits,
+                "{edge:?} over {columns}×{rows}"
+            );
+            fitting += usize::from(fits);
+            let loose = edge.row_start.abs() + columns * edge.step_x.abs() + rows * edge.step_y.abs();
+            only_exact += usize::from(fits && loose + margin > limit);
+        }
+        assert!(
+            fitting > 1000 && only_exact > 50,
+            "{fitting} fit, {only_exact} by the exact bound only"
+        );
     }
 
     /// The depth-only rasterizer (shadow maps) against the visibility buffer's depths, bit for
