@@ -167,6 +167,12 @@ impl Ints {
         backend::gt_ints(self, other)
     }
 
+    /// `==` per lane.
+    #[inline(always)]
+    pub fn eq(self, other: Self) -> Mask {
+        backend::eq_ints(self, other)
+    }
+
     /// Each lane `as f32` (rounded to nearest, ties to even, as Rust's conversion is).
     #[inline(always)]
     pub fn to_floats(self) -> Floats {
@@ -452,6 +458,11 @@ mod portable {
     }
 
     #[inline(always)]
+    pub fn eq_ints(a: Ints, b: Ints) -> Mask {
+        Mask(std::array::from_fn(|i| bits(a.0[i] == b.0[i])))
+    }
+
+    #[inline(always)]
     pub fn to_floats(a: Ints) -> Floats {
         Floats(a.0.map(|i| i as f32))
     }
@@ -571,6 +582,11 @@ mod sse {
     #[inline(always)]
     pub fn gt_ints(a: Ints, b: Ints) -> Mask {
         Mask(int_halves!(_mm_cmpgt_epi32(a, b)))
+    }
+
+    #[inline(always)]
+    pub fn eq_ints(a: Ints, b: Ints) -> Mask {
+        Mask(int_halves!(_mm_cmpeq_epi32(a, b)))
     }
 
     /// Four samples per `pcmpeqd` and `movmskps`; patterns whose sample count is not a
@@ -1394,6 +1410,10 @@ mod tests {
             assert_eq!(i - j, portable::sub_ints(i, j), "sub_ints");
             assert_eq!(i.and(j), portable::and_ints(i, j), "and_ints");
             assert_eq!(i.gt(j), portable::gt_ints(i, j), "gt_ints");
+            let partly_i = Ints(std::array::from_fn(|lane| {
+                if lane % 3 == 0 { i.0[lane] } else { j.0[lane] }
+            }));
+            assert_eq!(i.eq(partly_i), portable::eq_ints(i, partly_i), "eq_ints");
             assert_eq!(bits(i.to_floats()), bits(portable::to_floats(i)), "to_floats");
         }
     }

@@ -19,7 +19,9 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
-use crate::render::lanes::{Floats, LANES, Mask, Vec3s, Wides, fill_vec3s, mark_shown, samples_showing};
+use crate::render::lanes::{
+    Floats, Ints, LANES, Mask, Vec3s, Wides, fill_vec3s, mark_shown, samples_showing,
+};
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
     Corners, EdgePlanes, NO_TRIANGLE, PixelRect, RasterTriangle, SUBPIXEL_ONE, SampleSubset, Visibility,
@@ -1388,6 +1390,7 @@ impl ShownPixels<'_> {
         );
         let (step, step_down) = (edge_steps_x(self.raster), edge_steps_y(self.raster));
         let lane_steps = LaneSteps::over(self.raster, self.area);
+        let local = Ints::splat(self.local as i32);
         let mut row_start = edge_values(
             self.raster,
             pixel_centre(self.area.x0),
@@ -1398,8 +1401,15 @@ impl ShownPixels<'_> {
             let ids = &self.visibility.triangle[row * tile_width..][first..last];
             let mut start = row_start;
             row_start = std::array::from_fn(|k| row_start[k] + step_down[k]);
-            for (group, ids) in ids.chunks(LANES).enumerate() {
-                let shown = Mask::from_bools(std::array::from_fn(|lane| ids.get(lane) == Some(&self.local)));
+            // Whole groups compared in lanes; the row's last, shorter group lane by lane.
+            let (whole_groups, rest) = ids.as_chunks::<LANES>();
+            let groups = whole_groups
+                .iter()
+                .map(|ids| Ints(bytemuck::cast(*ids)).eq(local))
+                .chain((!rest.is_empty()).then(|| {
+                    Mask::from_bools(std::array::from_fn(|lane| rest.get(lane) == Some(&self.local)))
+                }));
+            for (group, shown) in groups.enumerate() {
                 if shown.any() {
                     visit(PixelGroup {
                         first: row * self.stride + self.area.x0 as usize + group * LANES,
