@@ -1173,19 +1173,14 @@ fn shade_single_sample<'f>(
 
     // The background, the one-colour triangles and the Gouraud ones, in one pass over the pixels.
     let per_pixel = sources.iter().any(|&source| source != PixelSource::Fill);
+    let pass = || LastPass {
+        sources,
+        fills,
+        gouraud,
+        stride,
+    };
     if !phong_planes.is_empty() {
-        last_pass_with_phong(
-            visibility,
-            LastPass {
-                sources,
-                fills,
-                gouraud,
-                stride,
-            },
-            phong_planes,
-            &mut phong,
-            target.color,
-        );
+        last_pass_with_phong(visibility, &pass(), phong_planes, &mut phong, target.color);
         phong.flush(target.color);
         return shaded;
     }
@@ -1193,42 +1188,19 @@ fn shade_single_sample<'f>(
         let row_start = row * stride + rect.x0 as usize;
         let colors = &mut target.color[row_start..row_start + tile_width];
         if per_pixel {
+            let pass = pass();
             for (group, (colors, ids)) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)).enumerate() {
                 let first_column = group * LANES;
-                // A group showing one triangle (inside a large one) takes its source once.
                 if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
-                    && samples_showing(group_ids, group_ids[0]) == ALL_LANES
+                    && let Ok(group) = <&mut [Vec3; LANES]>::try_from(&mut *colors)
+                    && pass.write_whole_group(group_ids, first_column, row, group)
                 {
-                    let id = group_ids[0];
-                    let done = match sources[entry(id)] {
-                        PixelSource::Fill => {
-                            fill_group(colors, fills[entry(id)]);
-                            true
-                        }
-                        PixelSource::Gouraud(plane) => match <&mut [Vec3; LANES]>::try_from(&mut *colors) {
-                            Ok(group) => gouraud[usize::from(plane)].write_group_colors(
-                                first_column as i64,
-                                row as i64,
-                                group,
-                            ),
-                            Err(_) => false,
-                        },
-                        PixelSource::Phong(_) => false,
-                        PixelSource::Shaded => true,
-                    };
-                    if done {
-                        continue;
-                    }
+                    continue;
                 }
                 for (column, (color, &id)) in (first_column..).zip(colors.iter_mut().zip(ids)) {
-                    match sources[entry(id)] {
-                        PixelSource::Fill => *color = fills[entry(id)],
-                        PixelSource::Gouraud(plane) => {
-                            *color = gouraud[usize::from(plane)].color_at(column as i64, row as i64)
-                        }
-                        // None here: tiles with small Phong triangles take the loop below.
-                        PixelSource::Phong(_) | PixelSource::Shaded => {}
-                    }
+                    // No Phong source here: tiles with small Phong triangles take
+                    // `last_pass_with_phong`.
+                    pass.write_pixel(id, column, row, color);
                 }
             }
         } else {
@@ -1259,6 +1231,58 @@ struct LastPass<'s> {
     stride: usize,
 }
 
+impl LastPass<'_> {
+    /// The entry of the tile's triangle `id` in `sources` and `fills`: `NO_TRIANGLE`
+    /// (`u32::MAX`) becomes the background's, the last.
+    #[inline(always)]
+    fn entry(&self, id: u32) -> usize {
+        (id as usize).min(self.sources.len() - 1)
+    }
+
+    /// Writes the colours of a group of [`LANES`] pixels of row `row` from column
+    /// `first_column` on where all show one triangle (inside a large one) whose source gives
+    /// them at once: a fill, or a Gouraud plane in lanes. False (nothing written) for any other
+    /// group, whose pixels are taken one by one.
+    #[inline(always)]
+    fn write_whole_group(
+        &self,
+        ids: &[u32; LANES],
+        first_column: usize,
+        row: usize,
+        colors: &mut [Vec3; LANES],
+    ) -> bool {
+        if samples_showing(ids, ids[0]) != ALL_LANES {
+            return false;
+        }
+        let id = ids[0];
+        match self.sources[self.entry(id)] {
+            PixelSource::Fill => {
+                fill_vec3s(colors, self.fills[self.entry(id)]);
+                true
+            }
+            PixelSource::Gouraud(plane) => {
+                self.gouraud[usize::from(plane)].write_group_colors(first_column as i64, row as i64, colors)
+            }
+            PixelSource::Phong(_) => false,
+            PixelSource::Shaded => true,
+        }
+    }
+
+    /// Writes the colour of the pixel `(column, row)`, which shows the tile's triangle `id`,
+    /// where its source is a fill or a Gouraud plane; a shaded pixel already has its colour,
+    /// and a small Phong triangle's pixel is the caller's.
+    #[inline(always)]
+    fn write_pixel(&self, id: u32, column: usize, row: usize, color: &mut Vec3) {
+        match self.sources[self.entry(id)] {
+            PixelSource::Fill => *color = self.fills[self.entry(id)],
+            PixelSource::Gouraud(plane) => {
+                *color = self.gouraud[usize::from(plane)].color_at(column as i64, row as i64)
+            }
+            PixelSource::Phong(_) | PixelSource::Shaded => {}
+        }
+    }
+}
+
 /// [`shade_single_sample`]'s last pass over a tile with small Phong triangles
 /// ([`PhongPlane`]s): their pixels are queued in `phong` as the pass meets them, so the frame's
 /// colours are written by index (the batch writes them too) instead of through a row slice,
@@ -1266,64 +1290,35 @@ struct LastPass<'s> {
 /// instructions; they take the slice loop.
 fn last_pass_with_phong<'f>(
     visibility: &Visibility,
-    pass: LastPass<'_>,
+    pass: &LastPass<'_>,
     planes: &[PhongPlane<'f>],
     phong: &mut PhongBatch<'f>,
     color: &mut [Vec3],
 ) {
-    let LastPass {
-        sources,
-        fills,
-        gouraud,
-        stride,
-    } = pass;
     let rect = visibility.rect;
     let tile_width = rect.width() as usize;
-    let count = sources.len() - 1;
-    let entry = |id: u32| (id as usize).min(count);
     for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
-        let row_start = row * stride + rect.x0 as usize;
+        let row_start = row * pass.stride + rect.x0 as usize;
         for (group, ids) in ids.chunks(LANES).enumerate() {
             let first_column = group * LANES;
-            // A group showing one triangle (inside a large one) takes its source once.
-            if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
-                && samples_showing(group_ids, group_ids[0]) == ALL_LANES
-            {
-                let id = group_ids[0];
-                let first = row_start + first_column;
+            let first = row_start + first_column;
+            if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids) {
                 let colors: &mut [Vec3; LANES] = (&mut color[first..first + LANES])
                     .try_into()
                     .expect("a group of lanes");
-                let done = match sources[entry(id)] {
-                    PixelSource::Fill => {
-                        fill_group(colors, fills[entry(id)]);
-                        true
-                    }
-                    PixelSource::Gouraud(plane) => gouraud[usize::from(plane)].write_group_colors(
-                        first_column as i64,
-                        row as i64,
-                        colors,
-                    ),
-                    PixelSource::Phong(_) => false,
-                    PixelSource::Shaded => true,
-                };
-                if done {
+                if pass.write_whole_group(group_ids, first_column, row, colors) {
                     continue;
                 }
             }
             for (column, &id) in (first_column..).zip(ids) {
                 let offset = row_start + column;
-                match sources[entry(id)] {
-                    PixelSource::Fill => color[offset] = fills[entry(id)],
-                    PixelSource::Gouraud(plane) => {
-                        color[offset] = gouraud[usize::from(plane)].color_at(column as i64, row as i64)
-                    }
+                match pass.sources[pass.entry(id)] {
                     PixelSource::Phong(plane) => {
                         let plane = &planes[usize::from(plane)];
                         let weights = plane.weights_at(column as i64, row as i64);
                         phong.push(&plane.shader, weights, offset, color);
                     }
-                    PixelSource::Shaded => {}
+                    _ => pass.write_pixel(id, column, row, &mut color[offset]),
                 }
             }
         }
