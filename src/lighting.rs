@@ -330,10 +330,16 @@ pub fn specular_power(cosine: f32, shininess: f32) -> f32 {
 pub const MAX_SQUARED_EXPONENT: u32 = 1024;
 
 /// `shininess` as a whole number, when it is one from 0 to [`MAX_SQUARED_EXPONENT`].
+/// Whole when truncating it changes nothing: in that range the conversions are exact, and
+/// they are two instructions, where `f32::fract` is a call into libm on x86-64 without
+/// SSE4.1 (the lane lighting asks once per light and group of eight pixels).
 #[inline]
 pub fn whole_exponent(shininess: f32) -> Option<u32> {
-    let whole = (0.0..=MAX_SQUARED_EXPONENT as f32).contains(&shininess) && shininess.fract() == 0.0;
-    whole.then_some(shininess as u32)
+    if !(0.0..=MAX_SQUARED_EXPONENT as f32).contains(&shininess) {
+        return None;
+    }
+    let whole = shininess as u32;
+    (whole as f32 == shininess).then_some(whole)
 }
 
 /// `base^exponent` by binary exponentiation, `one` being the multiplicative identity: for an
@@ -671,6 +677,21 @@ mod tests {
         assert_eq!(whole_exponent(2048.0), None);
         assert_eq!(whole_exponent(f32::NAN), None);
         assert_eq!(whole_exponent(-2.0), None);
+        assert_eq!(whole_exponent(-0.0), Some(0));
+        assert_eq!(whole_exponent(1024.0), Some(MAX_SQUARED_EXPONENT));
+        assert_eq!(whole_exponent(1023.5), None);
+        assert_eq!(whole_exponent(0.5), None);
+        assert_eq!(whole_exponent(f32::INFINITY), None);
+        // Eighths over the range and a little beyond, and each whole number's neighbours,
+        // against the definition.
+        for eighths in -16..=1100 * 8 {
+            let near = eighths as f32 / 8.0;
+            for shininess in [near.next_down(), near, near.next_up()] {
+                let expected = ((0.0..=1024.0).contains(&shininess) && shininess.fract() == 0.0)
+                    .then_some(shininess as u32);
+                assert_eq!(whole_exponent(shininess), expected, "{shininess}");
+            }
+        }
         for exponent in [0, 1, 2, 5, 17, 20, 128, 1000, MAX_SQUARED_EXPONENT] {
             for i in 0..=1000 {
                 let base = i as f32 / 1000.0;
