@@ -13,8 +13,9 @@
 //! per vertex with the half vector as fixed-function OpenGL does, `phong` lights per pixel with
 //! `R·V`, `blinn` per pixel with `N·H`. `scene` leaves the file's own modes alone.
 //!
-//! `cores` is the process's CPU time per timed frame over the median frame time: how many cores
-//! the frame kept busy on average.
+//! `cores` is the process's CPU time over the wall time of the same timed frames: how many cores
+//! the frames kept busy on average (at most the thread count, give or take the clocks' grain).
+//! Over the median frame instead, one slow frame among short ones read above the core count.
 //!
 //! Before the frames, each scene is also loaded `loads` times per thread count, from scratch
 //! (no mesh cache: what a one-shot `render` does), and the `load` row gives the median time and
@@ -136,6 +137,14 @@ struct Measurement {
 impl Measurement {
     fn median(&self) -> Duration {
         median(self.frames.iter().copied())
+    }
+
+    /// How many cores the timed frames kept busy on average: their CPU time over their wall
+    /// time.
+    fn cores(&self) -> Option<f64> {
+        let cpu = self.cpu_per_frame? * self.frames.len() as u32;
+        let wall: Duration = self.frames.iter().sum();
+        Some(cpu.as_secs_f64() / wall.as_secs_f64().max(1e-9))
     }
 
     fn min(&self) -> Duration {
@@ -370,7 +379,7 @@ fn measure(
             peak_memory: None,
             cpu_per_frame: None,
         };
-        let cpu_before = process_cpu_time();
+        let cpu_before = crate::cpu_time::process_cpu_time();
         for _ in 0..frames {
             let started = std::time::Instant::now();
             let stats = renderer.render(scene, &pooled);
@@ -378,7 +387,7 @@ fn measure(
             measurement.stats.push(stats);
         }
         measurement.peak_memory = peak_memory();
-        if let (Some(before), Some(after)) = (cpu_before, process_cpu_time()) {
+        if let (Some(before), Some(after)) = (cpu_before, crate::cpu_time::process_cpu_time()) {
             measurement.cpu_per_frame = Some(after.saturating_sub(before) / frames.max(1));
         }
         if warmup + frames == 0 {
@@ -431,7 +440,7 @@ fn report(
             "shaded_pixels_per_s": per_second(shaded),
             "peak_memory_mib": mib,
             "cpu_ms_per_frame": measurement.cpu_per_frame.map(ms),
-            "cores_busy": measurement.cpu_per_frame.map(|cpu| cpu.as_secs_f64() / median.as_secs_f64().max(1e-9)),
+            "cores_busy": measurement.cores(),
         });
         if let Some(anchor) = anchor {
             line["llvmpipe_mean_abs"] = json!(anchor.mean);
@@ -454,10 +463,9 @@ fn report(
             per_second(stats.triangles) / 1e6,
             per_second(shaded) / 1e6,
             mib.map_or_else(|| "?".to_string(), |mib| format!("{mib:.0}")),
-            measurement.cpu_per_frame.map_or_else(
-                || "?".to_string(),
-                |cpu| format!("{:.2}", cpu.as_secs_f64() / median.as_secs_f64().max(1e-9))
-            ),
+            measurement
+                .cores()
+                .map_or_else(|| "?".to_string(), |cores| format!("{cores:.2}")),
         );
         if let Some(anchor) = anchor {
             row += &format!(
@@ -542,20 +550,6 @@ fn reset_peak_memory() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
-/// Linux: the CPU time the process has used, all threads, user and system (`/proc/self/stat`,
-/// in clock ticks of 10 ms: meaningful over many frames, not one).
-fn process_cpu_time() -> Option<Duration> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // The command name (field 2) may hold spaces; the fields after its closing parenthesis are
-    // plain: utime and stime are the 12th and 13th of them.
-    let after_name = &stat[stat.rfind(')')? + 1..];
-    let mut fields = after_name.split_whitespace().skip(11);
-    let user: u64 = fields.next()?.parse().ok()?;
-    let system: u64 = fields.next()?.parse().ok()?;
-    const TICKS_PER_SECOND: u64 = 100;
-    Some(Duration::from_millis((user + system) * 1000 / TICKS_PER_SECOND))
-}
-
 /// Linux: the process's peak resident memory (`VmHWM`) in bytes.
 fn peak_memory() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -590,28 +584,23 @@ mod tests {
         assert_eq!(bytes_of_files(&[a.clone(), b, a, missing]), 1024);
     }
 
+    /// Cores are CPU time over the frames' wall time: one slow frame among short ones does not
+    /// lift them above the cores there are (over the median frame this read 8).
     #[test]
-    fn process_cpu_time_grows_with_work() {
-        let Some(before) = process_cpu_time() else {
-            return; // not Linux
+    fn cores_are_cpu_time_over_the_frames_wall_time() {
+        let ms = Duration::from_millis;
+        let measurement = Measurement {
+            frames: vec![ms(1), ms(1), ms(10)],
+            stats: Vec::new(),
+            peak_memory: None,
+            cpu_per_frame: Some(ms(8)),
         };
-        // Spin until the process has used 30 ms more (however loaded the machine is), but not
-        // forever: a clock that does not move fails.
-        let started = std::time::Instant::now();
-        let mut x = 0u64;
-        loop {
-            for _ in 0..100_000 {
-                x = std::hint::black_box(x.wrapping_add(1));
-            }
-            let now = process_cpu_time().expect("readable a moment ago");
-            if now >= before + Duration::from_millis(30) {
-                break;
-            }
-            assert!(
-                started.elapsed() < Duration::from_secs(20),
-                "CPU time stuck at {now:?}"
-            );
-        }
+        assert_eq!(measurement.cores(), Some(2.0));
+        let unmeasured = Measurement {
+            cpu_per_frame: None,
+            ..measurement
+        };
+        assert_eq!(unmeasured.cores(), None);
     }
 
     #[test]

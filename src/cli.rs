@@ -844,21 +844,9 @@ impl PhaseClock {
     fn now() -> PhaseClock {
         PhaseClock {
             wall: Instant::now(),
-            cpu: process_cpu_time(),
+            cpu: crate::cpu_time::process_cpu_time(),
         }
     }
-}
-
-/// The CPU time every thread of this process has used so far: the sum of the scheduler's
-/// nanosecond counts (Linux's `/proc/self/task/*/schedstat`); `None` elsewhere. Threads that
-/// have ended are not counted (the render's pool lives as long as the process).
-fn process_cpu_time() -> Option<Duration> {
-    let mut nanoseconds = 0u64;
-    for task in std::fs::read_dir("/proc/self/task").ok()? {
-        let schedstat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
-        nanoseconds += schedstat.split_whitespace().next()?.parse::<u64>().ok()?;
-    }
-    Some(Duration::from_nanos(nanoseconds))
 }
 
 /// One scene's render, phase by phase, for `LAMPSHADE_TIMINGS`.

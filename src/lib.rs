@@ -25,6 +25,7 @@ mod test_support;
 pub mod bench;
 pub mod check;
 pub mod cli;
+pub mod cpu_time;
 pub mod diag;
 pub mod inspect;
 pub mod lighting;
