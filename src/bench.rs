@@ -130,8 +130,8 @@ struct Measurement {
     frames: Vec<Duration>,
     stats: Vec<RenderStats>,
     peak_memory: Option<u64>,
-    /// Process CPU time (all threads) over the timed frames, per frame.
-    cpu_per_frame: Option<Duration>,
+    /// Process CPU time (all threads) over the timed frames.
+    cpu_time: Option<Duration>,
 }
 
 impl Measurement {
@@ -142,9 +142,13 @@ impl Measurement {
     /// How many cores the timed frames kept busy on average: their CPU time over their wall
     /// time.
     fn cores(&self) -> Option<f64> {
-        let cpu = self.cpu_per_frame? * self.frames.len() as u32;
         let wall: Duration = self.frames.iter().sum();
-        Some(cpu.as_secs_f64() / wall.as_secs_f64().max(1e-9))
+        Some(self.cpu_time?.as_secs_f64() / wall.as_secs_f64().max(1e-9))
+    }
+
+    /// The timed frames' CPU time, per frame.
+    fn cpu_per_frame(&self) -> Option<Duration> {
+        Some(self.cpu_time? / (self.frames.len() as u32).max(1))
     }
 
     fn min(&self) -> Duration {
@@ -377,7 +381,7 @@ fn measure(
             frames: Vec::new(),
             stats: Vec::new(),
             peak_memory: None,
-            cpu_per_frame: None,
+            cpu_time: None,
         };
         let cpu_before = crate::cpu_time::process_cpu_time();
         for _ in 0..frames {
@@ -388,7 +392,7 @@ fn measure(
         }
         measurement.peak_memory = peak_memory();
         if let (Some(before), Some(after)) = (cpu_before, crate::cpu_time::process_cpu_time()) {
-            measurement.cpu_per_frame = Some(after.saturating_sub(before) / frames.max(1));
+            measurement.cpu_time = Some(after.saturating_sub(before));
         }
         if warmup + frames == 0 {
             renderer.render(scene, &pooled);
@@ -439,7 +443,7 @@ fn report(
             "shaded_pixels": shaded,
             "shaded_pixels_per_s": per_second(shaded),
             "peak_memory_mib": mib,
-            "cpu_ms_per_frame": measurement.cpu_per_frame.map(ms),
+            "cpu_ms_per_frame": measurement.cpu_per_frame().map(ms),
             "cores_busy": measurement.cores(),
         });
         if let Some(anchor) = anchor {
@@ -593,11 +597,12 @@ mod tests {
             frames: vec![ms(1), ms(1), ms(10)],
             stats: Vec::new(),
             peak_memory: None,
-            cpu_per_frame: Some(ms(8)),
+            cpu_time: Some(ms(24)),
         };
         assert_eq!(measurement.cores(), Some(2.0));
+        assert_eq!(measurement.cpu_per_frame(), Some(ms(8)));
         let unmeasured = Measurement {
-            cpu_per_frame: None,
+            cpu_time: None,
             ..measurement
         };
         assert_eq!(unmeasured.cores(), None);

@@ -5,9 +5,8 @@ use std::time::Duration;
 /// The CPU time every thread of this process has used so far: the sum of the scheduler's
 /// nanosecond counts (Linux's `/proc/self/task/*/schedstat`); `None` elsewhere. Threads that
 /// have ended are not counted (a render's pool lives while it is measured), nor one that ends
-/// while they are read. The process-wide
-/// `utime` and `stime` of `/proc/self/stat` count in 10 ms ticks, too coarse for frames of a
-/// few milliseconds.
+/// while they are read. (The process-wide `utime` and `stime` of `/proc/self/stat` count in
+/// 10 ms ticks, too coarse for frames of a few milliseconds.)
 pub fn process_cpu_time() -> Option<Duration> {
     // A thread that ends while the folder is read leaves an entry without a file: skipped.
     let thread_time = |task: std::fs::DirEntry| -> Option<u64> {

@@ -1173,14 +1173,14 @@ fn shade_single_sample<'f>(
 
     // The background, the one-colour triangles and the Gouraud ones, in one pass over the pixels.
     let per_pixel = sources.iter().any(|&source| source != PixelSource::Fill);
-    let pass = || LastPass {
+    let pass = LastPass {
         sources,
         fills,
         gouraud,
         stride,
     };
     if !phong_planes.is_empty() {
-        last_pass_with_phong(visibility, &pass(), phong_planes, &mut phong, target.color);
+        last_pass_with_phong(visibility, &pass, phong_planes, &mut phong, target.color);
         phong.flush(target.color);
         return shaded;
     }
@@ -1188,7 +1188,6 @@ fn shade_single_sample<'f>(
         let row_start = row * stride + rect.x0 as usize;
         let colors = &mut target.color[row_start..row_start + tile_width];
         if per_pixel {
-            let pass = pass();
             for (group, (colors, ids)) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)).enumerate() {
                 let first_column = group * LANES;
                 if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
