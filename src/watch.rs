@@ -370,7 +370,7 @@ impl WatchSession {
             announced_missing: Vec::new(),
             color: use_color(),
         };
-        session.follow([]);
+        session.watch([]);
         session
     }
 
@@ -385,11 +385,12 @@ impl WatchSession {
             }))
         };
         match outcome {
-            Ok(BuildOutcome::Written(written)) => {
+            Ok(BuildOutcome::Written(mut written)) => {
                 self.follow_the_file_where_it_changed(trigger, &written.rendered.camera);
+                self.watch(std::mem::take(&mut written.rendered.files_read));
                 self.report_written(trigger, &written);
+                self.announce_followed();
                 let rendered = written.rendered;
-                self.follow(rendered.files_read);
                 // The next build renders into the same pixels.
                 self.cache.renderer.reuse_framebuffer(rendered.framebuffer);
                 if !self.view.is_the_file_s() {
@@ -401,20 +402,22 @@ impl WatchSession {
                 errout!("{report}");
                 let errors = error.diagnostics.iter().filter(|d| d.is_error()).count();
                 let problem = format!("{errors} error{}", if errors == 1 { "" } else { "s" });
+                self.watch(error.files_read);
                 self.report_failure(trigger, &problem, Some(load_time), || {
                     render_diagnostics(&error.diagnostics, &error.sources, false)
                 });
-                self.follow(error.files_read);
+                self.announce_followed();
             }
             Ok(BuildOutcome::OutputFailed { error, files_read }) => {
                 errln!("error: {error}");
                 if matches!(error, OutputError::WouldReplaceInput { .. }) {
                     errln!("  = help: rename the file the scene reads, or watch with another -o");
                 }
+                self.watch(files_read);
                 self.report_failure(trigger, "the image could not be written", None, || {
                     error.to_string()
                 });
-                self.follow(files_read);
+                self.announce_followed();
             }
             Err(payload) => {
                 // The panic hook has printed the message; say what happens next.
@@ -630,14 +633,20 @@ impl WatchSession {
         }
     }
 
-    /// Follows `files_read` (and always the scene) from now on, and says so when that changes.
-    fn follow(&mut self, files_read: impl IntoIterator<Item = PathBuf>) {
+    /// Follows `files_read` (and always the scene) from now on: their folders are watched
+    /// before the build's outcome is reported, so that a file saved as soon as the report is
+    /// seen (a mesh created once the watcher said it was missing) is not missed.
+    fn watch(&mut self, files_read: impl IntoIterator<Item = PathBuf>) {
         let mut followed: Vec<PathBuf> = files_read.into_iter().collect();
         followed.push(self.scene.clone());
         self.files.follow(followed.iter().map(PathBuf::as_path));
         for problem in self.watches.sync(self.files.folders()) {
             errln!("warning: {problem}");
         }
+    }
+
+    /// Says which files are followed and which are awaited, when that changed.
+    fn announce_followed(&mut self) {
         if self.builds == 0 {
             return; // before the first build there is nothing to announce yet
         }
