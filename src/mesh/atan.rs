@@ -282,8 +282,8 @@ mod tests {
     fn check_lanes(pairs: &[(f32, f32)]) {
         for eight in pairs.chunks(LANES) {
             let lane_pair = |lane: usize| eight[lane % eight.len()];
-            let y = Floats(std::array::from_fn(|lane| lane_pair(lane).0));
-            let x = Floats(std::array::from_fn(|lane| lane_pair(lane).1));
+            let y = Floats::new(std::array::from_fn(|lane| lane_pair(lane).0));
+            let x = Floats::new(std::array::from_fn(|lane| lane_pair(lane).1));
             let angles = atan2_lanes(y, x);
             for lane in 0..LANES {
                 let (y, x) = lane_pair(lane);

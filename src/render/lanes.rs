@@ -2,14 +2,25 @@
 //!
 //! Every operation is the scalar one applied lane by lane (the same IEEE operations in the same
 //! order as glam's `Vec3`), so a lane's result has the same bits as the scalar code on the same
-//! input; branches become per-lane masks and selects. The operations come from a backend:
-//! [`sse`] on x86-64 (SSE instructions on the two four-lane halves of each array), [`portable`]
-//! elsewhere (plain loops over the arrays, left to the compiler's vectoriser). Both compute the
-//! same IEEE operations and are checked against each other and against glam below. The
-//! portable loops were the only backend at first; on x86-64 the compiler turned them into a mix
-//! of scalar and shuffled partial vectors, about 1.7 times the instructions of the SSE backend
-//! in the lighting (`FastLighting::light_lanes`).
+//! input; branches become per-lane masks and selects. The operations come from a [`Backend`],
+//! a type parameter of the lane types that defaults to the target's own ([`Native`]):
+//! [`Sse`] on x86-64 (SSE instructions on the two four-lane halves of each array),
+//! [`Portable`] elsewhere (plain loops over the arrays, left to the compiler's vectoriser).
+//! Both compute the same IEEE operations and are checked against each other and against glam
+//! below. The portable loops were the only backend at first; on the baseline x86-64 target the
+//! compiler turned them into a mix of scalar and shuffled partial vectors, about 1.7 times the
+//! instructions of the SSE backend in the lighting (`FastLighting::light_lanes`).
+//!
+//! Where the processor has AVX2, the same portable loops compiled inside an `avx2` function
+//! become one 256-bit instruction per operation, half the SSE backend's. [`run_widest`] runs
+//! a piece of lane code ([`LaneWork`], generic over the backend) that way when the processor
+//! allows, and on the native backend otherwise: the same operations, so the same bits, on
+//! every machine. The lighting runs there; the rest stays on the native backend, where the
+//! masks, integer and `f64` lanes of the rasterizer compile better than the portable loops
+//! do under AVX2 (measured: docs/performance.md).
 
+use std::fmt::Debug;
+use std::marker::PhantomData;
 use std::ops::{Add, Div, Mul, Neg, Not, Sub};
 
 use glam::{Mat3, Vec2, Vec3};
@@ -18,14 +29,53 @@ use glam::{Mat3, Vec2, Vec3};
 /// the baseline x86-64 target.
 pub const LANES: usize = 8;
 
+/// The lane operations a backend provides, on the arrays of [`Floats`] and [`Mask`]: each one
+/// the scalar IEEE operation lane by lane, bit for bit. Integer and `f64` lanes ([`Ints`],
+/// [`Wides`]) are the native backend's alone.
+pub trait Backend: Copy + Default + Debug + PartialEq + Send + Sync + 'static {
+    fn add(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES];
+    fn sub(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES];
+    fn mul(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES];
+    fn div(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES];
+    fn sqrt(a: [f32; LANES]) -> [f32; LANES];
+    /// Towards zero, as [`truncate`].
+    fn trunc(a: [f32; LANES]) -> [f32; LANES];
+    /// `>`, ordered (false where either side is NaN), as mask bits.
+    fn gt(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES];
+    /// `<=`, ordered.
+    fn le(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES];
+    /// `==`, ordered (true for `-0.0 == 0.0`).
+    fn eq(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES];
+    /// `f32::is_finite`.
+    fn is_finite(a: [f32; LANES]) -> [u32; LANES];
+    fn and(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES];
+    fn or(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES];
+    /// Whether any lane is set.
+    fn any(mask: [u32; LANES]) -> bool;
+    /// `if_true`'s bits where `mask` is set, `if_false`'s elsewhere.
+    fn select(mask: [u32; LANES], if_true: [f32; LANES], if_false: [f32; LANES]) -> [f32; LANES];
+}
+
+/// The target's own backend: the one every lane type uses unless told otherwise.
+#[cfg(target_arch = "x86_64")]
+pub type Native = Sse;
+
+/// The target's own backend: the one every lane type uses unless told otherwise.
+#[cfg(not(target_arch = "x86_64"))]
+pub type Native = Portable;
+
+pub use portable::Portable;
+#[cfg(target_arch = "x86_64")]
+pub use sse::Sse;
+
 /// One `f32` per lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Floats(pub [f32; LANES]);
+pub struct Floats<B = Native>(pub [f32; LANES], PhantomData<B>);
 
 /// Where a condition holds, per lane: all bits set or none, as SIMD compares produce, so
 /// selects compile to bitwise `and`/`or` rather than branches per lane.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Mask([u32; LANES]);
+pub struct Mask<B = Native>([u32; LANES], PhantomData<B>);
 
 /// One `i32` per lane (texel indices), with wrapping arithmetic.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,6 +86,47 @@ pub struct Ints(pub [i32; LANES]);
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Wides(pub [f64; LANES]);
 
+/// Lane code generic over the backend, for [`run_widest`]: what it computes must not depend on
+/// `B` (every backend has the same bits), only how fast it runs.
+pub trait LaneWork {
+    type Output;
+    /// The work on backend `B`. Everything it calls on lanes must inline into it (be
+    /// `#[inline(always)]`), or that part is compiled for the baseline target after all.
+    fn run<B: Backend>(self) -> Self::Output;
+}
+
+/// `work` on the widest lanes the processor has: the portable loops compiled for AVX2 where it
+/// has AVX2, else the native backend. The result has the same bits either way.
+#[inline(always)]
+pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        return avx2::run(work);
+    }
+    work.run::<Native>()
+}
+
+/// [`run_widest`]'s AVX2 path: the one place that enters code compiled for a feature the
+/// baseline target lacks.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+mod avx2 {
+    use super::{LaneWork, Portable};
+
+    #[inline(always)]
+    pub fn run<W: LaneWork>(work: W) -> W::Output {
+        // SAFETY: the caller has checked that the processor has AVX2.
+        unsafe { run_on_avx2(work) }
+    }
+
+    /// `work` on the portable backend, its loops compiled with AVX2 enabled (the compiler
+    /// vectorises them eight lanes wide). Called only where the processor has AVX2.
+    #[target_feature(enable = "avx2")]
+    unsafe fn run_on_avx2<W: LaneWork>(work: W) -> W::Output {
+        work.run::<Portable>()
+    }
+}
+
 impl Wides {
     #[inline(always)]
     pub fn splat(value: f64) -> Self {
@@ -45,14 +136,14 @@ impl Wides {
     /// `>` per lane.
     #[inline(always)]
     pub fn gt(self, other: Self) -> Mask {
-        backend::gt_wides(self, other)
+        native::gt_wides(self, other)
     }
 
     /// Each lane `as f32`: rounded once, to nearest, ties to even (so a whole number below 2⁵³
     /// converts exactly as the same integer held in an `i64` does).
     #[inline(always)]
     pub fn to_floats(self) -> Floats {
-        backend::wides_to_floats(self)
+        native::wides_to_floats(self)
     }
 }
 
@@ -61,14 +152,26 @@ impl Add for Wides {
     type Output = Wides;
     #[inline(always)]
     fn add(self, other: Wides) -> Wides {
-        backend::add_wides(self, other)
+        native::add_wides(self, other)
     }
 }
 
-impl Floats {
+impl<B: Backend> Floats<B> {
+    /// The lanes `lanes`.
     #[inline(always)]
-    pub fn splat(value: f32) -> Self {
-        Floats([value; LANES])
+    pub const fn new(lanes: [f32; LANES]) -> Self {
+        Floats(lanes, PhantomData)
+    }
+
+    #[inline(always)]
+    pub const fn splat(value: f32) -> Self {
+        Floats::new([value; LANES])
+    }
+
+    /// The same lanes, for backend `C`'s operations.
+    #[inline(always)]
+    pub fn on<C: Backend>(self) -> Floats<C> {
+        Floats::new(self.0)
     }
 
     /// Each lane's `value` of the entry of `items` in that lane (read in place: mapping the
@@ -79,52 +182,54 @@ impl Floats {
         for (lane, item) in lanes.iter_mut().zip(items) {
             *lane = value(item);
         }
-        Floats(lanes)
+        Floats::new(lanes)
     }
 
     #[inline(always)]
     pub fn sqrt(self) -> Self {
-        backend::sqrt(self)
+        Floats::new(B::sqrt(self.0))
     }
 
     /// `f32::max` per lane (the other operand where one is NaN). Left to the compiler on every
-    /// target: an SSE `maxps` treats NaN and signed zeros differently from `f32::max`.
+    /// backend: an SSE `maxps` treats NaN and signed zeros differently from `f32::max`.
     #[inline(always)]
     pub fn max(self, other: Self) -> Self {
-        Floats(std::array::from_fn(|i| self.0[i].max(other.0[i])))
+        Floats::new(std::array::from_fn(|i| self.0[i].max(other.0[i])))
     }
 
     /// `f32::min` per lane (the other operand where one is NaN), left to the compiler as
     /// [`Floats::max`] is.
     #[inline(always)]
     pub fn min(self, other: Self) -> Self {
-        Floats(std::array::from_fn(|i| self.0[i].min(other.0[i])))
+        Floats::new(std::array::from_fn(|i| self.0[i].min(other.0[i])))
     }
 
     /// `>` per lane: false where either side is NaN.
     #[inline(always)]
-    pub fn gt(self, other: Self) -> Mask {
-        backend::gt(self, other)
+    pub fn gt(self, other: Self) -> Mask<B> {
+        Mask::from_bits(B::gt(self.0, other.0))
     }
 
     /// `<=` per lane: false where either side is NaN.
     #[inline(always)]
-    pub fn le(self, other: Self) -> Mask {
-        backend::le(self, other)
+    pub fn le(self, other: Self) -> Mask<B> {
+        Mask::from_bits(B::le(self.0, other.0))
     }
 
     /// `==` per lane: false where either side is NaN, true for `-0.0 == 0.0`.
     #[inline(always)]
-    pub fn eq(self, other: Self) -> Mask {
-        backend::eq(self, other)
+    pub fn eq(self, other: Self) -> Mask<B> {
+        Mask::from_bits(<B as Backend>::eq(self.0, other.0))
     }
 
     /// `f32::is_finite` per lane, as an integer compare of the bits.
     #[inline(always)]
-    pub fn is_finite(self) -> Mask {
-        backend::is_finite(self)
+    pub fn is_finite(self) -> Mask<B> {
+        Mask::from_bits(B::is_finite(self.0))
     }
+}
 
+impl Floats {
     /// Each lane's bits, as an integer (`f32::to_bits`).
     #[inline(always)]
     pub fn to_bits(self) -> Ints {
@@ -135,7 +240,7 @@ impl Floats {
     /// and for NaN, as [`truncate`]).
     #[inline(always)]
     pub fn truncate_to_ints(self) -> Ints {
-        backend::truncate_to_ints(self)
+        native::truncate_to_ints(self)
     }
 }
 
@@ -158,35 +263,47 @@ impl Ints {
     /// `&` per lane.
     #[inline(always)]
     pub fn and(self, other: Self) -> Self {
-        backend::and_ints(self, other)
+        native::and_ints(self, other)
     }
 
     /// `>` per lane.
     #[inline(always)]
     pub fn gt(self, other: Self) -> Mask {
-        backend::gt_ints(self, other)
+        native::gt_ints(self, other)
     }
 
     /// `==` per lane.
     #[inline(always)]
     pub fn eq(self, other: Self) -> Mask {
-        backend::eq_ints(self, other)
+        native::eq_ints(self, other)
     }
 
     /// Each lane `as f32` (rounded to nearest, ties to even, as Rust's conversion is).
     #[inline(always)]
     pub fn to_floats(self) -> Floats {
-        backend::to_floats(self)
+        native::to_floats(self)
     }
 }
 
-impl Mask {
+impl<B: Backend> Mask<B> {
     /// Every lane.
-    pub const ALL: Mask = Mask([u32::MAX; LANES]);
+    pub const ALL: Self = Mask([u32::MAX; LANES], PhantomData);
+
+    /// The mask whose lanes have the bits `bits` (each all ones or all zeros).
+    #[inline(always)]
+    const fn from_bits(bits: [u32; LANES]) -> Self {
+        Mask(bits, PhantomData)
+    }
 
     #[inline(always)]
     pub fn from_bools(lanes: [bool; LANES]) -> Self {
-        Mask(lanes.map(|on| 0u32.wrapping_sub(u32::from(on))))
+        Mask::from_bits(lanes.map(|on| 0u32.wrapping_sub(u32::from(on))))
+    }
+
+    /// The same lanes, for backend `C`'s operations.
+    #[inline(always)]
+    pub fn on<C: Backend>(self) -> Mask<C> {
+        Mask::from_bits(self.0)
     }
 
     /// Whether the condition holds in `lane`.
@@ -197,17 +314,17 @@ impl Mask {
 
     #[inline(always)]
     pub fn and(self, other: Self) -> Self {
-        backend::and(self, other)
+        Mask::from_bits(B::and(self.0, other.0))
     }
 
     #[inline(always)]
     pub fn or(self, other: Self) -> Self {
-        backend::or(self, other)
+        Mask::from_bits(B::or(self.0, other.0))
     }
 
     #[inline(always)]
     pub fn any(self) -> bool {
-        backend::any(self)
+        B::any(self.0)
     }
 
     /// How many lanes the condition holds in.
@@ -224,17 +341,28 @@ impl Mask {
 
     /// Per lane, `if_true` where the mask holds and `if_false` elsewhere (bit for bit).
     #[inline(always)]
-    pub fn select(self, if_true: Floats, if_false: Floats) -> Floats {
-        backend::select(self, if_true, if_false)
+    pub fn select(self, if_true: Floats<B>, if_false: Floats<B>) -> Floats<B> {
+        Floats::new(B::select(self.0, if_true.0, if_false.0))
     }
 
+    #[inline(always)]
+    pub fn select3(self, if_true: Vec3s<B>, if_false: Vec3s<B>) -> Vec3s<B> {
+        Vec3s {
+            x: self.select(if_true.x, if_false.x),
+            y: self.select(if_true.y, if_false.y),
+            z: self.select(if_true.z, if_false.z),
+        }
+    }
+}
+
+impl Mask {
     /// Per lane, `if_true` where the mask holds and `if_false` elsewhere.
     #[inline(always)]
     pub fn select_ints(self, if_true: Ints, if_false: Ints) -> Ints {
         Ints(bytemuck::cast(
             self.select(
-                Floats(bytemuck::cast(if_true.0)),
-                Floats(bytemuck::cast(if_false.0)),
+                Floats::new(bytemuck::cast(if_true.0)),
+                Floats::new(bytemuck::cast(if_false.0)),
             )
             .0,
         ))
@@ -245,32 +373,23 @@ impl Mask {
     pub fn to_ints(self) -> Ints {
         Ints(bytemuck::cast(self.0))
     }
-
-    #[inline(always)]
-    pub fn select3(self, if_true: Vec3s, if_false: Vec3s) -> Vec3s {
-        Vec3s {
-            x: self.select(if_true.x, if_false.x),
-            y: self.select(if_true.y, if_false.y),
-            z: self.select(if_true.z, if_false.z),
-        }
-    }
 }
 
-impl Not for Mask {
-    type Output = Mask;
+impl<B: Backend> Not for Mask<B> {
+    type Output = Mask<B>;
     #[inline(always)]
-    fn not(self) -> Mask {
-        Mask(self.0.map(|m| !m))
+    fn not(self) -> Mask<B> {
+        Mask::from_bits(self.0.map(|m| !m))
     }
 }
 
 macro_rules! lane_operator {
     ($trait:ident, $method:ident) => {
-        impl $trait for Floats {
-            type Output = Floats;
+        impl<B: Backend> $trait for Floats<B> {
+            type Output = Floats<B>;
             #[inline(always)]
-            fn $method(self, other: Floats) -> Floats {
-                backend::$method(self, other)
+            fn $method(self, other: Floats<B>) -> Floats<B> {
+                Floats::new(B::$method(self.0, other.0))
             }
         }
     };
@@ -286,7 +405,7 @@ lane_operator!(Div, div);
 /// at a time where the backend has the instructions.
 #[inline(always)]
 pub fn samples_showing<const S: usize>(ids: &[u32; S], id: u32) -> u32 {
-    backend::samples_showing(ids, id)
+    native::samples_showing(ids, id)
 }
 
 /// Whether each of a group's triangle numbers names a triangle (is not `none`), into
@@ -294,7 +413,7 @@ pub fn samples_showing<const S: usize>(ids: &[u32; S], id: u32) -> u32 {
 /// has them: as a loop of `bool` stores it was a tenth of a flat close-up's frame.
 #[inline(always)]
 pub fn mark_shown(ids: &[u32; LANES], none: u32, shown: &mut [bool; LANES]) -> usize {
-    backend::mark_shown(ids, none, shown)
+    native::mark_shown(ids, none, shown)
 }
 
 /// Sets every entry of `out` to `value`, as four entries' worth of floats twice: six 16-byte
@@ -304,23 +423,118 @@ pub fn mark_shown(ids: &[u32; LANES], none: u32, shown: &mut [bool; LANES]) -> u
 /// frame went there.
 #[inline(always)]
 pub fn fill_vec3s(out: &mut [Vec3; LANES], value: Vec3) {
-    backend::fill_vec3s(out, value)
+    native::fill_vec3s(out, value)
 }
 
 #[cfg(target_arch = "x86_64")]
-use sse as backend;
+use sse as native;
 
 #[cfg(not(target_arch = "x86_64"))]
-use portable as backend;
+use portable as native;
 
 /// The lane operations as loops over the arrays, for the compiler to vectorise: the backend of
-/// targets without one of their own (compiled everywhere, so the tests can hold the others to
-/// it).
+/// targets without one of their own and of [`run_widest`]'s AVX2 path (compiled everywhere,
+/// so the tests can hold the others to it).
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 mod portable {
     use glam::Vec3;
 
-    use super::{Floats, Ints, LANES, Mask, Wides};
+    use super::{Backend, Floats, Ints, LANES, Mask, Wides};
+
+    /// The portable loops.
+    #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+    pub struct Portable;
+
+    #[inline(always)]
+    fn zip(a: [f32; LANES], b: [f32; LANES], f: impl Fn(f32, f32) -> f32) -> [f32; LANES] {
+        std::array::from_fn(|i| f(a[i], b[i]))
+    }
+
+    /// A lane's bits from its comparison, straight (through a `[bool; LANES]` the compiler
+    /// compared lane by lane and packed the results).
+    #[inline(always)]
+    fn compare(a: [f32; LANES], b: [f32; LANES], f: impl Fn(f32, f32) -> bool) -> [u32; LANES] {
+        std::array::from_fn(|i| bits(f(a[i], b[i])))
+    }
+
+    #[inline(always)]
+    fn bits(on: bool) -> u32 {
+        0u32.wrapping_sub(u32::from(on))
+    }
+
+    impl Backend for Portable {
+        #[inline(always)]
+        fn add(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            zip(a, b, |a, b| a + b)
+        }
+
+        #[inline(always)]
+        fn sub(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            zip(a, b, |a, b| a - b)
+        }
+
+        #[inline(always)]
+        fn mul(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            zip(a, b, |a, b| a * b)
+        }
+
+        #[inline(always)]
+        fn div(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            zip(a, b, |a, b| a / b)
+        }
+
+        #[inline(always)]
+        fn sqrt(a: [f32; LANES]) -> [f32; LANES] {
+            a.map(f32::sqrt)
+        }
+
+        #[inline(always)]
+        fn trunc(a: [f32; LANES]) -> [f32; LANES] {
+            a.map(super::truncate)
+        }
+
+        #[inline(always)]
+        fn gt(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            compare(a, b, |a, b| a > b)
+        }
+
+        #[inline(always)]
+        fn le(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            compare(a, b, |a, b| a <= b)
+        }
+
+        #[inline(always)]
+        fn eq(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            compare(a, b, |a, b| a == b)
+        }
+
+        #[inline(always)]
+        fn is_finite(a: [f32; LANES]) -> [u32; LANES] {
+            a.map(|a| bits((a.to_bits() & 0x7fff_ffff) < 0x7f80_0000))
+        }
+
+        #[inline(always)]
+        fn and(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
+            std::array::from_fn(|i| a[i] & b[i])
+        }
+
+        #[inline(always)]
+        fn or(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
+            std::array::from_fn(|i| a[i] | b[i])
+        }
+
+        #[inline(always)]
+        fn any(mask: [u32; LANES]) -> bool {
+            mask.iter().fold(0, |any, &m| any | m) != 0
+        }
+
+        #[inline(always)]
+        fn select(mask: [u32; LANES], if_true: [f32; LANES], if_false: [f32; LANES]) -> [f32; LANES] {
+            std::array::from_fn(|i| {
+                f32::from_bits((if_true[i].to_bits() & mask[i]) | (if_false[i].to_bits() & !mask[i]))
+            })
+        }
+    }
 
     #[inline(always)]
     pub fn add_wides(a: Wides, b: Wides) -> Wides {
@@ -329,59 +543,12 @@ mod portable {
 
     #[inline(always)]
     pub fn gt_wides(a: Wides, b: Wides) -> Mask {
-        Mask(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
+        Mask::from_bits(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
     }
 
     #[inline(always)]
     pub fn wides_to_floats(a: Wides) -> Floats {
-        Floats(a.0.map(|value| value as f32))
-    }
-
-    #[inline(always)]
-    fn zip(a: Floats, b: Floats, f: impl Fn(f32, f32) -> f32) -> Floats {
-        Floats(std::array::from_fn(|i| f(a.0[i], b.0[i])))
-    }
-
-    /// A lane's bits from its comparison, straight (through a `[bool; LANES]` the compiler
-    /// compared lane by lane and packed the results).
-    #[inline(always)]
-    fn compare(a: Floats, b: Floats, f: impl Fn(f32, f32) -> bool) -> Mask {
-        Mask(std::array::from_fn(|i| bits(f(a.0[i], b.0[i]))))
-    }
-
-    #[inline(always)]
-    fn bits(on: bool) -> u32 {
-        0u32.wrapping_sub(u32::from(on))
-    }
-
-    #[inline(always)]
-    pub fn add(a: Floats, b: Floats) -> Floats {
-        zip(a, b, |a, b| a + b)
-    }
-
-    #[inline(always)]
-    pub fn sub(a: Floats, b: Floats) -> Floats {
-        zip(a, b, |a, b| a - b)
-    }
-
-    #[inline(always)]
-    pub fn mul(a: Floats, b: Floats) -> Floats {
-        zip(a, b, |a, b| a * b)
-    }
-
-    #[inline(always)]
-    pub fn div(a: Floats, b: Floats) -> Floats {
-        zip(a, b, |a, b| a / b)
-    }
-
-    #[inline(always)]
-    pub fn sqrt(a: Floats) -> Floats {
-        Floats(a.0.map(f32::sqrt))
-    }
-
-    #[inline(always)]
-    pub fn trunc(a: Floats) -> Floats {
-        Floats(a.0.map(super::truncate))
+        Floats::new(a.0.map(|value| value as f32))
     }
 
     #[inline(always)]
@@ -392,48 +559,6 @@ mod portable {
             } else {
                 i32::MIN
             }
-        }))
-    }
-
-    #[inline(always)]
-    pub fn gt(a: Floats, b: Floats) -> Mask {
-        compare(a, b, |a, b| a > b)
-    }
-
-    #[inline(always)]
-    pub fn le(a: Floats, b: Floats) -> Mask {
-        compare(a, b, |a, b| a <= b)
-    }
-
-    #[inline(always)]
-    pub fn eq(a: Floats, b: Floats) -> Mask {
-        compare(a, b, |a, b| a == b)
-    }
-
-    #[inline(always)]
-    pub fn is_finite(a: Floats) -> Mask {
-        Mask(a.0.map(|a| bits((a.to_bits() & 0x7fff_ffff) < 0x7f80_0000)))
-    }
-
-    #[inline(always)]
-    pub fn and(a: Mask, b: Mask) -> Mask {
-        Mask(std::array::from_fn(|i| a.0[i] & b.0[i]))
-    }
-
-    #[inline(always)]
-    pub fn or(a: Mask, b: Mask) -> Mask {
-        Mask(std::array::from_fn(|i| a.0[i] | b.0[i]))
-    }
-
-    #[inline(always)]
-    pub fn any(mask: Mask) -> bool {
-        mask.0.iter().fold(0, |any, &m| any | m) != 0
-    }
-
-    #[inline(always)]
-    pub fn select(mask: Mask, if_true: Floats, if_false: Floats) -> Floats {
-        Floats(std::array::from_fn(|i| {
-            f32::from_bits((if_true.0[i].to_bits() & mask.0[i]) | (if_false.0[i].to_bits() & !mask.0[i]))
         }))
     }
 
@@ -454,17 +579,17 @@ mod portable {
 
     #[inline(always)]
     pub fn gt_ints(a: Ints, b: Ints) -> Mask {
-        Mask(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
+        Mask::from_bits(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
     }
 
     #[inline(always)]
     pub fn eq_ints(a: Ints, b: Ints) -> Mask {
-        Mask(std::array::from_fn(|i| bits(a.0[i] == b.0[i])))
+        Mask::from_bits(std::array::from_fn(|i| bits(a.0[i] == b.0[i])))
     }
 
     #[inline(always)]
     pub fn to_floats(a: Ints) -> Floats {
-        Floats(a.0.map(|i| i as f32))
+        Floats::new(a.0.map(|i| i as f32))
     }
 
     #[inline(always)]
@@ -505,7 +630,11 @@ mod sse {
         _mm_shuffle_ps, _mm_sqrt_ps, _mm_storel_epi64, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps,
     };
 
-    use super::{Floats, Ints, LANES, Mask, Wides};
+    use super::{Backend, Floats, Ints, LANES, Mask, Wides};
+
+    /// SSE on the two halves.
+    #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+    pub struct Sse;
 
     #[inline(always)]
     pub fn add_wides(a: Wides, b: Wides) -> Wides {
@@ -526,7 +655,7 @@ mod sse {
             let high = _mm_castpd_ps(_mm_cmpgt_pd(a[2 * i + 1], b[2 * i + 1]));
             _mm_shuffle_ps::<0b10_00_10_00>(low, high)
         };
-        Mask(bytemuck::cast([half(0), half(1)]))
+        Mask::from_bits(bytemuck::cast([half(0), half(1)]))
     }
 
     /// `cvtpd2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's `as f32`.
@@ -537,15 +666,16 @@ mod sse {
         let half = |i: usize| unsafe {
             _mm_movelh_ps(_mm_cvtpd_ps(quarters[2 * i]), _mm_cvtpd_ps(quarters[2 * i + 1]))
         };
-        Floats(bytemuck::cast([half(0), half(1)]))
+        Floats::new(bytemuck::cast([half(0), half(1)]))
     }
 
     const _: () = assert!(LANES == 8, "the lanes are two SSE registers");
 
-    /// Applies an SSE operation to both halves.
+    /// Applies an SSE operation to both halves of one or two lane arrays (of `f32` or mask
+    /// bits).
     macro_rules! halves {
         ($op:ident($($arg:expr),+)) => {{
-            let args = ($(bytemuck::cast::<_, [__m128; 2]>($arg.0),)+);
+            let args = ($(bytemuck::cast::<_, [__m128; 2]>($arg),)+);
             // SAFETY: SSE and SSE2 are enabled on every x86-64 target (see the module).
             let pair = |i: usize| unsafe { halves!(@call $op, args, i, $($arg),+) };
             bytemuck::cast([pair(0), pair(1)])
@@ -581,12 +711,12 @@ mod sse {
 
     #[inline(always)]
     pub fn gt_ints(a: Ints, b: Ints) -> Mask {
-        Mask(int_halves!(_mm_cmpgt_epi32(a, b)))
+        Mask::from_bits(int_halves!(_mm_cmpgt_epi32(a, b)))
     }
 
     #[inline(always)]
     pub fn eq_ints(a: Ints, b: Ints) -> Mask {
-        Mask(int_halves!(_mm_cmpeq_epi32(a, b)))
+        Mask::from_bits(int_halves!(_mm_cmpeq_epi32(a, b)))
     }
 
     /// Four samples per `pcmpeqd` and `movmskps`; patterns whose sample count is not a
@@ -649,41 +779,7 @@ mod sse {
         let halves: [__m128i; 2] = bytemuck::cast(a.0);
         // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
         let converted = |half: __m128i| unsafe { _mm_cvtepi32_ps(half) };
-        Floats(bytemuck::cast(halves.map(converted)))
-    }
-
-    #[inline(always)]
-    pub fn add(a: Floats, b: Floats) -> Floats {
-        Floats(halves!(_mm_add_ps(a, b)))
-    }
-
-    #[inline(always)]
-    pub fn sub(a: Floats, b: Floats) -> Floats {
-        Floats(halves!(_mm_sub_ps(a, b)))
-    }
-
-    #[inline(always)]
-    pub fn mul(a: Floats, b: Floats) -> Floats {
-        Floats(halves!(_mm_mul_ps(a, b)))
-    }
-
-    #[inline(always)]
-    pub fn div(a: Floats, b: Floats) -> Floats {
-        Floats(halves!(_mm_div_ps(a, b)))
-    }
-
-    #[inline(always)]
-    pub fn sqrt(a: Floats) -> Floats {
-        Floats(halves!(_mm_sqrt_ps(a)))
-    }
-
-    /// `cvttps2dq` and back: towards zero, −2³¹ out of range ([`super::truncate`]).
-    #[inline(always)]
-    pub fn trunc(a: Floats) -> Floats {
-        let halves: [__m128; 2] = bytemuck::cast(a.0);
-        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
-        let truncated = |half: __m128| unsafe { _mm_cvtepi32_ps(_mm_cvttps_epi32(half)) };
-        Floats(bytemuck::cast(halves.map(truncated)))
+        Floats::new(bytemuck::cast(halves.map(converted)))
     }
 
     /// `cvttps2dq`: towards zero, −2³¹ out of range ([`super::truncate`]).
@@ -695,80 +791,116 @@ mod sse {
         Ints(bytemuck::cast(halves.map(truncated)))
     }
 
-    /// An ordered compare, as Rust's `>`: false where either side is NaN.
-    #[inline(always)]
-    pub fn gt(a: Floats, b: Floats) -> Mask {
-        Mask(halves!(_mm_cmpgt_ps(a, b)))
-    }
+    impl Backend for Sse {
+        #[inline(always)]
+        fn add(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            halves!(_mm_add_ps(a, b))
+        }
 
-    /// An ordered compare, as Rust's `<=`.
-    #[inline(always)]
-    pub fn le(a: Floats, b: Floats) -> Mask {
-        Mask(halves!(_mm_cmple_ps(a, b)))
-    }
+        #[inline(always)]
+        fn sub(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            halves!(_mm_sub_ps(a, b))
+        }
 
-    /// An ordered compare, as Rust's `==`.
-    #[inline(always)]
-    pub fn eq(a: Floats, b: Floats) -> Mask {
-        Mask(halves!(_mm_cmpeq_ps(a, b)))
-    }
+        #[inline(always)]
+        fn mul(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            halves!(_mm_mul_ps(a, b))
+        }
 
-    #[inline(always)]
-    pub fn and(a: Mask, b: Mask) -> Mask {
-        Mask(halves!(_mm_and_ps(a, b)))
-    }
+        #[inline(always)]
+        fn div(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            halves!(_mm_div_ps(a, b))
+        }
 
-    #[inline(always)]
-    pub fn or(a: Mask, b: Mask) -> Mask {
-        Mask(halves!(_mm_or_ps(a, b)))
-    }
+        #[inline(always)]
+        fn sqrt(a: [f32; LANES]) -> [f32; LANES] {
+            halves!(_mm_sqrt_ps(a))
+        }
 
-    /// The magnitude's bits below infinity's, compared as integers.
-    #[inline(always)]
-    pub fn is_finite(a: Floats) -> Mask {
-        let halves: [__m128i; 2] = bytemuck::cast(a.0);
-        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
-        let finite = |half: __m128i| unsafe {
-            _mm_cmplt_epi32(
-                _mm_and_si128(half, _mm_set1_epi32(0x7fff_ffff)),
-                _mm_set1_epi32(0x7f80_0000),
-            )
-        };
-        Mask(bytemuck::cast(halves.map(finite)))
-    }
+        /// `cvttps2dq` and back: towards zero, −2³¹ out of range ([`super::truncate`]).
+        #[inline(always)]
+        fn trunc(a: [f32; LANES]) -> [f32; LANES] {
+            let halves: [__m128; 2] = bytemuck::cast(a);
+            // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+            let truncated = |half: __m128| unsafe { _mm_cvtepi32_ps(_mm_cvttps_epi32(half)) };
+            bytemuck::cast(halves.map(truncated))
+        }
 
-    #[inline(always)]
-    pub fn any(mask: Mask) -> bool {
-        let [low, high]: [__m128; 2] = bytemuck::cast(mask.0);
-        // SAFETY: SSE is enabled on every x86-64 target (see the module).
-        unsafe { _mm_movemask_ps(_mm_or_ps(low, high)) != 0 }
-    }
+        /// An ordered compare, as Rust's `>`: false where either side is NaN.
+        #[inline(always)]
+        fn gt(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            halves!(_mm_cmpgt_ps(a, b))
+        }
 
-    #[inline(always)]
-    pub fn select(mask: Mask, if_true: Floats, if_false: Floats) -> Floats {
-        let mask: [__m128; 2] = bytemuck::cast(mask.0);
-        let (if_true, if_false): ([__m128; 2], [__m128; 2]) =
-            (bytemuck::cast(if_true.0), bytemuck::cast(if_false.0));
-        // SAFETY: SSE is enabled on every x86-64 target (see the module).
-        let pick = |i: usize| unsafe {
-            _mm_or_ps(
-                _mm_and_ps(mask[i], if_true[i]),
-                _mm_andnot_ps(mask[i], if_false[i]),
-            )
-        };
-        Floats(bytemuck::cast([pick(0), pick(1)]))
+        /// An ordered compare, as Rust's `<=`.
+        #[inline(always)]
+        fn le(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            halves!(_mm_cmple_ps(a, b))
+        }
+
+        /// An ordered compare, as Rust's `==`.
+        #[inline(always)]
+        fn eq(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            halves!(_mm_cmpeq_ps(a, b))
+        }
+
+        /// The magnitude's bits below infinity's, compared as integers.
+        #[inline(always)]
+        fn is_finite(a: [f32; LANES]) -> [u32; LANES] {
+            let halves: [__m128i; 2] = bytemuck::cast(a);
+            // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+            let finite = |half: __m128i| unsafe {
+                _mm_cmplt_epi32(
+                    _mm_and_si128(half, _mm_set1_epi32(0x7fff_ffff)),
+                    _mm_set1_epi32(0x7f80_0000),
+                )
+            };
+            bytemuck::cast(halves.map(finite))
+        }
+
+        #[inline(always)]
+        fn and(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
+            halves!(_mm_and_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn or(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
+            halves!(_mm_or_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn any(mask: [u32; LANES]) -> bool {
+            let [low, high]: [__m128; 2] = bytemuck::cast(mask);
+            // SAFETY: SSE is enabled on every x86-64 target (see the module).
+            unsafe { _mm_movemask_ps(_mm_or_ps(low, high)) != 0 }
+        }
+
+        #[inline(always)]
+        fn select(mask: [u32; LANES], if_true: [f32; LANES], if_false: [f32; LANES]) -> [f32; LANES] {
+            let mask: [__m128; 2] = bytemuck::cast(mask);
+            let (if_true, if_false): ([__m128; 2], [__m128; 2]) =
+                (bytemuck::cast(if_true), bytemuck::cast(if_false));
+            // SAFETY: SSE is enabled on every x86-64 target (see the module).
+            let pick = |i: usize| unsafe {
+                _mm_or_ps(
+                    _mm_and_ps(mask[i], if_true[i]),
+                    _mm_andnot_ps(mask[i], if_false[i]),
+                )
+            };
+            bytemuck::cast([pick(0), pick(1)])
+        }
     }
 }
 
 /// One `Vec3` per lane, stored as three lane arrays.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Vec3s {
-    pub x: Floats,
-    pub y: Floats,
-    pub z: Floats,
+pub struct Vec3s<B = Native> {
+    pub x: Floats<B>,
+    pub y: Floats<B>,
+    pub z: Floats<B>,
 }
 
-impl Vec3s {
+impl<B: Backend> Vec3s<B> {
     #[inline(always)]
     pub fn splat(v: Vec3) -> Self {
         Vec3s {
@@ -782,9 +914,19 @@ impl Vec3s {
     #[inline(always)]
     pub fn from_array(vectors: &[Vec3; LANES]) -> Self {
         Vec3s {
-            x: Floats(vectors.map(|v| v.x)),
-            y: Floats(vectors.map(|v| v.y)),
-            z: Floats(vectors.map(|v| v.z)),
+            x: Floats::new(vectors.map(|v| v.x)),
+            y: Floats::new(vectors.map(|v| v.y)),
+            z: Floats::new(vectors.map(|v| v.z)),
+        }
+    }
+
+    /// The same lanes, for backend `C`'s operations.
+    #[inline(always)]
+    pub fn on<C: Backend>(self) -> Vec3s<C> {
+        Vec3s {
+            x: self.x.on(),
+            y: self.y.on(),
+            z: self.z.on(),
         }
     }
 
@@ -823,7 +965,7 @@ impl Vec3s {
 
     /// `Vec3::dot`: `(x·x') + (y·y') + (z·z')`, summed left to right.
     #[inline(always)]
-    pub fn dot(self, other: Self) -> Floats {
+    pub fn dot(self, other: Self) -> Floats<B> {
         self.x * other.x + self.y * other.y + self.z * other.z
     }
 
@@ -839,20 +981,20 @@ impl Vec3s {
 
     /// `v == Vec3::ZERO` per lane (each component `== 0.0`: true for `-0.0`, false for NaN).
     #[inline(always)]
-    pub fn is_zero(self) -> Mask {
+    pub fn is_zero(self) -> Mask<B> {
         let zero = Floats::splat(0.0);
         self.x.eq(zero).and(self.y.eq(zero)).and(self.z.eq(zero))
     }
 
     /// `Vec3::length`.
     #[inline(always)]
-    pub fn length(self) -> Floats {
+    pub fn length(self) -> Floats<B> {
         self.dot(self).sqrt()
     }
 
     /// Each component times the lane's `factor` (`Vec3 * f32`).
     #[inline(always)]
-    pub fn scale(self, factor: Floats) -> Self {
+    pub fn scale(self, factor: Floats<B>) -> Self {
         Vec3s {
             x: self.x * factor,
             y: self.y * factor,
@@ -863,7 +1005,7 @@ impl Vec3s {
     /// Each component over the lane's `divisor` (`Vec3 / f32`: three divisions, not a
     /// reciprocal).
     #[inline(always)]
-    pub fn divide(self, divisor: Floats) -> Self {
+    pub fn divide(self, divisor: Floats<B>) -> Self {
         Vec3s {
             x: self.x / divisor,
             y: self.y / divisor,
@@ -875,7 +1017,7 @@ impl Vec3s {
     /// that order).
     #[inline(always)]
     pub fn transformed_by(self, matrix: Mat3) -> Self {
-        let column = |axis: Vec3, factor: Floats| Vec3s::splat(axis).scale(factor);
+        let column = |axis: Vec3, factor: Floats<B>| Vec3s::splat(axis).scale(factor);
         column(matrix.x_axis, self.x) + column(matrix.y_axis, self.y) + column(matrix.z_axis, self.z)
     }
 
@@ -959,7 +1101,7 @@ impl Add for Ints {
     type Output = Ints;
     #[inline(always)]
     fn add(self, other: Ints) -> Ints {
-        backend::add_ints(self, other)
+        native::add_ints(self, other)
     }
 }
 
@@ -968,24 +1110,24 @@ impl Sub for Ints {
     type Output = Ints;
     #[inline(always)]
     fn sub(self, other: Ints) -> Ints {
-        backend::sub_ints(self, other)
+        native::sub_ints(self, other)
     }
 }
 
 /// `-a`: a sign flip, so `-0.0` stays distinct from `0.0 - 0.0` as in the scalar code.
-impl Neg for Floats {
-    type Output = Floats;
+impl<B: Backend> Neg for Floats<B> {
+    type Output = Floats<B>;
     #[inline(always)]
-    fn neg(self) -> Floats {
-        Floats(self.0.map(|a| -a))
+    fn neg(self) -> Floats<B> {
+        Floats::new(self.0.map(|a| -a))
     }
 }
 
 /// `-v`: each component's sign flipped (see `Floats`' `-`).
-impl Neg for Vec3s {
-    type Output = Vec3s;
+impl<B: Backend> Neg for Vec3s<B> {
+    type Output = Vec3s<B>;
     #[inline(always)]
-    fn neg(self) -> Vec3s {
+    fn neg(self) -> Vec3s<B> {
         Vec3s {
             x: -self.x,
             y: -self.y,
@@ -994,10 +1136,10 @@ impl Neg for Vec3s {
     }
 }
 
-impl Add for Vec3s {
-    type Output = Vec3s;
+impl<B: Backend> Add for Vec3s<B> {
+    type Output = Vec3s<B>;
     #[inline(always)]
-    fn add(self, other: Vec3s) -> Vec3s {
+    fn add(self, other: Vec3s<B>) -> Vec3s<B> {
         Vec3s {
             x: self.x + other.x,
             y: self.y + other.y,
@@ -1006,10 +1148,10 @@ impl Add for Vec3s {
     }
 }
 
-impl Sub for Vec3s {
-    type Output = Vec3s;
+impl<B: Backend> Sub for Vec3s<B> {
+    type Output = Vec3s<B>;
     #[inline(always)]
-    fn sub(self, other: Vec3s) -> Vec3s {
+    fn sub(self, other: Vec3s<B>) -> Vec3s<B> {
         Vec3s {
             x: self.x - other.x,
             y: self.y - other.y,
@@ -1019,10 +1161,10 @@ impl Sub for Vec3s {
 }
 
 /// Component by component, as `Vec3 * Vec3`.
-impl Mul for Vec3s {
-    type Output = Vec3s;
+impl<B: Backend> Mul for Vec3s<B> {
+    type Output = Vec3s<B>;
     #[inline(always)]
-    fn mul(self, other: Vec3s) -> Vec3s {
+    fn mul(self, other: Vec3s<B>) -> Vec3s<B> {
         Vec3s {
             x: self.x * other.x,
             y: self.y * other.y,
@@ -1096,8 +1238,8 @@ impl Real for f32 {
     }
 }
 
-impl Real for Floats {
-    type Mask = Mask;
+impl<B: Backend> Real for Floats<B> {
+    type Mask = Mask<B>;
 
     #[inline(always)]
     fn splat(value: f32) -> Self {
@@ -1106,26 +1248,26 @@ impl Real for Floats {
 
     #[inline(always)]
     fn abs(self) -> Self {
-        Floats(self.0.map(f32::abs))
+        Floats::new(self.0.map(f32::abs))
     }
 
     #[inline(always)]
     fn trunc(self) -> Self {
-        backend::trunc(self)
+        Floats::new(B::trunc(self.0))
     }
 
     #[inline(always)]
-    fn gt(self, other: Self) -> Mask {
+    fn gt(self, other: Self) -> Mask<B> {
         Floats::gt(self, other)
     }
 
     #[inline(always)]
-    fn and(a: Mask, b: Mask) -> Mask {
+    fn and(a: Mask<B>, b: Mask<B>) -> Mask<B> {
         a.and(b)
     }
 
     #[inline(always)]
-    fn select(mask: Mask, if_true: Self, if_false: Self) -> Self {
+    fn select(mask: Mask<B>, if_true: Self, if_false: Self) -> Self {
         mask.select(if_true, if_false)
     }
 }
@@ -1157,7 +1299,7 @@ mod tests {
         let a = vectors();
         let mut b = vectors();
         b.rotate_left(3);
-        let (la, lb) = (Vec3s::from_array(&a), Vec3s::from_array(&b));
+        let (la, lb): (Vec3s, Vec3s) = (Vec3s::from_array(&a), Vec3s::from_array(&b));
         let dots = la.dot(lb);
         let lengths = la.length();
         let normalized = la.normalize_or_zero().to_array();
@@ -1172,7 +1314,7 @@ mod tests {
         let planar_b = Vec2s::from_array(&b.map(|v| v.truncate()));
         let planar_lengths = planar_a.length();
         let planar = planar_a + planar_b.scale(Floats::splat(2.0)) - planar_a;
-        let zero = Vec3s::from_array(&[
+        let zero: Vec3s = Vec3s::from_array(&[
             Vec3::ZERO,
             Vec3::splat(-0.0),
             Vec3::X,
@@ -1252,13 +1394,16 @@ mod tests {
             assert_eq!(mask.to_ints().0[i], -i32::from(a.0[i] > b.0[i]));
         }
         assert_eq!(Floats::splat(1.5).to_bits(), Ints::splat(1.5f32.to_bits() as i32));
-        assert!(Mask::ALL.all() && !mask.all() && !(!Mask::ALL).all());
+        assert!(Mask::<Native>::ALL.all() && !mask.all() && !(!Mask::<Native>::ALL).all());
         let items = [3u32, 1, 4, 1, 5, 9, 2, 6];
         assert_eq!(
             Ints::gather(&items, |&n| n as i32 * 2).0,
             items.map(|n| n as i32 * 2)
         );
-        assert_eq!(Floats::gather(&items, |&n| n as f32).0, items.map(|n| n as f32));
+        assert_eq!(
+            Floats::<Native>::gather(&items, |&n| n as f32).0,
+            items.map(|n| n as f32)
+        );
     }
 
     /// Filling eight `Vec3`s in wide stores and writing lanes straight into an array give the
@@ -1279,7 +1424,7 @@ mod tests {
             portable::fill_vec3s(&mut out, value);
             assert_eq!(bits(&out), bits(&[value; LANES]));
         }
-        let lanes = Vec3s::from_array(&std::array::from_fn(|i| {
+        let lanes: Vec3s = Vec3s::from_array(&std::array::from_fn(|i| {
             Vec3::new(i as f32, -(i as f32) * 0.5, values[i % 3].x)
         }));
         let mut out = [Vec3::ZERO; LANES];
@@ -1377,6 +1522,7 @@ mod tests {
         b.rotate_left(5);
         let (la, lb) = (Vec3s::from_array(&a), Vec3s::from_array(&b));
         let bits = |f: Floats| f.0.map(f32::to_bits);
+        let portable_bits = |f: Floats<Portable>| f.0.map(f32::to_bits);
         for (x, y) in [
             (la.x, lb.x),
             (la.y, lb.y),
@@ -1384,27 +1530,29 @@ mod tests {
             (la.x, la.y),
             (lb.z, la.x),
         ] {
-            assert_eq!(bits(x + y), bits(portable::add(x, y)), "add");
-            assert_eq!(bits(x - y), bits(portable::sub(x, y)), "sub");
-            assert_eq!(bits(x * y), bits(portable::mul(x, y)), "mul");
-            assert_eq!(bits(x / y), bits(portable::div(x, y)), "div");
-            assert_eq!(bits(x.sqrt()), bits(portable::sqrt(x)), "sqrt");
-            assert_eq!(bits(Real::trunc(x)), bits(portable::trunc(x)), "trunc");
+            let (px, py) = (x.on::<Portable>(), y.on::<Portable>());
+            assert_eq!(bits(x + y), portable_bits(px + py), "add");
+            assert_eq!(bits(x - y), portable_bits(px - py), "sub");
+            assert_eq!(bits(x * y), portable_bits(px * py), "mul");
+            assert_eq!(bits(x / y), portable_bits(px / py), "div");
+            assert_eq!(bits(x.sqrt()), portable_bits(px.sqrt()), "sqrt");
+            assert_eq!(bits(Real::trunc(x)), portable_bits(Real::trunc(px)), "trunc");
             assert_eq!(
                 x.truncate_to_ints(),
                 portable::truncate_to_ints(x),
                 "truncate_to_ints"
             );
-            assert_eq!(x.gt(y), portable::gt(x, y), "gt");
-            assert_eq!(x.le(y), portable::le(x, y), "le");
-            assert_eq!(x.eq(y), portable::eq(x, y), "eq");
-            assert_eq!(x.eq(x), portable::eq(x, x), "eq");
-            assert_eq!(x.is_finite(), portable::is_finite(x), "is_finite");
+            assert_eq!(x.gt(y).0, px.gt(py).0, "gt");
+            assert_eq!(x.le(y).0, px.le(py).0, "le");
+            assert_eq!(x.eq(y).0, px.eq(py).0, "eq");
+            assert_eq!(x.eq(x).0, px.eq(px).0, "eq");
+            assert_eq!(x.is_finite().0, px.is_finite().0, "is_finite");
             let (m, n) = (x.gt(y), y.is_finite());
-            assert_eq!(m.and(n), portable::and(m, n), "and");
-            assert_eq!(m.or(n), portable::or(m, n), "or");
-            assert_eq!(m.any(), portable::any(m), "any");
-            assert_eq!(bits(m.select(x, y)), bits(portable::select(m, x, y)), "select");
+            let (pm, pn) = (m.on::<Portable>(), n.on::<Portable>());
+            assert_eq!(m.and(n).0, pm.and(pn).0, "and");
+            assert_eq!(m.or(n).0, pm.or(pn).0, "or");
+            assert_eq!(m.any(), pm.any(), "any");
+            assert_eq!(bits(m.select(x, y)), portable_bits(pm.select(px, py)), "select");
             let (i, j) = (x.to_bits(), y.to_bits());
             assert_eq!(i + j, portable::add_ints(i, j), "add_ints");
             assert_eq!(i - j, portable::sub_ints(i, j), "sub_ints");
@@ -1416,6 +1564,30 @@ mod tests {
             assert_eq!(i.eq(partly_i), portable::eq_ints(i, partly_i), "eq_ints");
             assert_eq!(bits(i.to_floats()), bits(portable::to_floats(i)), "to_floats");
         }
+    }
+
+    /// Lane code run by `run_widest` (on AVX2 where the processor has it: the portable loops
+    /// compiled eight lanes wide) has the native backend's bits, NaN lanes included.
+    #[test]
+    fn the_widest_lanes_equal_the_native_backend_bit_for_bit() {
+        struct Formula(Vec3s, Vec3s);
+        impl LaneWork for Formula {
+            type Output = [[u32; LANES]; 4];
+            fn run<B: Backend>(self) -> Self::Output {
+                let (a, b) = (self.0.on::<B>(), self.1.on::<B>());
+                let n = a.normalize_or_zero();
+                let d = n.dot(b).max(Floats::splat(0.0)) / b.length();
+                let m = d.gt(Floats::splat(0.25)).or(a.x.is_finite());
+                let c = m.select3(a.cross(b) - b.scale(d), -a);
+                [d, c.x, c.y, Real::trunc(c.z * Floats::splat(1e3))].map(|f| f.0.map(f32::to_bits))
+            }
+        }
+        let a = vectors();
+        let mut b = vectors();
+        b.rotate_left(3);
+        let formula = || Formula(Vec3s::from_array(&a), Vec3s::from_array(&b));
+        assert_eq!(run_widest(formula()), formula().run::<Native>());
+        assert_eq!(formula().run::<Portable>(), formula().run::<Native>());
     }
 
     #[test]
@@ -1443,8 +1615,8 @@ mod tests {
             ],
         ];
         for values in edges {
-            let truncated = Real::trunc(Floats(values));
-            let integers = Floats(values).truncate_to_ints();
+            let truncated: Floats = Real::trunc(Floats::new(values));
+            let integers = Floats::new(values).truncate_to_ints();
             for (lane, &x) in values.iter().enumerate() {
                 assert_eq!(truncated.0[lane].to_bits(), truncate(x).to_bits(), "{x}");
                 assert_eq!(integers.0[lane] as f32, truncate(x), "{x}");
@@ -1453,7 +1625,7 @@ mod tests {
                 }
             }
             assert_eq!(
-                portable::trunc(Floats(values)).0.map(f32::to_bits),
+                Real::trunc(Floats::<Portable>::new(values)).0.map(f32::to_bits),
                 truncated.0.map(f32::to_bits)
             );
         }
@@ -1463,16 +1635,16 @@ mod tests {
 
     #[test]
     fn select_takes_each_lane_from_the_side_its_mask_names() {
-        let mask = Mask::from_bools(std::array::from_fn(|i| i % 3 == 0));
+        let mask: Mask = Mask::from_bools(std::array::from_fn(|i| i % 3 == 0));
         let picked = mask.select(Floats::splat(1.0), Floats::splat(2.0));
         for i in 0..LANES {
             assert_eq!(picked.0[i], if i % 3 == 0 { 1.0 } else { 2.0 });
         }
-        assert!(mask.any() && !(!Mask::ALL).any());
+        assert!(mask.any() && !(!Mask::<Native>::ALL).any());
         assert!((0..LANES).all(|i| mask.lane(i) == (i % 3 == 0)));
         assert_eq!((!mask).or(mask), Mask::ALL);
         assert_eq!((!mask).and(mask), !Mask::ALL);
-        let finite = Floats([
+        let finite: Floats = Floats::new([
             0.0,
             -1e38,
             f32::MAX,

@@ -1139,7 +1139,7 @@ fn rasterize_sample_lanes<const S: usize, E: EdgeLanes>(
                         .expect("a group of lanes");
                     let group_ids: &mut [u32; LANES] =
                         (&mut block_ids[slots]).try_into().expect("a group of lanes");
-                    let old = Floats(*group_depths);
+                    let old = Floats::new(*group_depths);
                     let nearer = inside.and(depth.gt(old));
                     if nearer.any() {
                         *group_depths = nearer.select(depth, old).0;
@@ -1681,7 +1681,7 @@ impl<E: EdgeLanes> RowLanes<E> {
         }
         let [d0, d1, d2] = self.corner_depths;
         let depth = (e0.to_floats() * d0 + e1.to_floats() * d1 + e2.to_floats() * d2) * self.inv_area;
-        let old = Floats(*depths);
+        let old = Floats::new(*depths);
         let nearer = inside.and(depth.gt(old));
         *depths = nearer.select(depth, old).0;
         if let Some(ids) = ids {

@@ -1498,9 +1498,9 @@ impl PixelGroup<'_> {
     fn edges(&self) -> [Floats; 3] {
         match self.lane_steps {
             Some(lane_steps) => lane_steps.edges(self.start),
-            None => {
-                std::array::from_fn(|k| Floats(std::array::from_fn(|lane| self.edges_at(lane)[k] as f32)))
-            }
+            None => std::array::from_fn(|k| {
+                Floats::new(std::array::from_fn(|lane| self.edges_at(lane)[k] as f32))
+            }),
         }
     }
 }
@@ -1532,7 +1532,7 @@ impl GatheredPixels {
     /// The full lanes' edge functions, each rounded once to `f32` (as [`PixelGroup::edges`]).
     #[inline(always)]
     fn edges(&self) -> [Floats; 3] {
-        self.edges.map(|edge| Floats(edge.map(|value| value as f32)))
+        self.edges.map(|edge| Floats::new(edge.map(|value| value as f32)))
     }
 }
 
@@ -2340,7 +2340,7 @@ mod tests {
                                     let (centre, step) =
                                         (edge_values(raster, at.0, at.1), edge_steps_x(raster));
                                     let group = std::array::from_fn(|k| {
-                                        Floats(std::array::from_fn(|l| {
+                                        Floats::new(std::array::from_fn(|l| {
                                             (centre[k] + step[k] * (l as i64 - lane as i64)) as f32
                                         }))
                                     });

@@ -64,7 +64,7 @@ use crate::lighting::{
 };
 use crate::render::DebugView;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer, shown_component};
-use crate::render::lanes::{Floats, LANES, Mask, Vec3s};
+use crate::render::lanes::{Backend, Floats, LANES, LaneWork, Mask, Native, Vec3s, run_widest};
 use crate::render::normals::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
 use crate::render::raster::Corners;
 use crate::render::shadow::shadow_visibility_lanes;
@@ -81,9 +81,20 @@ use crate::scene::{
 /// texture multiplies (ambient and diffuse, or the shown terms of them) and the rest (specular
 /// and emission). Their sum is the colour.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LitLanes {
-    pub textured: Vec3s,
-    pub rest: Vec3s,
+pub struct LitLanes<B = Native> {
+    pub textured: Vec3s<B>,
+    pub rest: Vec3s<B>,
+}
+
+impl<B: Backend> LitLanes<B> {
+    /// The same lanes, for backend `C`'s operations.
+    #[inline(always)]
+    fn on<C: Backend>(self) -> LitLanes<C> {
+        LitLanes {
+            textured: self.textured.on(),
+            rest: self.rest.on(),
+        }
+    }
 }
 
 /// How a material reflects light, as the lanes evaluate it: chosen once per material and side.
@@ -235,9 +246,27 @@ impl<'f> FastLighting<'f> {
 
     /// The lighting of points whose `k_a` and `k_d` may vary from lane to lane (vertex colours,
     /// textures: `surface_lanes`), in `Frame::light_side`'s two parts; each lane has the bits of
-    /// the general path's lighting of the material it sees.
+    /// the general path's lighting of the material it sees. It runs on the widest lanes the
+    /// processor has (`lanes::run_widest`): the lighting is most of a Phong pixel's
+    /// arithmetic, and half its instructions go where eight lanes fit one register.
     #[inline]
     pub fn light_surface_lanes(&self, position: Vec3s, normal: Vec3s, surface: &SurfaceLanes) -> LitLanes {
+        run_widest(LightingWork {
+            lighting: self,
+            position,
+            normal,
+            surface,
+        })
+    }
+
+    /// [`FastLighting::light_surface_lanes`] on backend `B`.
+    #[inline(always)]
+    fn light_surface_lanes_on<B: Backend>(
+        &self,
+        position: Vec3s<B>,
+        normal: Vec3s<B>,
+        surface: &SurfaceLanes<B>,
+    ) -> LitLanes<B> {
         match self.model {
             LaneModel::Constant { textured, rest } => LitLanes {
                 textured: Vec3s::splat(textured),
@@ -264,8 +293,8 @@ impl<'f> FastLighting<'f> {
     /// lights (`k_a·I_a` and the emission), split as `select_component_split` splits them. The
     /// light sums are zero: no light reaches an unlit side or material, and the ambient term
     /// alone does not show them.
-    #[inline]
-    fn one_colour_lanes(&self, surface: &SurfaceLanes) -> LitLanes {
+    #[inline(always)]
+    fn one_colour_lanes<B: Backend>(&self, surface: &SurfaceLanes<B>) -> LitLanes<B> {
         let none = Vec3s::splat(Vec3::ZERO);
         let (ambient, diffuse) = if self.material.model == LightingModel::Unlit {
             (none, surface.diffuse)
@@ -299,14 +328,14 @@ impl<'f> FastLighting<'f> {
     /// lane's own `k_a` and `k_d` (`surface`), then the shown terms split as `Frame::light_side`
     /// splits them: the same operations in the same order, its `continue`s turned into masks (a
     /// masked-off lane keeps its sums untouched, not `+ 0`).
-    #[inline]
-    fn light_model_lanes<R: Reflectance>(
+    #[inline(always)]
+    fn light_model_lanes<B: Backend, R: Reflectance>(
         &self,
         reflectance: R,
-        position: Vec3s,
-        normal: Vec3s,
-        surface: &SurfaceLanes,
-    ) -> LitLanes {
+        position: Vec3s<B>,
+        normal: Vec3s<B>,
+        surface: &SurfaceLanes<B>,
+    ) -> LitLanes<B> {
         let to_viewer = match self.frame.viewer {
             Viewer::Local => (-position).normalize_or_zero(),
             Viewer::Infinite { to_viewer } => Vec3s::splat(to_viewer),
@@ -356,7 +385,7 @@ impl<'f> FastLighting<'f> {
             // there, as the general path asks it only for lights that face the surface; then
             // its `strength <= 0` test, which turns away the lanes in full shadow.
             let map = self.frame.shadows.get(index).and_then(Option::as_deref);
-            let strength = strength * shadow_visibility_lanes(map, position, normal, to_light, lit);
+            let strength = strength * shadow_visibility(map, position, normal, to_light, lit);
             lit = lit.and(!strength.le(Floats::splat(0.0)));
             if !lit.any() {
                 continue;
@@ -386,6 +415,41 @@ impl<'f> FastLighting<'f> {
             LightingComponent::Specular => (none, specular),
         };
         LitLanes { textured, rest }
+    }
+}
+
+/// [`FastLighting::light_surface_lanes`]' arguments, for `lanes::run_widest`.
+struct LightingWork<'l, 'f> {
+    lighting: &'l FastLighting<'f>,
+    position: Vec3s,
+    normal: Vec3s,
+    surface: &'l SurfaceLanes,
+}
+
+impl LaneWork for LightingWork<'_, '_> {
+    type Output = LitLanes;
+
+    #[inline(always)]
+    fn run<B: Backend>(self) -> LitLanes {
+        self.lighting
+            .light_surface_lanes_on(self.position.on::<B>(), self.normal.on(), &self.surface.on())
+            .on()
+    }
+}
+
+/// `shadow_visibility_lanes` from lanes of any backend: the shadow lookups run on the native
+/// one (their integer lanes are its alone).
+#[inline(always)]
+fn shadow_visibility<B: Backend>(
+    map: Option<&crate::render::shadow::ShadowMap>,
+    position: Vec3s<B>,
+    normal: Vec3s<B>,
+    to_light: Vec3s<B>,
+    wanted: Mask<B>,
+) -> Floats<B> {
+    match map {
+        None => Floats::splat(1.0),
+        Some(_) => shadow_visibility_lanes(map, position.on(), normal.on(), to_light.on(), wanted.on()).on(),
     }
 }
 
@@ -429,20 +493,20 @@ impl<'f> LightingMemo<'f> {
 }
 
 /// One light at eight points, where [`Reflectance::reflect`] reads it.
-struct LightAtLanes {
+struct LightAtLanes<B: Backend> {
     /// The side's normal `N`.
-    normal: Vec3s,
+    normal: Vec3s<B>,
     /// `L`, towards the light.
-    to_light: Vec3s,
+    to_light: Vec3s<B>,
     /// `V`, towards the viewer.
-    to_viewer: Vec3s,
-    n_dot_l: Floats,
+    to_viewer: Vec3s<B>,
+    n_dot_l: Floats<B>,
     /// The light's colour times its strength (attenuation, spot factor, shadow): `I`.
-    intensity: Vec3s,
+    intensity: Vec3s<B>,
     /// `I·(N·L)`, as `illuminate_with_visibility` forms it.
-    irradiance: Vec3s,
+    irradiance: Vec3s<B>,
     /// Where the light reaches and faces the point: only these lanes' results are used.
-    lit: Mask,
+    lit: Mask<B>,
 }
 
 /// What a lighting model adds for one light at a lit point: the model's arm of
@@ -452,7 +516,12 @@ trait Reflectance: Copy {
     /// Whether the model adds to the specular sum at all.
     const SPECULAR: bool;
     /// (what is added to the diffuse sum, what is added to the specular sum) at each lane.
-    fn reflect(self, material: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s);
+    fn reflect<B: Backend>(
+        self,
+        material: &Material,
+        surface: &SurfaceLanes<B>,
+        light: &LightAtLanes<B>,
+    ) -> (Vec3s<B>, Vec3s<B>);
 }
 
 /// `k_d·I·(N·L)`.
@@ -463,7 +532,12 @@ impl Reflectance for Lambert {
     const SPECULAR: bool = false;
 
     #[inline(always)]
-    fn reflect(self, _: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+    fn reflect<B: Backend>(
+        self,
+        _: &Material,
+        surface: &SurfaceLanes<B>,
+        light: &LightAtLanes<B>,
+    ) -> (Vec3s<B>, Vec3s<B>) {
         (surface.diffuse * light.irradiance, Vec3s::splat(Vec3::ZERO))
     }
 }
@@ -476,7 +550,12 @@ impl Reflectance for Phong {
     const SPECULAR: bool = true;
 
     #[inline(always)]
-    fn reflect(self, material: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+    fn reflect<B: Backend>(
+        self,
+        material: &Material,
+        surface: &SurfaceLanes<B>,
+        light: &LightAtLanes<B>,
+    ) -> (Vec3s<B>, Vec3s<B>) {
         let reflected = light.normal.scale(Floats::splat(2.0) * light.n_dot_l) - light.to_light;
         let cosine = reflected.dot(light.to_viewer);
         (
@@ -494,7 +573,12 @@ impl Reflectance for BlinnPhong {
     const SPECULAR: bool = true;
 
     #[inline(always)]
-    fn reflect(self, material: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+    fn reflect<B: Backend>(
+        self,
+        material: &Material,
+        surface: &SurfaceLanes<B>,
+        light: &LightAtLanes<B>,
+    ) -> (Vec3s<B>, Vec3s<B>) {
         let cosine = light
             .normal
             .dot((light.to_light + light.to_viewer).normalize_or_zero());
@@ -507,7 +591,11 @@ impl Reflectance for BlinnPhong {
 
 /// `k_s·I·max(cosine, 0)^n`, for the lanes where `light` is lit.
 #[inline(always)]
-fn phong_specular_lanes(material: &Material, light: &LightAtLanes, cosine: Floats) -> Vec3s {
+fn phong_specular_lanes<B: Backend>(
+    material: &Material,
+    light: &LightAtLanes<B>,
+    cosine: Floats<B>,
+) -> Vec3s<B> {
     let power = specular_power_lanes(cosine, material.shininess, light.lit);
     (Vec3s::splat(material.specular) * light.intensity).scale(power)
 }
@@ -521,7 +609,12 @@ impl<const GGX: bool> Reflectance for CookTorrance<GGX> {
     const SPECULAR: bool = true;
 
     #[inline(always)]
-    fn reflect(self, _: &Material, surface: &SurfaceLanes, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+    fn reflect<B: Backend>(
+        self,
+        _: &Material,
+        surface: &SurfaceLanes<B>,
+        light: &LightAtLanes<B>,
+    ) -> (Vec3s<B>, Vec3s<B>) {
         let (fresnel, specular) = self.reflection(light);
         let diffuse = surface.diffuse * (Vec3s::splat(Vec3::ONE) - fresnel) * light.irradiance;
         (diffuse, specular * light.irradiance)
@@ -532,7 +625,7 @@ impl<const GGX: bool> CookTorrance<GGX> {
     /// `lighting::cook_torrance`'s `(F, π·F·D·G / (4(N·V)(N·L)))` lane-wise. Its early return
     /// (a viewer, light or half vector below the surface: no microfacet term) is a select.
     #[inline(always)]
-    fn reflection(self, light: &LightAtLanes) -> (Vec3s, Vec3s) {
+    fn reflection<B: Backend>(self, light: &LightAtLanes<B>) -> (Vec3s<B>, Vec3s<B>) {
         let surface = self.0;
         let (zero, one) = (Floats::splat(0.0), Floats::splat(1.0));
         let LightAtLanes {
@@ -575,11 +668,11 @@ impl<const GGX: bool> CookTorrance<GGX> {
 /// `lighting::microfacet_distribution` for Beckmann's `exp((cos²α − 1)/(m² cos²α)) / (π m² cos⁴α)`
 /// lane-wise but for `exp`, which is called for the lanes in `wanted` only (the others get 0).
 #[inline(always)]
-fn beckmann_lanes(surface: &Microfacet, n_dot_h: Floats, wanted: Mask) -> Floats {
+fn beckmann_lanes<B: Backend>(surface: &Microfacet, n_dot_h: Floats<B>, wanted: Mask<B>) -> Floats<B> {
     let m2 = surface.roughness * surface.roughness;
     let cos2 = n_dot_h * n_dot_h;
     let exponent = (cos2 - Floats::splat(1.0)) / (Floats::splat(m2) * cos2);
-    let exponential = Floats(std::array::from_fn(|lane| {
+    let exponential = Floats::new(std::array::from_fn(|lane| {
         if wanted.lane(lane) {
             exponent.0[lane].exp()
         } else {
@@ -593,7 +686,7 @@ fn beckmann_lanes(surface: &Microfacet, n_dot_h: Floats, wanted: Mask) -> Floats
 
 /// `lighting::microfacet_distribution` for GGX's `α² / (π((N·H)²(α² − 1) + 1)²)` lane-wise.
 #[inline(always)]
-fn ggx_lanes(surface: &Microfacet, n_dot_h: Floats) -> Floats {
+fn ggx_lanes<B: Backend>(surface: &Microfacet, n_dot_h: Floats<B>) -> Floats<B> {
     let m2 = surface.roughness * surface.roughness;
     let cos2 = n_dot_h * n_dot_h;
     let d = cos2 * Floats::splat(m2 - 1.0) + Floats::splat(1.0);
@@ -603,7 +696,10 @@ fn ggx_lanes(surface: &Microfacet, n_dot_h: Floats) -> Floats {
 /// `light_position`: the unit direction, the distance, and where the light has a direction
 /// (a distance above 0 and finite; elsewhere the direction is not used).
 #[inline(always)]
-fn direction_and_distance_lanes(light_position: Vec3, position: Vec3s) -> (Vec3s, Floats, Mask) {
+fn direction_and_distance_lanes<B: Backend>(
+    light_position: Vec3,
+    position: Vec3s<B>,
+) -> (Vec3s<B>, Floats<B>, Mask<B>) {
     let offset = Vec3s::splat(light_position) - position;
     let distance = offset.length();
     let reaches = distance.gt(Floats::splat(0.0)).and(distance.is_finite());
@@ -613,7 +709,7 @@ fn direction_and_distance_lanes(light_position: Vec3, position: Vec3s) -> (Vec3s
 /// `lighting::attenuate` lane-wise. Its `f32::max` against a positive constant is "the
 /// denominator where it is larger", NaN giving the constant: a compare and a select.
 #[inline(always)]
-fn attenuate_lanes(attenuation: Attenuation, distance: Floats) -> Floats {
+fn attenuate_lanes<B: Backend>(attenuation: Attenuation, distance: Floats<B>) -> Floats<B> {
     let Attenuation {
         constant,
         linear,
@@ -630,10 +726,10 @@ fn attenuate_lanes(attenuation: Attenuation, distance: Floats) -> Floats {
 /// has no lane-wise form with the same bits, called only for the lanes in `wanted` (the others
 /// are masked off by the caller and get 0).
 #[inline(always)]
-fn specular_power_lanes(base: Floats, exponent: f32, wanted: Mask) -> Floats {
+fn specular_power_lanes<B: Backend>(base: Floats<B>, exponent: f32, wanted: Mask<B>) -> Floats<B> {
     match whole_exponent(exponent) {
         Some(whole) => power_by_squaring(base.max(Floats::splat(0.0)), Floats::splat(1.0), whole),
-        None => Floats(std::array::from_fn(|i| {
+        None => Floats::new(std::array::from_fn(|i| {
             if wanted.lane(i) {
                 specular_power(base.0[i], exponent)
             } else {
@@ -810,12 +906,12 @@ impl<'f> PhongBatch<'f> {
         }
         let shaded = match output {
             PixelOutput::Depth => {
-                let depth = Vec3s::from_array(&self.positions).dot(Vec3s::splat(frame.forward));
+                let depth: Floats = Vec3s::from_array(&self.positions).dot(Vec3s::splat(frame.forward));
                 depth.0.map(Vec3::splat)
             }
             PixelOutput::Lit(lighting) => lighting.light_lanes(&self.positions, &self.side_normals(frame)),
             PixelOutput::Normals => {
-                let normals = Vec3s::from_array(&self.side_normals(frame));
+                let normals: Vec3s = Vec3s::from_array(&self.side_normals(frame));
                 let half = Floats::splat(0.5);
                 (normals.scale(half) + Vec3s::splat(Vec3::splat(0.5))).to_array()
             }
@@ -881,7 +977,7 @@ impl ArcLanes {
         ArcLanes {
             start: Vec3s::from_array(&arcs.map(|arc| arc.start())),
             other: Vec3s::from_array(&other),
-            angle: Floats(angle),
+            angle: Floats::new(angle),
             chord: Mask::from_bools(chord),
         }
     }
@@ -1792,9 +1888,10 @@ pub(crate) mod tests {
         );
     }
 
-    /// Eight points lit at once against the one-point lighting (the general path's), bit for
-    /// bit, per model, component, side and debug view, with both viewers, unlit lanes, reversed
-    /// normals and a zero normal among them.
+    /// Eight points lit at once, on the widest lanes and on the native backend, against the
+    /// one-point lighting (the general path's), bit for bit, per model, component, side and
+    /// debug view, with both viewers, unlit lanes, reversed normals and a zero normal among
+    /// them.
     #[test]
     fn lighting_eight_points_at_once_equals_lighting_each_bit_for_bit() {
         // A whole shininess is raised by squaring, lane-wise; another goes through `powf`.
@@ -1838,15 +1935,25 @@ pub(crate) mod tests {
                             1 if group % 7 == 0 => Vec3::ZERO,
                             _ => vertices[i].normal,
                         });
+                        // The widest lanes (AVX2 where the processor has it) and the native
+                        // backend's, each against the one-point lighting.
                         let lit = lighting.light_lanes(&positions, &normals);
+                        let native = lighting.light_surface_lanes_on::<Native>(
+                            Vec3s::from_array(&positions),
+                            Vec3s::from_array(&normals),
+                            &SurfaceLanes::of(lighting.material),
+                        );
+                        let native = (native.textured + native.rest).to_array();
                         for i in 0..LANES {
                             let one = lighting.light(positions[i], normals[i]);
-                            assert_eq!(
-                                lit[i].to_array().map(f32::to_bits),
-                                one.to_array().map(f32::to_bits),
-                                "{model:?} {component:?} {view:?} back {back_facing} {lights:?}, \
-                                 point {i} of group {group}"
-                            );
+                            for (lanes, backend) in [(lit, "widest"), (native, "native")] {
+                                assert_eq!(
+                                    lanes[i].to_array().map(f32::to_bits),
+                                    one.to_array().map(f32::to_bits),
+                                    "{model:?} {component:?} {view:?} back {back_facing} {lights:?}, \
+                                     point {i} of group {group}, {backend} lanes"
+                                );
+                            }
                             points.push((positions[i], normals[i]));
                             compared += 1;
                         }

@@ -269,7 +269,7 @@ impl ShadowFace {
         }
         // A mask is −1 where it holds: subtracting each texel's counts it.
         let lit = blocks.iter().flatten().fold(Ints::splat(0), |lit, &texels| {
-            lit - Floats(texels).le(depth).to_ints()
+            lit - Floats::new(texels).le(depth).to_ints()
         });
         lit.to_floats()
     }
@@ -277,7 +277,7 @@ impl ShadowFace {
     /// [`lit_texels`] of the lanes looked up (0 elsewhere) one lane at a time, as floats.
     #[inline(never)]
     fn lit_lanes_clamped(&self, texels: TexelLanes, radius: i64) -> Floats {
-        Floats(std::array::from_fn(|lane| {
+        Floats::new(std::array::from_fn(|lane| {
             if !texels.looked_up.lane(lane) {
                 return 0.0;
             }

@@ -20,25 +20,34 @@
 use glam::Vec3;
 
 use crate::render::frame::{Frame, VertexAttributes};
-use crate::render::lanes::{Floats, LANES, Mask, Vec2s, Vec3s};
+use crate::render::lanes::{Backend, Floats, LANES, Mask, Native, Vec2s, Vec3s};
 use crate::render::raster::Corners;
 use crate::render::texture_lanes::sample_lanes;
 use crate::scene::{Material, TextureBinding};
 
 /// `k_a` and `k_d` per lane: the material's, modulated by vertex colours and textures.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SurfaceLanes {
-    pub ambient: Vec3s,
-    pub diffuse: Vec3s,
+pub struct SurfaceLanes<B = Native> {
+    pub ambient: Vec3s<B>,
+    pub diffuse: Vec3s<B>,
 }
 
-impl SurfaceLanes {
+impl<B: Backend> SurfaceLanes<B> {
     /// `material`'s own coefficients on every lane.
     #[inline(always)]
     pub fn of(material: &Material) -> Self {
         SurfaceLanes {
             ambient: Vec3s::splat(material.ambient),
             diffuse: Vec3s::splat(material.diffuse),
+        }
+    }
+
+    /// The same lanes, for backend `C`'s operations.
+    #[inline(always)]
+    pub fn on<C: Backend>(&self) -> SurfaceLanes<C> {
+        SurfaceLanes {
+            ambient: self.ambient.on(),
+            diffuse: self.diffuse.on(),
         }
     }
 }
@@ -100,7 +109,7 @@ impl WeightLanes {
             }
         }
         let weights = |edges: &[[f32; LANES]; 3]| -> [Floats; 3] {
-            let screen = edges.map(|edge| Floats(edge) * inv_area);
+            let screen = edges.map(|edge| Floats::new(edge) * inv_area);
             let over_w = [screen[0] * inv_w[0], screen[1] * inv_w[1], screen[2] * inv_w[2]];
             let sum = over_w[0] + over_w[1] + over_w[2];
             let positive = sum.gt(Floats::splat(0.0));
@@ -311,7 +320,7 @@ impl<'a> Gathered<'a> {
     /// component of the general path's `Vec4` interpolation.
     #[inline(always)]
     fn interpolate_w(&self, weights: &[Floats; 3]) -> Floats {
-        let [a, b, c] = self.corners(|vertex| vertex.tangent.w).map(Floats);
+        let [a, b, c] = self.corners(|vertex| vertex.tangent.w).map(Floats::new);
         a * weights[0] + b * weights[1] + c * weights[2]
     }
 
@@ -486,7 +495,7 @@ mod tests {
                 let lanes = perturb_normal_lanes(
                     Vec3s::from_array(&normals),
                     Vec3s::from_array(&t.map(|t| t.truncate())),
-                    Floats(t.map(|t| t.w)),
+                    Floats::new(t.map(|t| t.w)),
                     Vec3s::from_array(&texels),
                     scale,
                 )

@@ -188,8 +188,8 @@ mod tests {
             -1.0,
         ];
         for (i, window) in values.windows(LANES).enumerate() {
-            let x = Floats(std::array::from_fn(|lane| window[lane]));
-            let y = Floats(std::array::from_fn(|lane| values[(i + 3 * lane) % values.len()]));
+            let x: Floats = Floats::new(std::array::from_fn(|lane| window[lane]));
+            let y = Floats::new(std::array::from_fn(|lane| values[(i + 3 * lane) % values.len()]));
             let (sines, cosines) = sin_cos(x);
             let angles = atan2(y, x);
             for lane in 0..LANES {

@@ -56,7 +56,7 @@ static SAME_AS_LIBM: LazyLock<bool> = LazyLock::new(|| {
         .flat_map(|exponent| (0u32..64).map(move |step| f32::from_bits((exponent << 23) | (step * 131_071))))
         .collect();
     inputs.chunks(LANES).all(|chunk| {
-        let x = Floats(std::array::from_fn(|lane| chunk[lane % chunk.len()]));
+        let x = Floats::new(std::array::from_fn(|lane| chunk[lane % chunk.len()]));
         match glibc_fma::log2(x) {
             Some((log, regular)) => (0..LANES)
                 .all(|lane| !regular.lane(lane) || log.0[lane].to_bits() == x.0[lane].log2().to_bits()),
@@ -149,7 +149,7 @@ mod glibc_fma {
         for (log, &x) in log.iter_mut().zip(&x.0) {
             *log = main_path(x);
         }
-        (Floats(log), Mask::from_bools(x.0.map(is_regular)))
+        (Floats::new(log), Mask::from_bools(x.0.map(is_regular)))
     }
 }
 
@@ -175,7 +175,7 @@ mod tests {
         let mut lanes = [0.0; LANES];
         let mut filled = 0;
         let compare = |lanes: &[f32; LANES], filled: usize| {
-            let log = log2_lanes(Floats(*lanes), Mask::ALL);
+            let log = log2_lanes(Floats::new(*lanes), Mask::ALL);
             for (lane, &x) in lanes.iter().enumerate().take(filled) {
                 let expected = x.log2();
                 assert_eq!(
