@@ -38,6 +38,8 @@ pub trait Backend: Copy + Default + Debug + PartialEq + Send + Sync + 'static {
     fn mul(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES];
     fn div(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES];
     fn sqrt(a: [f32; LANES]) -> [f32; LANES];
+    /// The sign flipped (`-a`: `-0.0` stays distinct from `0.0 - 0.0`).
+    fn neg(a: [f32; LANES]) -> [f32; LANES];
     /// Towards zero, as [`truncate`].
     fn trunc(a: [f32; LANES]) -> [f32; LANES];
     /// `>`, ordered (false where either side is NaN), as mask bits.
@@ -50,6 +52,8 @@ pub trait Backend: Copy + Default + Debug + PartialEq + Send + Sync + 'static {
     fn is_finite(a: [f32; LANES]) -> [u32; LANES];
     fn and(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES];
     fn or(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES];
+    /// Every bit flipped.
+    fn not(a: [u32; LANES]) -> [u32; LANES];
     /// Whether any lane is set.
     fn any(mask: [u32; LANES]) -> bool;
     /// `if_true`'s bits where `mask` is set, `if_false`'s elsewhere.
@@ -106,12 +110,29 @@ pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
     work.run::<Native>()
 }
 
-/// [`run_widest`]'s AVX2 path: the one place that enters code compiled for a feature the
-/// baseline target lacks.
+/// [`run_widest`]'s AVX2 path: the lane operations as 256-bit AVX instructions, one per
+/// operation, and the one place that enters code compiled for a feature the baseline target
+/// lacks. The portable loops compiled for AVX2 were tried first: the compiler vectorised them
+/// in the lighting alone, but fell back to scalar code once interpolation shared the function.
+///
+/// Soundness: [`Avx`](avx2::Avx) is private to this file, so lane code can only be
+/// instantiated with it by [`run_widest`], inside `run_on_avx2`, which runs only after the
+/// processor was found to have AVX2. Its operations' intrinsics therefore run only there.
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod avx2 {
-    use super::{LaneWork, Portable};
+    use std::arch::x86_64::{
+        __m256, __m256i, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_and_si256,
+        _mm256_blendv_ps, _mm256_cmp_ps, _mm256_cmpgt_epi32, _mm256_cvtepi32_ps, _mm256_cvttps_epi32,
+        _mm256_div_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_set1_epi32, _mm256_sqrt_ps,
+        _mm256_sub_ps, _mm256_xor_ps,
+    };
+
+    use super::{Backend, LANES, LaneWork};
+
+    /// AVX on all eight lanes at once.
+    #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+    pub(super) struct Avx;
 
     #[inline(always)]
     pub fn run<W: LaneWork>(work: W) -> W::Output {
@@ -119,11 +140,117 @@ mod avx2 {
         unsafe { run_on_avx2(work) }
     }
 
-    /// `work` on the portable backend, its loops compiled with AVX2 enabled (the compiler
-    /// vectorises them eight lanes wide). Called only where the processor has AVX2.
+    /// `work` on the [`Avx`] backend, compiled with AVX2 enabled. Called only where the
+    /// processor has AVX2.
     #[target_feature(enable = "avx2")]
     unsafe fn run_on_avx2<W: LaneWork>(work: W) -> W::Output {
-        work.run::<Portable>()
+        work.run::<Avx>()
+    }
+
+    /// Applies an AVX operation to one or two lane arrays (of `f32` or mask bits).
+    macro_rules! wide {
+        ($op:ident$(::<$imm:ident>)?($($arg:expr),+)) => {{
+            // SAFETY: `Avx`'s operations run only inside `run_on_avx2` (see the module).
+            bytemuck::cast(unsafe { $op$(::<$imm>)?($(bytemuck::cast::<_, __m256>($arg)),+) })
+        }};
+    }
+
+    impl Backend for Avx {
+        #[inline(always)]
+        fn add(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            wide!(_mm256_add_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn sub(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            wide!(_mm256_sub_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn mul(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            wide!(_mm256_mul_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn div(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES] {
+            wide!(_mm256_div_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn sqrt(a: [f32; LANES]) -> [f32; LANES] {
+            wide!(_mm256_sqrt_ps(a))
+        }
+
+        /// The sign bit flipped.
+        #[inline(always)]
+        fn neg(a: [f32; LANES]) -> [f32; LANES] {
+            let sign = [-0.0f32; LANES];
+            wide!(_mm256_xor_ps(a, sign))
+        }
+
+        /// `vcvttps2dq` and back: towards zero, −2³¹ out of range ([`super::truncate`]).
+        #[inline(always)]
+        fn trunc(a: [f32; LANES]) -> [f32; LANES] {
+            // SAFETY: as `wide!`'s.
+            bytemuck::cast(unsafe { _mm256_cvtepi32_ps(_mm256_cvttps_epi32(bytemuck::cast(a))) })
+        }
+
+        /// Ordered and quiet, as Rust's `>`: false where either side is NaN.
+        #[inline(always)]
+        fn gt(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            wide!(_mm256_cmp_ps::<_CMP_GT_OQ>(a, b))
+        }
+
+        #[inline(always)]
+        fn le(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            wide!(_mm256_cmp_ps::<_CMP_LE_OQ>(a, b))
+        }
+
+        #[inline(always)]
+        fn eq(a: [f32; LANES], b: [f32; LANES]) -> [u32; LANES] {
+            wide!(_mm256_cmp_ps::<_CMP_EQ_OQ>(a, b))
+        }
+
+        /// The magnitude's bits below infinity's, compared as integers.
+        #[inline(always)]
+        fn is_finite(a: [f32; LANES]) -> [u32; LANES] {
+            let bits: __m256i = bytemuck::cast(a);
+            // SAFETY: as `wide!`'s.
+            bytemuck::cast(unsafe {
+                _mm256_cmpgt_epi32(
+                    _mm256_set1_epi32(0x7f80_0000),
+                    _mm256_and_si256(bits, _mm256_set1_epi32(0x7fff_ffff)),
+                )
+            })
+        }
+
+        #[inline(always)]
+        fn and(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
+            wide!(_mm256_and_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn or(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
+            wide!(_mm256_or_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn not(a: [u32; LANES]) -> [u32; LANES] {
+            let ones = [u32::MAX; LANES];
+            wide!(_mm256_xor_ps(a, ones))
+        }
+
+        #[inline(always)]
+        fn any(mask: [u32; LANES]) -> bool {
+            // SAFETY: as `wide!`'s.
+            unsafe { _mm256_movemask_ps(bytemuck::cast(mask)) != 0 }
+        }
+
+        /// `vblendvps`, which picks by each lane's sign bit: a mask lane is all ones or none.
+        #[inline(always)]
+        fn select(mask: [u32; LANES], if_true: [f32; LANES], if_false: [f32; LANES]) -> [f32; LANES] {
+            wide!(_mm256_blendv_ps(if_false, if_true, mask))
+        }
     }
 }
 
@@ -379,7 +506,7 @@ impl<B: Backend> Not for Mask<B> {
     type Output = Mask<B>;
     #[inline(always)]
     fn not(self) -> Mask<B> {
-        Mask::from_bits(self.0.map(|m| !m))
+        Mask::from_bits(B::not(self.0))
     }
 }
 
@@ -489,6 +616,11 @@ mod portable {
         }
 
         #[inline(always)]
+        fn neg(a: [f32; LANES]) -> [f32; LANES] {
+            a.map(|a| -a)
+        }
+
+        #[inline(always)]
         fn trunc(a: [f32; LANES]) -> [f32; LANES] {
             a.map(super::truncate)
         }
@@ -521,6 +653,11 @@ mod portable {
         #[inline(always)]
         fn or(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
             std::array::from_fn(|i| a[i] | b[i])
+        }
+
+        #[inline(always)]
+        fn not(a: [u32; LANES]) -> [u32; LANES] {
+            a.map(|m| !m)
         }
 
         #[inline(always)]
@@ -627,7 +764,7 @@ mod sse {
         _mm_cmpgt_epi32, _mm_cmpgt_pd, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps,
         _mm_cvtpd_ps, _mm_cvttps_epi32, _mm_div_ps, _mm_movelh_ps, _mm_movemask_epi8, _mm_movemask_ps,
         _mm_mul_ps, _mm_or_ps, _mm_packs_epi16, _mm_packs_epi32, _mm_set1_epi8, _mm_set1_epi32, _mm_setr_ps,
-        _mm_shuffle_ps, _mm_sqrt_ps, _mm_storel_epi64, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps,
+        _mm_shuffle_ps, _mm_sqrt_ps, _mm_storel_epi64, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps, _mm_xor_ps,
     };
 
     use super::{Backend, Floats, Ints, LANES, Mask, Wides};
@@ -817,6 +954,13 @@ mod sse {
             halves!(_mm_sqrt_ps(a))
         }
 
+        /// The sign bit flipped (`xorps`).
+        #[inline(always)]
+        fn neg(a: [f32; LANES]) -> [f32; LANES] {
+            let sign = [-0.0f32; LANES];
+            halves!(_mm_xor_ps(a, sign))
+        }
+
         /// `cvttps2dq` and back: towards zero, −2³¹ out of range ([`super::truncate`]).
         #[inline(always)]
         fn trunc(a: [f32; LANES]) -> [f32; LANES] {
@@ -866,6 +1010,12 @@ mod sse {
         #[inline(always)]
         fn or(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
             halves!(_mm_or_ps(a, b))
+        }
+
+        #[inline(always)]
+        fn not(a: [u32; LANES]) -> [u32; LANES] {
+            let ones = [u32::MAX; LANES];
+            halves!(_mm_xor_ps(a, ones))
         }
 
         #[inline(always)]
@@ -1119,7 +1269,7 @@ impl<B: Backend> Neg for Floats<B> {
     type Output = Floats<B>;
     #[inline(always)]
     fn neg(self) -> Floats<B> {
-        Floats::new(self.0.map(|a| -a))
+        Floats::new(B::neg(self.0))
     }
 }
 
@@ -1566,28 +1716,49 @@ mod tests {
         }
     }
 
-    /// Lane code run by `run_widest` (on AVX2 where the processor has it: the portable loops
-    /// compiled eight lanes wide) has the native backend's bits, NaN lanes included.
+    /// Every backend operation run by `run_widest` (on the AVX backend where the processor has
+    /// AVX2) has the native backend's bits and the portable loops', on awkward inputs (NaN
+    /// lanes included), and so does a formula of them.
     #[test]
     fn the_widest_lanes_equal_the_native_backend_bit_for_bit() {
-        struct Formula(Vec3s, Vec3s);
-        impl LaneWork for Formula {
-            type Output = [[u32; LANES]; 4];
+        struct EveryOperation(Vec3s, Vec3s);
+        impl LaneWork for EveryOperation {
+            type Output = Vec<[u32; LANES]>;
             fn run<B: Backend>(self) -> Self::Output {
                 let (a, b) = (self.0.on::<B>(), self.1.on::<B>());
-                let n = a.normalize_or_zero();
-                let d = n.dot(b).max(Floats::splat(0.0)) / b.length();
-                let m = d.gt(Floats::splat(0.25)).or(a.x.is_finite());
-                let c = m.select3(a.cross(b) - b.scale(d), -a);
-                [d, c.x, c.y, Real::trunc(c.z * Floats::splat(1e3))].map(|f| f.0.map(f32::to_bits))
+                let mut results = Vec::new();
+                for (x, y) in [(a.x, b.x), (a.y, b.y), (a.z, b.z), (a.x, a.y), (b.z, a.x)] {
+                    let (m, n) = (x.gt(y), y.is_finite());
+                    let floats = [
+                        x + y,
+                        x - y,
+                        x * y,
+                        x / y,
+                        x.sqrt(),
+                        -x,
+                        Real::trunc(x),
+                        m.select(x, y),
+                    ];
+                    let masks = [m, x.le(y), x.eq(y), x.eq(x), n, m.and(n), m.or(n), !m];
+                    results.extend(floats.map(|f| f.0.map(f32::to_bits)));
+                    results.extend(masks.map(|m| m.0));
+                    results.push([u32::from(m.any()), u32::from(m.and(!m).any()), 0, 0, 0, 0, 0, 0]);
+                }
+                let normal = a.normalize_or_zero();
+                let d = normal.dot(b).max(Floats::splat(0.0)) / b.length();
+                let keep = d.gt(Floats::splat(0.25)).or(a.x.is_finite());
+                let c = keep.select3(a.cross(b) - b.scale(d), -a);
+                results.extend([d, c.x, c.y, c.z].map(|f| f.0.map(f32::to_bits)));
+                results
             }
         }
         let a = vectors();
         let mut b = vectors();
         b.rotate_left(3);
-        let formula = || Formula(Vec3s::from_array(&a), Vec3s::from_array(&b));
-        assert_eq!(run_widest(formula()), formula().run::<Native>());
-        assert_eq!(formula().run::<Portable>(), formula().run::<Native>());
+        let every = || EveryOperation(Vec3s::from_array(&a), Vec3s::from_array(&b));
+        let native = every().run::<Native>();
+        assert_eq!(run_widest(every()), native);
+        assert_eq!(every().run::<Portable>(), native);
     }
 
     #[test]

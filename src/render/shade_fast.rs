@@ -244,6 +244,13 @@ impl<'f> FastLighting<'f> {
         (lit.textured + lit.rest).to_array()
     }
 
+    /// [`FastLighting::light_lanes_of`] on backend `B`, for lane code already running there.
+    #[inline(always)]
+    fn light_lanes_on<B: Backend>(&self, position: Vec3s<B>, normal: Vec3s<B>) -> [Vec3; LANES] {
+        let lit = self.light_surface_lanes_on(position, normal, &SurfaceLanes::of(self.material));
+        (lit.textured + lit.rest).to_array()
+    }
+
     /// The lighting of points whose `k_a` and `k_d` may vary from lane to lane (vertex colours,
     /// textures: `surface_lanes`), in `Frame::light_side`'s two parts; each lane has the bits of
     /// the general path's lighting of the material it sees. It runs on the widest lanes the
@@ -1033,11 +1040,11 @@ fn interpolate([a, b, c]: [Vec3; 3], weights: Vec3) -> Vec3 {
 /// `renormalize_or_else` lane-wise: `v / |v|` where `|v|² > 1e-12`, else the face normal of the
 /// lane's triangle.
 #[inline(always)]
-fn renormalize_lanes(
+fn renormalize_lanes<B: Backend>(
     frame: &Frame,
-    interpolated: Vec3s,
+    interpolated: Vec3s<B>,
     triangles: &[Option<&FrameTriangle>; LANES],
-) -> Vec3s {
+) -> Vec3s<B> {
     let length_squared = interpolated.dot(interpolated);
     let usable = length_squared.gt(Floats::splat(1e-12));
     let normals = interpolated.divide(length_squared.sqrt());
@@ -1247,15 +1254,22 @@ impl<'f> PhongRows<'f> {
 
     /// The colours of the pixels where the raster triangle's edge functions take the values
     /// `edges` (converted to `f32`, one pixel per lane). Lanes outside the triangle get a
-    /// colour too, which the caller drops.
+    /// colour too, which the caller drops. Interpolated and lit on the widest lanes the
+    /// processor has (`lanes::run_widest`).
     #[inline]
     pub fn shade(&self, edges: [Floats; 3]) -> [Vec3; LANES] {
+        run_widest(PhongRowsWork { rows: self, edges })
+    }
+
+    /// [`PhongRows::shade`] on backend `B`.
+    #[inline(always)]
+    fn shade_on<B: Backend>(&self, edges: [Floats<B>; 3]) -> [Vec3; LANES] {
         // `shade::perspective_weights`, then `Corners::apply`.
-        let screen = edges.map(|edge| edge * self.inv_area);
-        let over_w: [Floats; 3] = std::array::from_fn(|k| screen[k] * self.inv_w[k]);
+        let screen = edges.map(|edge| edge * self.inv_area.on());
+        let over_w: [Floats<B>; 3] = std::array::from_fn(|k| screen[k] * self.inv_w[k].on());
         let sum = over_w[0] + over_w[1] + over_w[2];
         let positive = sum.gt(Floats::splat(0.0));
-        let [x, y, z]: [Floats; 3] = std::array::from_fn(|k| positive.select(over_w[k] / sum, screen[k]));
+        let [x, y, z]: [Floats<B>; 3] = std::array::from_fn(|k| positive.select(over_w[k] / sum, screen[k]));
         let [x, y, z] = match self.corners {
             Corners::Identity => [x, y, z],
             Corners::Swapped => [x, z, y],
@@ -1265,15 +1279,37 @@ impl<'f> PhongRows<'f> {
                 [weights.x, weights.y, weights.z]
             }
         };
-        let interpolate = |[a, b, c]: [Vec3s; 3]| a.scale(x) + b.scale(y) + c.scale(z);
-        let position = interpolate(self.positions);
+        let weights = [x, y, z];
+        let position = interpolate_lanes(self.positions, weights);
         let normals = renormalize_lanes(
             self.lighting.frame,
-            interpolate(self.normals),
+            interpolate_lanes(self.normals, weights),
             &[Some(self.triangle); LANES],
         );
         let normals = if self.reversed { -normals } else { normals };
-        self.lighting.light_lanes_of(position, normals)
+        self.lighting.light_lanes_on(position, normals)
+    }
+}
+
+/// `a·x + b·y + c·z` lane-wise, for corners `[a, b, c]` and weights `[x, y, z]` (as
+/// `interpolate`).
+#[inline(always)]
+fn interpolate_lanes<B: Backend>([a, b, c]: [Vec3s; 3], [x, y, z]: [Floats<B>; 3]) -> Vec3s<B> {
+    a.on::<B>().scale(x) + b.on().scale(y) + c.on().scale(z)
+}
+
+/// [`PhongRows::shade`]'s arguments, for `lanes::run_widest`.
+struct PhongRowsWork<'r, 'f> {
+    rows: &'r PhongRows<'f>,
+    edges: [Floats; 3],
+}
+
+impl LaneWork for PhongRowsWork<'_, '_> {
+    type Output = [Vec3; LANES];
+
+    #[inline(always)]
+    fn run<B: Backend>(self) -> [Vec3; LANES] {
+        self.rows.shade_on(self.edges.map(Floats::on::<B>))
     }
 }
 
