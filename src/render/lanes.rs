@@ -40,6 +40,8 @@ pub trait Backend: Copy + Default + Debug + PartialEq + Send + Sync + 'static {
     fn sqrt(a: [f32; LANES]) -> [f32; LANES];
     /// The sign flipped (`-a`: `-0.0` stays distinct from `0.0 - 0.0`).
     fn neg(a: [f32; LANES]) -> [f32; LANES];
+    /// The sign cleared (`f32::abs`).
+    fn abs(a: [f32; LANES]) -> [f32; LANES];
     /// Towards zero, as [`truncate`].
     fn trunc(a: [f32; LANES]) -> [f32; LANES];
     /// `>`, ordered (false where either side is NaN), as mask bits.
@@ -123,9 +125,9 @@ pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
 mod avx2 {
     use std::arch::x86_64::{
         __m256, __m256i, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_and_si256,
-        _mm256_blendv_ps, _mm256_cmp_ps, _mm256_cmpgt_epi32, _mm256_cvtepi32_ps, _mm256_cvttps_epi32,
-        _mm256_div_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps, _mm256_set1_epi32, _mm256_sqrt_ps,
-        _mm256_sub_ps, _mm256_xor_ps,
+        _mm256_andnot_ps, _mm256_blendv_ps, _mm256_cmp_ps, _mm256_cmpgt_epi32, _mm256_cvtepi32_ps,
+        _mm256_cvttps_epi32, _mm256_div_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps,
+        _mm256_set1_epi32, _mm256_sqrt_ps, _mm256_sub_ps, _mm256_xor_ps,
     };
 
     use super::{Backend, LANES, LaneWork};
@@ -186,6 +188,13 @@ mod avx2 {
         fn neg(a: [f32; LANES]) -> [f32; LANES] {
             let sign = [-0.0f32; LANES];
             wide!(_mm256_xor_ps(a, sign))
+        }
+
+        /// The sign bit cleared.
+        #[inline(always)]
+        fn abs(a: [f32; LANES]) -> [f32; LANES] {
+            let sign = [-0.0f32; LANES];
+            wide!(_mm256_andnot_ps(sign, a))
         }
 
         /// `vcvttps2dq` and back: towards zero, −2³¹ out of range ([`super::truncate`]).
@@ -621,6 +630,11 @@ mod portable {
         }
 
         #[inline(always)]
+        fn abs(a: [f32; LANES]) -> [f32; LANES] {
+            a.map(f32::abs)
+        }
+
+        #[inline(always)]
         fn trunc(a: [f32; LANES]) -> [f32; LANES] {
             a.map(super::truncate)
         }
@@ -959,6 +973,13 @@ mod sse {
         fn neg(a: [f32; LANES]) -> [f32; LANES] {
             let sign = [-0.0f32; LANES];
             halves!(_mm_xor_ps(a, sign))
+        }
+
+        /// The sign bit cleared (`andnps`).
+        #[inline(always)]
+        fn abs(a: [f32; LANES]) -> [f32; LANES] {
+            let sign = [-0.0f32; LANES];
+            halves!(_mm_andnot_ps(sign, a))
         }
 
         /// `cvttps2dq` and back: towards zero, −2³¹ out of range ([`super::truncate`]).
@@ -1398,7 +1419,7 @@ impl<B: Backend> Real for Floats<B> {
 
     #[inline(always)]
     fn abs(self) -> Self {
-        Floats::new(self.0.map(f32::abs))
+        Floats::new(B::abs(self.0))
     }
 
     #[inline(always)]
@@ -1736,6 +1757,7 @@ mod tests {
                         x / y,
                         x.sqrt(),
                         -x,
+                        Real::abs(x),
                         Real::trunc(x),
                         m.select(x, y),
                     ];

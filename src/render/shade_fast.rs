@@ -916,9 +916,13 @@ impl<'f> PhongBatch<'f> {
                 let depth: Floats = Vec3s::from_array(&self.positions).dot(Vec3s::splat(frame.forward));
                 depth.0.map(Vec3::splat)
             }
-            PixelOutput::Lit(lighting) => lighting.light_lanes(&self.positions, &self.side_normals(frame)),
+            PixelOutput::Lit(lighting) => run_widest(PhongBatchWork {
+                batch: self,
+                frame,
+                lighting,
+            }),
             PixelOutput::Normals => {
-                let normals: Vec3s = Vec3s::from_array(&self.side_normals(frame));
+                let normals: Vec3s = self.side_normals(frame);
                 let half = Floats::splat(0.5);
                 (normals.scale(half) + Vec3s::splat(Vec3::splat(0.5))).to_array()
             }
@@ -932,23 +936,44 @@ impl<'f> PhongBatch<'f> {
     /// The waiting pixels' normals renormalised (`renormalize_or_else`, lane-wise: `v / |v|`
     /// where `|v|² > 1e-12`, else the face normal) and turned to the side shaded.
     #[inline(always)]
-    fn side_normals(&self, frame: &Frame) -> [Vec3; LANES] {
+    fn side_normals<B: Backend>(&self, frame: &Frame) -> Vec3s<B> {
         let interpolated = if self.slerp {
             slerp_triangle_lanes(&self.arcs, &self.thirds, &self.weights)
         } else {
             Vec3s::from_array(&self.normals)
         };
         let normals = renormalize_lanes(frame, interpolated, &self.triangles);
-        Mask::from_bools(self.reversed)
-            .select3(-normals, normals)
-            .to_array()
+        Mask::from_bools(self.reversed).select3(-normals, normals)
+    }
+}
+
+/// A [`PhongBatch`]'s lit pixels, for `lanes::run_widest`: normals (Slerp included) and
+/// lighting on the widest lanes.
+struct PhongBatchWork<'b, 'f> {
+    batch: &'b PhongBatch<'f>,
+    frame: &'f Frame,
+    lighting: FastLighting<'f>,
+}
+
+impl LaneWork for PhongBatchWork<'_, '_> {
+    type Output = [Vec3; LANES];
+
+    #[inline(always)]
+    fn run<B: Backend>(self) -> [Vec3; LANES] {
+        let normals = self.batch.side_normals::<B>(self.frame);
+        self.lighting
+            .light_lanes_on(Vec3s::from_array(&self.batch.positions), normals)
     }
 }
 
 /// `slerp_triangle_along` for the lanes' weights, first arcs and third normals: lane by lane
 /// the same operations, `trig`'s sine, cosine and `atan2` included.
 #[inline(always)]
-fn slerp_triangle_lanes(arcs: &[NormalArc; LANES], thirds: &[Vec3; LANES], weights: &[Vec3; LANES]) -> Vec3s {
+fn slerp_triangle_lanes<B: Backend>(
+    arcs: &[NormalArc; LANES],
+    thirds: &[Vec3; LANES],
+    weights: &[Vec3; LANES],
+) -> Vec3s<B> {
     let weights = Vec3s::from_array(weights);
     let first = ArcLanes::of(arcs);
     let first_two_weight = weights.x + weights.y;
@@ -959,14 +984,14 @@ fn slerp_triangle_lanes(arcs: &[NormalArc; LANES], thirds: &[Vec3; LANES], weigh
 
 /// [`NormalArc`]s in lanes: where each starts, where it goes (a chord's end, a turn's
 /// `towards`), its angle (a turn's), and which lanes are chords.
-struct ArcLanes {
-    start: Vec3s,
-    other: Vec3s,
-    angle: Floats,
-    chord: Mask,
+struct ArcLanes<B: Backend> {
+    start: Vec3s<B>,
+    other: Vec3s<B>,
+    angle: Floats<B>,
+    chord: Mask<B>,
 }
 
-impl ArcLanes {
+impl<B: Backend> ArcLanes<B> {
     /// The lanes of `arcs`.
     #[inline(always)]
     fn of(arcs: &[NormalArc; LANES]) -> Self {
@@ -992,7 +1017,7 @@ impl ArcLanes {
     /// `NormalArc::new` lane by lane; a half turn's perpendicular (`any_orthonormal_vector`)
     /// per lane where one occurs.
     #[inline(always)]
-    fn new(n0: Vec3s, n1: Vec3s) -> Self {
+    fn new(n0: Vec3s<B>, n1: Vec3s<B>) -> Self {
         let zero = Floats::splat(0.0);
         let cos = n0.dot(n1);
         let cross = n0.cross(n1);
@@ -1019,7 +1044,7 @@ impl ArcLanes {
     /// `NormalArc::at(t)` lane by lane (the chord only where a lane has one: rare, normals
     /// nearly parallel).
     #[inline(always)]
-    fn at(&self, t: Floats) -> Vec3s {
+    fn at(&self, t: Floats<B>) -> Vec3s<B> {
         let (sine, cosine) = trig::sin_cos(t * self.angle);
         let turn = self.start.scale(cosine) + self.other.scale(sine);
         if !self.chord.any() {
@@ -1079,11 +1104,11 @@ pub struct SurfaceBatch<'f> {
 /// `FastPhong::shade`'s interpolation, lane-wise: per lane the `corner`s of its triangle
 /// weighted by `weights`.
 #[inline(always)]
-fn interpolate_corners<T>(
+fn interpolate_corners<B: Backend, T>(
     triangles: &[&T; LANES],
-    weights: &[Floats; 3],
+    weights: &[Floats<B>; 3],
     corner: impl Fn(&T, usize) -> Vec3,
-) -> Vec3s {
+) -> Vec3s<B> {
     let at = |k: usize| Vec3s::gather(triangles, |triangle| corner(triangle, k));
     at(0).scale(weights[0]) + at(1).scale(weights[1]) + at(2).scale(weights[2])
 }
@@ -1188,7 +1213,7 @@ impl<'f> SurfaceBatch<'f> {
 /// slerped (`slerp_triangle_lanes`; a batch may hold triangles of both kinds where two objects
 /// light alike, so each lane takes its own).
 #[inline(always)]
-fn surface_normals(triangles: &[&SurfaceTriangle; LANES], weights: &[Floats; 3]) -> Vec3s {
+fn surface_normals<B: Backend>(triangles: &[&SurfaceTriangle; LANES], weights: &[Floats<B>; 3]) -> Vec3s<B> {
     let nlerped = || interpolate_corners(triangles, weights, |triangle, k| triangle.normals[k]);
     let Some(any_arc) = triangles.iter().find_map(|triangle| triangle.slerp) else {
         return nlerped();
@@ -2061,9 +2086,10 @@ pub(crate) mod tests {
         }
     }
 
-    /// Slerp in lanes against `slerp_triangle` (`NormalArc`) on awkward triangles, bit for bit:
-    /// normals parallel, nearly parallel, opposite (the half turn), zero, unnormalised, and
-    /// weights on corners and edges (a zero weight for the first two).
+    /// Slerp in lanes, on the widest lanes and the native ones, against `slerp_triangle`
+    /// (`NormalArc`) on awkward triangles, bit for bit: normals parallel, nearly parallel,
+    /// opposite (the half turn), zero, unnormalised, and weights on corners and edges (a zero
+    /// weight for the first two).
     #[test]
     fn slerp_in_lanes_equals_slerp_bit_for_bit() {
         let tilt = |angle: f32| Vec3::new(angle.sin(), 0.0, angle.cos());
@@ -2098,19 +2124,42 @@ pub(crate) mod tests {
             let lanes: [([Vec3; 3], Vec3); LANES] =
                 std::array::from_fn(|lane| (normal_sets[(set + lane) % normal_sets.len()], weights[lane]));
             let arcs = lanes.map(|(n, _)| NormalArc::new(n[0], n[1]));
-            let slerped = slerp_triangle_lanes(&arcs, &lanes.map(|(n, _)| n[2]), &lanes.map(|(_, w)| w));
-            for (lane, (normals, weights)) in lanes.iter().enumerate() {
-                let bits = |v: Vec3| v.to_array().map(f32::to_bits);
-                assert_eq!(
-                    bits(slerped.to_array()[lane]),
-                    bits(slerp_triangle(*normals, *weights)),
-                    "{normals:?} at {weights}"
-                );
-                compared += 1;
+            let slerp = Slerp {
+                arcs,
+                thirds: lanes.map(|(n, _)| n[2]),
+                weights: lanes.map(|(_, w)| w),
+            };
+            // On the widest lanes (AVX where the processor has it) and the native ones.
+            for (slerped, backend) in [(run_widest(slerp), "widest"), (slerp.run::<Native>(), "native")] {
+                for (lane, (normals, weights)) in lanes.iter().enumerate() {
+                    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+                    assert_eq!(
+                        bits(slerped[lane]),
+                        bits(slerp_triangle(*normals, *weights)),
+                        "{normals:?} at {weights}, {backend} lanes"
+                    );
+                    compared += 1;
+                }
             }
             assert!(normals.iter().all(|n| n.is_finite()));
         }
-        assert_eq!(compared, normal_sets.len() * LANES);
+        assert_eq!(compared, 2 * normal_sets.len() * LANES);
+    }
+
+    /// `slerp_triangle_lanes`' arguments, to run it on any backend.
+    #[derive(Clone, Copy)]
+    struct Slerp {
+        arcs: [NormalArc; LANES],
+        thirds: [Vec3; LANES],
+        weights: [Vec3; LANES],
+    }
+
+    impl LaneWork for Slerp {
+        type Output = [Vec3; LANES];
+
+        fn run<B: Backend>(self) -> [Vec3; LANES] {
+            slerp_triangle_lanes::<B>(&self.arcs, &self.thirds, &self.weights).to_array()
+        }
     }
 
     /// Gouraud vertex colours, lit by the fast path in the geometry stage, against the general
