@@ -230,7 +230,7 @@ impl PhongPlane<'_> {
 struct GouraudPlane {
     edges: TileEdges,
     colors: GouraudColors,
-    /// The lanes' steps along a row (for [`GouraudPlane::group_colors`]), formed once per
+    /// The lanes' steps along a row (for [`GouraudPlane::write_group_colors`]), formed once per
     /// triangle and tile: where the triangle is a group of lanes wide in the tile and its edge
     /// values over the tile are held exactly in `f64` lanes.
     lane_steps: Option<LaneSteps>,
