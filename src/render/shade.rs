@@ -1087,7 +1087,7 @@ fn shade_single_sample<'f>(
                         let mut gathered = GatheredPixels::default();
                         pixels.for_each_group(|group| {
                             if group.shown.all() {
-                                let colors = rows.shade(group.edges());
+                                let colors = rows.shade(|| group.edges());
                                 target.color[group.first..group.first + LANES].copy_from_slice(&colors);
                                 return;
                             }
@@ -1096,7 +1096,7 @@ fn shade_single_sample<'f>(
                             // full lanes of the same rows.
                             for lane in (0..LANES).filter(|&lane| group.shown.lane(lane)) {
                                 if gathered.push(group.first + lane, group.edges_at(lane)) {
-                                    let colors = rows.shade(gathered.edges());
+                                    let colors = rows.shade(|| gathered.edges());
                                     for (&offset, color) in gathered.offsets.iter().zip(colors) {
                                         target.color[offset] = color;
                                     }
@@ -1494,7 +1494,7 @@ impl PixelGroup<'_> {
 
     /// The edge functions at every lane's pixel centre, each exact in `i64` and then rounded
     /// once to `f32`.
-    #[inline]
+    #[inline(always)]
     fn edges(&self) -> [Floats; 3] {
         match self.lane_steps {
             Some(lane_steps) => lane_steps.edges(self.start),
@@ -2346,7 +2346,7 @@ mod tests {
                                     });
                                     let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                                     assert_eq!(
-                                        bits(rows.shade(group)[lane]),
+                                        bits(rows.shade(|| group)[lane]),
                                         bits(color[0]),
                                         "rows at {px}, {py}"
                                     );

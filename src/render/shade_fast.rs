@@ -1278,11 +1278,13 @@ impl<'f> PhongRows<'f> {
     }
 
     /// The colours of the pixels where the raster triangle's edge functions take the values
-    /// `edges` (converted to `f32`, one pixel per lane). Lanes outside the triangle get a
+    /// `edges` gives (converted to `f32`, one pixel per lane). Lanes outside the triangle get a
     /// colour too, which the caller drops. Interpolated and lit on the widest lanes the
-    /// processor has (`lanes::run_widest`).
+    /// processor has (`lanes::run_widest`); `edges` runs there too, so that its values reach
+    /// the wide lanes in registers (stored as two halves and loaded whole, they would wait
+    /// for the stores).
     #[inline]
-    pub fn shade(&self, edges: [Floats; 3]) -> [Vec3; LANES] {
+    pub fn shade(&self, edges: impl Fn() -> [Floats; 3]) -> [Vec3; LANES] {
         run_widest(PhongRowsWork { rows: self, edges })
     }
 
@@ -1324,17 +1326,17 @@ fn interpolate_lanes<B: Backend>([a, b, c]: [Vec3s; 3], [x, y, z]: [Floats<B>; 3
 }
 
 /// [`PhongRows::shade`]'s arguments, for `lanes::run_widest`.
-struct PhongRowsWork<'r, 'f> {
+struct PhongRowsWork<'r, 'f, E> {
     rows: &'r PhongRows<'f>,
-    edges: [Floats; 3],
+    edges: E,
 }
 
-impl LaneWork for PhongRowsWork<'_, '_> {
+impl<E: Fn() -> [Floats; 3]> LaneWork for PhongRowsWork<'_, '_, E> {
     type Output = [Vec3; LANES];
 
     #[inline(always)]
     fn run<B: Backend>(self) -> [Vec3; LANES] {
-        self.rows.shade_on(self.edges.map(Floats::on::<B>))
+        self.rows.shade_on((self.edges)().map(Floats::on::<B>))
     }
 }
 
