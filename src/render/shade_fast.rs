@@ -18,7 +18,11 @@
 //!
 //! Eight points are lit at once ([`FastLighting::light_lanes`]), each scalar step of
 //! `lighting::incidence` and `illuminate_with_visibility` becoming the same IEEE operation on
-//! every lane (`render::lanes`), and each `continue` a mask:
+//! every lane (`render::lanes`), and each `continue` a mask. The lighting is written once,
+//! generic over the lanes' backend, and runs on the widest lanes the processor has
+//! (`lanes::run_widest`: 256-bit AVX where it has AVX2), together with the work around it that
+//! is large enough to pay for the call: a Phong triangle's rows ([`PhongRows::shade`]:
+//! weights, interpolation, renormalisation) and a Phong batch's normals, Slerp included:
 //!
 //! ```text
 //! directional  L = to_light                      strength = 1                  every lane
@@ -67,7 +71,7 @@ use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer, shown_comp
 use crate::render::lanes::{Backend, Floats, LANES, LaneWork, Mask, Native, Vec3s, run_widest};
 use crate::render::normals::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
 use crate::render::raster::Corners;
-use crate::render::shadow::shadow_visibility_lanes;
+use crate::render::shadow::{ShadowMap, shadow_visibility_lanes};
 use crate::render::surface_lanes::{
     EdgeQueue, QueuedPixels, RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, surface_lanes, varies,
 };
@@ -448,7 +452,7 @@ impl LaneWork for LightingWork<'_, '_> {
 /// one (their integer lanes are its alone).
 #[inline(always)]
 fn shadow_visibility<B: Backend>(
-    map: Option<&crate::render::shadow::ShadowMap>,
+    map: Option<&ShadowMap>,
     position: Vec3s<B>,
     normal: Vec3s<B>,
     to_light: Vec3s<B>,
