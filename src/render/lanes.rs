@@ -11,13 +11,13 @@
 //! compiler turned them into a mix of scalar and shuffled partial vectors, about 1.7 times the
 //! instructions of the SSE backend in the lighting (`FastLighting::light_lanes`).
 //!
-//! Where the processor has AVX2, the same portable loops compiled inside an `avx2` function
-//! become one 256-bit instruction per operation, half the SSE backend's. [`run_widest`] runs
-//! a piece of lane code ([`LaneWork`], generic over the backend) that way when the processor
-//! allows, and on the native backend otherwise: the same operations, so the same bits, on
-//! every machine. The lighting runs there; the rest stays on the native backend, where the
-//! masks, integer and `f64` lanes of the rasterizer compile better than the portable loops
-//! do under AVX2 (measured: docs/performance.md).
+//! Where the processor has AVX2, [`run_widest`] runs a piece of lane code ([`LaneWork`],
+//! generic over the backend) on a third backend, `Avx`, inside an `avx2` function: one 256-bit
+//! instruction per operation, half the SSE backend's. Elsewhere it runs the same code on the
+//! native backend: the same operations, so the same bits, on every machine. The lighting runs
+//! there, with the Phong interpolation around it; the rest stays on the native backend, where
+//! the rasterizer's masks, integer and `f64` lanes are (the whole program built for AVX2 was
+//! slower on flat and Gouraud frames: docs/performance.md).
 
 use std::fmt::Debug;
 use std::marker::PhantomData;
@@ -101,8 +101,9 @@ pub trait LaneWork {
     fn run<B: Backend>(self) -> Self::Output;
 }
 
-/// `work` on the widest lanes the processor has: the portable loops compiled for AVX2 where it
-/// has AVX2, else the native backend. The result has the same bits either way.
+/// `work` on the widest lanes the processor has: the `Avx` backend where it has AVX2, else the
+/// native backend. The result has the same bits either way. A call costs a feature test, and
+/// its lanes cross in memory: worth it for a few hundred operations, not for a few dozen.
 #[inline(always)]
 pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
     #[cfg(target_arch = "x86_64")]
