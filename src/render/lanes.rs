@@ -570,8 +570,8 @@ use sse as native;
 use portable as native;
 
 /// The lane operations as loops over the arrays, for the compiler to vectorise: the backend of
-/// targets without one of their own and of [`run_widest`]'s AVX2 path (compiled everywhere,
-/// so the tests can hold the others to it).
+/// targets without one of their own (compiled everywhere, so the tests can hold the others to
+/// it).
 #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
 mod portable {
     use glam::Vec3;
