@@ -118,8 +118,9 @@ enum LaneModel {
     /// Lambert's diffuse term alone; also Phong and Blinn-Phong without a specular colour, which
     /// add nothing else.
     Lambert,
-    Phong,
-    BlinnPhong,
+    /// With the material's shininess, sorted once.
+    Phong(Exponent),
+    BlinnPhong(Exponent),
     /// Cook-Torrance with Beckmann's distribution (the material's `Microfacet`).
     Beckmann,
     /// Cook-Torrance with the GGX distribution.
@@ -184,8 +185,8 @@ impl<'f> FastLighting<'f> {
                 LaneModel::Lambert
             }
             LightingModel::Lambert => LaneModel::Lambert,
-            LightingModel::Phong => LaneModel::Phong,
-            LightingModel::BlinnPhong => LaneModel::BlinnPhong,
+            LightingModel::Phong => LaneModel::Phong(Exponent::of(material.shininess)),
+            LightingModel::BlinnPhong => LaneModel::BlinnPhong(Exponent::of(material.shininess)),
             LightingModel::CookTorrance(surface) => match surface.distribution {
                 MicrofacetDistribution::Beckmann => LaneModel::Beckmann,
                 MicrofacetDistribution::Ggx => LaneModel::Ggx,
@@ -285,8 +286,12 @@ impl<'f> FastLighting<'f> {
             },
             LaneModel::SurfaceConstant => self.one_colour_lanes(surface),
             LaneModel::Lambert => self.light_model_lanes(Lambert, position, normal, surface),
-            LaneModel::Phong => self.light_model_lanes(Phong, position, normal, surface),
-            LaneModel::BlinnPhong => self.light_model_lanes(BlinnPhong, position, normal, surface),
+            LaneModel::Phong(shininess) => {
+                self.light_model_lanes(Phong(shininess), position, normal, surface)
+            }
+            LaneModel::BlinnPhong(shininess) => {
+                self.light_model_lanes(BlinnPhong(shininess), position, normal, surface)
+            }
             LaneModel::Beckmann => {
                 let model = CookTorrance::<false>(self.microfacet());
                 self.light_model_lanes(model, position, normal, surface)
@@ -382,7 +387,7 @@ impl<'f> FastLighting<'f> {
                     // test below turns away: the lane does not reach. `cos_cutoff > cos_angle` is
                     // `cos_angle < cos_cutoff`, false for NaN as there.
                     let reaches = reaches.and(!Floats::splat(cos_cutoff).gt(cos_angle));
-                    let spot = specular_power_lanes(cos_angle, exponent, reaches);
+                    let spot = specular_power_lanes(cos_angle, Exponent::of(exponent), reaches);
                     (to_light, spot * attenuate_lanes(attenuation, distance), reaches)
                 }
             };
@@ -553,9 +558,10 @@ impl Reflectance for Lambert {
     }
 }
 
-/// Lambert's term and `k_s·I·max(R·V, 0)^n`, `R = 2(N·L)N − L`.
+/// Lambert's term and `k_s·I·max(R·V, 0)^n`, `R = 2(N·L)N − L`, with the material's
+/// shininess `n`.
 #[derive(Clone, Copy)]
-struct Phong;
+struct Phong(Exponent);
 
 impl Reflectance for Phong {
     const SPECULAR: bool = true;
@@ -571,14 +577,15 @@ impl Reflectance for Phong {
         let cosine = reflected.dot(light.to_viewer);
         (
             Lambert.reflect(material, surface, light).0,
-            phong_specular_lanes(material, light, cosine),
+            phong_specular_lanes(material, self.0, light, cosine),
         )
     }
 }
 
-/// Lambert's term and `k_s·I·max(N·H, 0)^n`, `H = (L + V)/|L + V|`.
+/// Lambert's term and `k_s·I·max(N·H, 0)^n`, `H = (L + V)/|L + V|`, with the material's
+/// shininess `n`.
 #[derive(Clone, Copy)]
-struct BlinnPhong;
+struct BlinnPhong(Exponent);
 
 impl Reflectance for BlinnPhong {
     const SPECULAR: bool = true;
@@ -595,7 +602,7 @@ impl Reflectance for BlinnPhong {
             .dot((light.to_light + light.to_viewer).normalize_or_zero());
         (
             Lambert.reflect(material, surface, light).0,
-            phong_specular_lanes(material, light, cosine),
+            phong_specular_lanes(material, self.0, light, cosine),
         )
     }
 }
@@ -604,10 +611,11 @@ impl Reflectance for BlinnPhong {
 #[inline(always)]
 fn phong_specular_lanes<B: Backend>(
     material: &Material,
+    shininess: Exponent,
     light: &LightAtLanes<B>,
     cosine: Floats<B>,
 ) -> Vec3s<B> {
-    let power = specular_power_lanes(cosine, material.shininess, light.lit);
+    let power = specular_power_lanes(cosine, shininess, light.lit);
     (Vec3s::splat(material.specular) * light.intensity).scale(power)
 }
 
@@ -732,15 +740,33 @@ fn attenuate_lanes<B: Backend>(attenuation: Attenuation, distance: Floats<B>) ->
     Floats::splat(1.0) / denominator.gt(least).select(denominator, least)
 }
 
+/// An exponent of `lighting::specular_power`, sorted once (per material for the shininess):
+/// whole ones up to `MAX_SQUARED_EXPONENT` are raised by squaring, the others by `powf`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Exponent {
+    Whole(u32),
+    Other(f32),
+}
+
+impl Exponent {
+    #[inline(always)]
+    fn of(exponent: f32) -> Self {
+        match whole_exponent(exponent) {
+            Some(whole) => Exponent::Whole(whole),
+            None => Exponent::Other(exponent),
+        }
+    }
+}
+
 /// `lighting::specular_power(base, exponent)` lane-wise, for the shininess and the spot
 /// exponent: a whole exponent by the same squaring on every lane; another through `powf`, which
 /// has no lane-wise form with the same bits, called only for the lanes in `wanted` (the others
 /// are masked off by the caller and get 0).
 #[inline(always)]
-fn specular_power_lanes<B: Backend>(base: Floats<B>, exponent: f32, wanted: Mask<B>) -> Floats<B> {
-    match whole_exponent(exponent) {
-        Some(whole) => power_by_squaring(base.max(Floats::splat(0.0)), Floats::splat(1.0), whole),
-        None => Floats::new(std::array::from_fn(|i| {
+fn specular_power_lanes<B: Backend>(base: Floats<B>, exponent: Exponent, wanted: Mask<B>) -> Floats<B> {
+    match exponent {
+        Exponent::Whole(whole) => power_by_squaring(base.max(Floats::splat(0.0)), Floats::splat(1.0), whole),
+        Exponent::Other(exponent) => Floats::new(std::array::from_fn(|i| {
             if wanted.lane(i) {
                 specular_power(base.0[i], exponent)
             } else {
