@@ -239,17 +239,14 @@ impl<'f> FastLighting<'f> {
     /// one-point call; many times faster per point.
     #[inline]
     pub fn light_lanes(&self, positions: &[Vec3; LANES], normals: &[Vec3; LANES]) -> [Vec3; LANES] {
-        self.light_lanes_of(Vec3s::from_array(positions), Vec3s::from_array(normals))
-    }
-
-    /// [`FastLighting::light_lanes`] of points already in lanes.
-    #[inline]
-    pub fn light_lanes_of(&self, position: Vec3s, normal: Vec3s) -> [Vec3; LANES] {
-        let lit = self.light_surface_lanes(position, normal, &SurfaceLanes::of(self.material));
+        let surface = SurfaceLanes::of(self.material);
+        let lit =
+            self.light_surface_lanes(Vec3s::from_array(positions), Vec3s::from_array(normals), &surface);
         (lit.textured + lit.rest).to_array()
     }
 
-    /// [`FastLighting::light_lanes_of`] on backend `B`, for lane code already running there.
+    /// [`FastLighting::light_lanes`] of points already in lanes of backend `B`, for lane code
+    /// already running there.
     #[inline(always)]
     fn light_lanes_on<B: Backend>(&self, position: Vec3s<B>, normal: Vec3s<B>) -> [Vec3; LANES] {
         let lit = self.light_surface_lanes_on(position, normal, &SurfaceLanes::of(self.material));
