@@ -40,6 +40,7 @@ use crate::render::geometry::{
     CameraSetup, ObjectTransforms, ProjectedVertex, RasterOutput, SpareBuffers, TRIANGLE_CHUNK, Viewport,
     back_faces_hidden, homogeneous_facing, set_up_raster_triangles,
 };
+use crate::render::lanes::{Backend, LaneWork, run_widest};
 use crate::render::raster::{
     PixelRect, RasterTriangle, SamplePattern, SourceTriangle, depth_bound, rasterize_depth_only,
 };
@@ -185,32 +186,64 @@ fn set_up_triangles(
 
 /// Rasterizes tile `tile` (the texels `rect`) into `depth`, the map's rows from `rect.y0` on,
 /// `stride` apart, replacing what it held: the triangles facing the light, then those facing
-/// away that [`FarthestInBlocks::may_be_nearer`] cannot rule out.
+/// away that [`FarthestInBlocks::may_be_nearer`] cannot rule out. On the widest lanes, one
+/// call of [`run_widest`] per tile.
 fn rasterize_tile(rect: PixelRect, chunks: &[RasterChunk], tile: usize, depth: &mut [f32], stride: usize) {
     let (x0, width) = (rect.x0 as usize, rect.width() as usize);
     for row in 0..rect.height() as usize {
         depth[row * stride + x0..][..width].fill(f32::NEG_INFINITY);
     }
-    let mut back_faces = false;
-    for chunk in chunks {
-        for &index in chunk.tile_triangles(tile) {
-            let triangle = &chunk.triangles[index as usize];
-            if triangle.back_facing {
-                back_faces = true;
-            } else {
-                rasterize_depth_only(triangle, rect, depth, stride);
+    run_widest(DepthTile {
+        rect,
+        chunks,
+        tile,
+        depth,
+        stride,
+    });
+}
+
+/// [`rasterize_tile`]'s triangles, as lane work.
+struct DepthTile<'t> {
+    rect: PixelRect,
+    chunks: &'t [RasterChunk],
+    tile: usize,
+    depth: &'t mut [f32],
+    stride: usize,
+}
+
+impl LaneWork for DepthTile<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<B: Backend>(self) {
+        let DepthTile {
+            rect,
+            chunks,
+            tile,
+            depth,
+            stride,
+        } = self;
+        let mut back_faces = false;
+        for chunk in chunks {
+            for &index in chunk.tile_triangles(tile) {
+                let triangle = &chunk.triangles[index as usize];
+                if triangle.back_facing {
+                    back_faces = true;
+                } else {
+                    rasterize_depth_only::<B>(triangle, rect, depth, stride);
+                }
             }
         }
-    }
-    if !back_faces {
-        return;
-    }
-    let farthest = FarthestInBlocks::of(rect, depth, stride);
-    for chunk in chunks {
-        for &index in chunk.tile_triangles(tile) {
-            let triangle = &chunk.triangles[index as usize];
-            if triangle.back_facing && farthest.may_be_nearer(triangle, rect) {
-                rasterize_depth_only(triangle, rect, depth, stride);
+        if !back_faces {
+            return;
+        }
+        let farthest = FarthestInBlocks::of(rect, depth, stride);
+        for chunk in chunks {
+            for &index in chunk.tile_triangles(tile) {
+                let triangle = &chunk.triangles[index as usize];
+                if triangle.back_facing && farthest.may_be_nearer(triangle, rect) {
+                    rasterize_depth_only::<B>(triangle, rect, depth, stride);
+                }
             }
         }
     }
@@ -272,6 +305,7 @@ impl FarthestInBlocks {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::lanes::Native;
     use crate::render::raster::Visibility;
     use glam::Vec3;
 
@@ -369,7 +403,7 @@ mod tests {
                     .iter()
                     .map(|&i| &every[0].triangles[i as usize]);
                 for triangle in tile_triangles.clone().filter(|t| !t.back_facing) {
-                    rasterize_depth_only(triangle, rect, band, size as usize);
+                    rasterize_depth_only::<Native>(triangle, rect, band, size as usize);
                 }
                 let farthest = FarthestInBlocks::of(rect, band, size as usize);
                 for triangle in tile_triangles.filter(|t| t.back_facing) {

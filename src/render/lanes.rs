@@ -60,6 +60,23 @@ pub trait Backend: Copy + Default + Debug + PartialEq + Send + Sync + 'static {
     fn any(mask: [u32; LANES]) -> bool;
     /// `if_true`'s bits where `mask` is set, `if_false`'s elsewhere.
     fn select(mask: [u32; LANES], if_true: [f32; LANES], if_false: [f32; LANES]) -> [f32; LANES];
+    /// `i32::wrapping_add`.
+    fn add_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES];
+    /// `i32::wrapping_sub`.
+    fn sub_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES];
+    fn and_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES];
+    /// `>`, signed.
+    fn gt_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES];
+    fn eq_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES];
+    /// `as f32`: to nearest, ties to even.
+    fn ints_to_floats(a: [i32; LANES]) -> [f32; LANES];
+    /// Towards zero, −2³¹ out of range and for NaN (as [`truncate`]).
+    fn truncate_to_ints(a: [f32; LANES]) -> [i32; LANES];
+    fn add_wides(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES];
+    /// `>`, ordered.
+    fn gt_wides(a: [f64; LANES], b: [f64; LANES]) -> [u32; LANES];
+    /// `as f32`: to nearest, ties to even.
+    fn wides_to_floats(a: [f64; LANES]) -> [f32; LANES];
 }
 
 /// The target's own backend: the one every lane type uses unless told otherwise.
@@ -83,14 +100,14 @@ pub struct Floats<B = Native>(pub [f32; LANES], PhantomData<B>);
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Mask<B = Native>([u32; LANES], PhantomData<B>);
 
-/// One `i32` per lane (texel indices), with wrapping arithmetic.
+/// One `i32` per lane (texel indices, edge functions), with wrapping arithmetic.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Ints(pub [i32; LANES]);
+pub struct Ints<B = Native>(pub [i32; LANES], PhantomData<B>);
 
 /// One `f64` per lane, for whole numbers: exact below 2⁵³ in magnitude, where `i32` lanes are
 /// too narrow (the one-sample rasterizer's edge functions on large triangles).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Wides(pub [f64; LANES]);
+pub struct Wides<B = Native>(pub [f64; LANES], PhantomData<B>);
 
 /// Lane code generic over the backend, for [`run_widest`]: what it computes must not depend on
 /// `B` (every backend has the same bits), only how fast it runs.
@@ -125,10 +142,12 @@ pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
 #[allow(unsafe_code)]
 mod avx2 {
     use std::arch::x86_64::{
-        __m256, __m256i, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_and_si256,
-        _mm256_andnot_ps, _mm256_blendv_ps, _mm256_cmp_ps, _mm256_cmpgt_epi32, _mm256_cvtepi32_ps,
-        _mm256_cvttps_epi32, _mm256_div_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps,
-        _mm256_set1_epi32, _mm256_sqrt_ps, _mm256_sub_ps, _mm256_xor_ps,
+        __m256, __m256d, __m256i, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm256_add_epi32, _mm256_add_pd,
+        _mm256_add_ps, _mm256_and_ps, _mm256_and_si256, _mm256_andnot_ps, _mm256_blendv_ps, _mm256_castpd_ps,
+        _mm256_cmp_pd, _mm256_cmp_ps, _mm256_cmpeq_epi32, _mm256_cmpgt_epi32, _mm256_cvtepi32_ps,
+        _mm256_cvtpd_ps, _mm256_cvttps_epi32, _mm256_div_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps,
+        _mm256_permute4x64_pd, _mm256_set_m128, _mm256_set1_epi32, _mm256_shuffle_ps, _mm256_sqrt_ps,
+        _mm256_sub_epi32, _mm256_sub_ps, _mm256_xor_ps,
     };
 
     use super::{Backend, LANES, LaneWork};
@@ -155,6 +174,14 @@ mod avx2 {
         ($op:ident$(::<$imm:ident>)?($($arg:expr),+)) => {{
             // SAFETY: `Avx`'s operations run only inside `run_on_avx2` (see the module).
             bytemuck::cast(unsafe { $op$(::<$imm>)?($(bytemuck::cast::<_, __m256>($arg)),+) })
+        }};
+    }
+
+    /// Applies an AVX2 integer operation to two integer lane arrays.
+    macro_rules! int_wide {
+        ($op:ident($a:expr, $b:expr)) => {{
+            // SAFETY: `Avx`'s operations run only inside `run_on_avx2` (see the module).
+            bytemuck::cast(unsafe { $op(bytemuck::cast::<_, __m256i>($a), bytemuck::cast::<_, __m256i>($b)) })
         }};
     }
 
@@ -261,35 +288,118 @@ mod avx2 {
         fn select(mask: [u32; LANES], if_true: [f32; LANES], if_false: [f32; LANES]) -> [f32; LANES] {
             wide!(_mm256_blendv_ps(if_false, if_true, mask))
         }
+
+        #[inline(always)]
+        fn add_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            int_wide!(_mm256_add_epi32(a, b))
+        }
+
+        #[inline(always)]
+        fn sub_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            int_wide!(_mm256_sub_epi32(a, b))
+        }
+
+        #[inline(always)]
+        fn and_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            int_wide!(_mm256_and_si256(a, b))
+        }
+
+        #[inline(always)]
+        fn gt_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES] {
+            int_wide!(_mm256_cmpgt_epi32(a, b))
+        }
+
+        #[inline(always)]
+        fn eq_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES] {
+            int_wide!(_mm256_cmpeq_epi32(a, b))
+        }
+
+        /// `vcvtdq2ps`: to nearest, ties to even, as the MXCSR says.
+        #[inline(always)]
+        fn ints_to_floats(a: [i32; LANES]) -> [f32; LANES] {
+            // SAFETY: as `wide!`'s.
+            bytemuck::cast(unsafe { _mm256_cvtepi32_ps(bytemuck::cast(a)) })
+        }
+
+        /// `vcvttps2dq`: towards zero, −2³¹ out of range ([`super::truncate`]).
+        #[inline(always)]
+        fn truncate_to_ints(a: [f32; LANES]) -> [i32; LANES] {
+            // SAFETY: as `wide!`'s.
+            bytemuck::cast(unsafe { _mm256_cvttps_epi32(bytemuck::cast(a)) })
+        }
+
+        /// Four lanes per register: two `vaddpd`.
+        #[inline(always)]
+        fn add_wides(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+            let (a, b): ([__m256d; 2], [__m256d; 2]) = (bytemuck::cast(a), bytemuck::cast(b));
+            // SAFETY: as `wide!`'s.
+            let half = |i: usize| unsafe { _mm256_add_pd(a[i], b[i]) };
+            bytemuck::cast([half(0), half(1)])
+        }
+
+        /// Two `vcmppd` (ordered, quiet), their 64-bit masks narrowed to 32 bits by taking
+        /// each one's low half: `vshufps` interleaves the halves' pairs within each 128 bits,
+        /// `vpermpd` puts the pairs back in lane order.
+        #[inline(always)]
+        fn gt_wides(a: [f64; LANES], b: [f64; LANES]) -> [u32; LANES] {
+            let (a, b): ([__m256d; 2], [__m256d; 2]) = (bytemuck::cast(a), bytemuck::cast(b));
+            // SAFETY: as `wide!`'s.
+            bytemuck::cast(unsafe {
+                let low = _mm256_castpd_ps(_mm256_cmp_pd::<_CMP_GT_OQ>(a[0], b[0]));
+                let high = _mm256_castpd_ps(_mm256_cmp_pd::<_CMP_GT_OQ>(a[1], b[1]));
+                let pairs: __m256d = bytemuck::cast(_mm256_shuffle_ps::<0b10_00_10_00>(low, high));
+                _mm256_permute4x64_pd::<0b11_01_10_00>(pairs)
+            })
+        }
+
+        /// Two `vcvtpd2ps`: to nearest, ties to even, as the MXCSR says.
+        #[inline(always)]
+        fn wides_to_floats(a: [f64; LANES]) -> [f32; LANES] {
+            let halves: [__m256d; 2] = bytemuck::cast(a);
+            // SAFETY: as `wide!`'s.
+            bytemuck::cast(unsafe { _mm256_set_m128(_mm256_cvtpd_ps(halves[1]), _mm256_cvtpd_ps(halves[0])) })
+        }
     }
 }
 
-impl Wides {
+impl<B: Backend> Wides<B> {
+    /// The lanes `lanes`.
     #[inline(always)]
-    pub fn splat(value: f64) -> Self {
-        Wides([value; LANES])
+    pub const fn new(lanes: [f64; LANES]) -> Self {
+        Wides(lanes, PhantomData)
+    }
+
+    #[inline(always)]
+    pub const fn splat(value: f64) -> Self {
+        Wides::new([value; LANES])
+    }
+
+    /// The same lanes, for backend `C`'s operations.
+    #[inline(always)]
+    pub fn on<C: Backend>(self) -> Wides<C> {
+        Wides::new(self.0)
     }
 
     /// `>` per lane.
     #[inline(always)]
-    pub fn gt(self, other: Self) -> Mask {
-        native::gt_wides(self, other)
+    pub fn gt(self, other: Self) -> Mask<B> {
+        Mask::from_bits(B::gt_wides(self.0, other.0))
     }
 
     /// Each lane `as f32`: rounded once, to nearest, ties to even (so a whole number below 2⁵³
     /// converts exactly as the same integer held in an `i64` does).
     #[inline(always)]
-    pub fn to_floats(self) -> Floats {
-        native::wides_to_floats(self)
+    pub fn to_floats(self) -> Floats<B> {
+        Floats::new(B::wides_to_floats(self.0))
     }
 }
 
 /// `+` per lane.
-impl Add for Wides {
-    type Output = Wides;
+impl<B: Backend> Add for Wides<B> {
+    type Output = Wides<B>;
     #[inline(always)]
-    fn add(self, other: Wides) -> Wides {
-        native::add_wides(self, other)
+    fn add(self, other: Wides<B>) -> Wides<B> {
+        Wides::new(B::add_wides(self.0, other.0))
     }
 }
 
@@ -366,25 +476,37 @@ impl<B: Backend> Floats<B> {
     }
 }
 
-impl Floats {
+impl<B: Backend> Floats<B> {
     /// Each lane's bits, as an integer (`f32::to_bits`).
     #[inline(always)]
-    pub fn to_bits(self) -> Ints {
-        Ints(bytemuck::cast(self.0))
+    pub fn to_bits(self) -> Ints<B> {
+        Ints::new(bytemuck::cast(self.0))
     }
 
     /// Each lane rounded towards zero to an `i32` (`as i32` for |x| < 2³¹; −2³¹ beyond that
     /// and for NaN, as [`truncate`]).
     #[inline(always)]
-    pub fn truncate_to_ints(self) -> Ints {
-        native::truncate_to_ints(self)
+    pub fn truncate_to_ints(self) -> Ints<B> {
+        Ints::new(B::truncate_to_ints(self.0))
     }
 }
 
-impl Ints {
+impl<B: Backend> Ints<B> {
+    /// The lanes `lanes`.
     #[inline(always)]
-    pub fn splat(value: i32) -> Self {
-        Ints([value; LANES])
+    pub const fn new(lanes: [i32; LANES]) -> Self {
+        Ints(lanes, PhantomData)
+    }
+
+    #[inline(always)]
+    pub const fn splat(value: i32) -> Self {
+        Ints::new([value; LANES])
+    }
+
+    /// The same lanes, for backend `C`'s operations.
+    #[inline(always)]
+    pub fn on<C: Backend>(self) -> Ints<C> {
+        Ints::new(self.0)
     }
 
     /// Each lane's `value` of the entry of `items` in that lane (see [`Floats::gather`]).
@@ -394,31 +516,31 @@ impl Ints {
         for (lane, item) in lanes.iter_mut().zip(items) {
             *lane = value(item);
         }
-        Ints(lanes)
+        Ints::new(lanes)
     }
 
     /// `&` per lane.
     #[inline(always)]
     pub fn and(self, other: Self) -> Self {
-        native::and_ints(self, other)
+        Ints::new(B::and_ints(self.0, other.0))
     }
 
     /// `>` per lane.
     #[inline(always)]
-    pub fn gt(self, other: Self) -> Mask {
-        native::gt_ints(self, other)
+    pub fn gt(self, other: Self) -> Mask<B> {
+        Mask::from_bits(B::gt_ints(self.0, other.0))
     }
 
     /// `==` per lane.
     #[inline(always)]
-    pub fn eq(self, other: Self) -> Mask {
-        native::eq_ints(self, other)
+    pub fn eq(self, other: Self) -> Mask<B> {
+        Mask::from_bits(B::eq_ints(self.0, other.0))
     }
 
     /// Each lane `as f32` (rounded to nearest, ties to even, as Rust's conversion is).
     #[inline(always)]
-    pub fn to_floats(self) -> Floats {
-        native::to_floats(self)
+    pub fn to_floats(self) -> Floats<B> {
+        Floats::new(B::ints_to_floats(self.0))
     }
 }
 
@@ -492,23 +614,21 @@ impl<B: Backend> Mask<B> {
     }
 }
 
-impl Mask {
+impl<B: Backend> Mask<B> {
     /// Per lane, `if_true` where the mask holds and `if_false` elsewhere.
     #[inline(always)]
-    pub fn select_ints(self, if_true: Ints, if_false: Ints) -> Ints {
-        Ints(bytemuck::cast(
-            self.select(
-                Floats::new(bytemuck::cast(if_true.0)),
-                Floats::new(bytemuck::cast(if_false.0)),
-            )
-            .0,
-        ))
+    pub fn select_ints(self, if_true: Ints<B>, if_false: Ints<B>) -> Ints<B> {
+        Ints::new(bytemuck::cast(B::select(
+            self.0,
+            bytemuck::cast(if_true.0),
+            bytemuck::cast(if_false.0),
+        )))
     }
 
     /// −1 where the mask holds, 0 elsewhere (its bits, as integers).
     #[inline(always)]
-    pub fn to_ints(self) -> Ints {
-        Ints(bytemuck::cast(self.0))
+    pub fn to_ints(self) -> Ints<B> {
+        Ints::new(bytemuck::cast(self.0))
     }
 }
 
@@ -576,7 +696,7 @@ use portable as native;
 mod portable {
     use glam::Vec3;
 
-    use super::{Backend, Floats, Ints, LANES, Mask, Wides};
+    use super::{Backend, LANES};
 
     /// The portable loops.
     #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -686,62 +806,62 @@ mod portable {
                 f32::from_bits((if_true[i].to_bits() & mask[i]) | (if_false[i].to_bits() & !mask[i]))
             })
         }
-    }
 
-    #[inline(always)]
-    pub fn add_wides(a: Wides, b: Wides) -> Wides {
-        Wides(std::array::from_fn(|i| a.0[i] + b.0[i]))
-    }
+        #[inline(always)]
+        fn add_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            std::array::from_fn(|i| a[i].wrapping_add(b[i]))
+        }
 
-    #[inline(always)]
-    pub fn gt_wides(a: Wides, b: Wides) -> Mask {
-        Mask::from_bits(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
-    }
+        #[inline(always)]
+        fn sub_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            std::array::from_fn(|i| a[i].wrapping_sub(b[i]))
+        }
 
-    #[inline(always)]
-    pub fn wides_to_floats(a: Wides) -> Floats {
-        Floats::new(a.0.map(|value| value as f32))
-    }
+        #[inline(always)]
+        fn and_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            std::array::from_fn(|i| a[i] & b[i])
+        }
 
-    #[inline(always)]
-    pub fn truncate_to_ints(a: Floats) -> Ints {
-        Ints(a.0.map(|x| {
-            if x.abs() < 2_147_483_648.0 {
-                x as i32
-            } else {
-                i32::MIN
-            }
-        }))
-    }
+        #[inline(always)]
+        fn gt_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES] {
+            std::array::from_fn(|i| bits(a[i] > b[i]))
+        }
 
-    #[inline(always)]
-    pub fn add_ints(a: Ints, b: Ints) -> Ints {
-        Ints(std::array::from_fn(|i| a.0[i].wrapping_add(b.0[i])))
-    }
+        #[inline(always)]
+        fn eq_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES] {
+            std::array::from_fn(|i| bits(a[i] == b[i]))
+        }
 
-    #[inline(always)]
-    pub fn sub_ints(a: Ints, b: Ints) -> Ints {
-        Ints(std::array::from_fn(|i| a.0[i].wrapping_sub(b.0[i])))
-    }
+        #[inline(always)]
+        fn ints_to_floats(a: [i32; LANES]) -> [f32; LANES] {
+            a.map(|i| i as f32)
+        }
 
-    #[inline(always)]
-    pub fn and_ints(a: Ints, b: Ints) -> Ints {
-        Ints(std::array::from_fn(|i| a.0[i] & b.0[i]))
-    }
+        #[inline(always)]
+        fn truncate_to_ints(a: [f32; LANES]) -> [i32; LANES] {
+            a.map(|x| {
+                if x.abs() < 2_147_483_648.0 {
+                    x as i32
+                } else {
+                    i32::MIN
+                }
+            })
+        }
 
-    #[inline(always)]
-    pub fn gt_ints(a: Ints, b: Ints) -> Mask {
-        Mask::from_bits(std::array::from_fn(|i| bits(a.0[i] > b.0[i])))
-    }
+        #[inline(always)]
+        fn add_wides(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+            std::array::from_fn(|i| a[i] + b[i])
+        }
 
-    #[inline(always)]
-    pub fn eq_ints(a: Ints, b: Ints) -> Mask {
-        Mask::from_bits(std::array::from_fn(|i| bits(a.0[i] == b.0[i])))
-    }
+        #[inline(always)]
+        fn gt_wides(a: [f64; LANES], b: [f64; LANES]) -> [u32; LANES] {
+            std::array::from_fn(|i| bits(a[i] > b[i]))
+        }
 
-    #[inline(always)]
-    pub fn to_floats(a: Ints) -> Floats {
-        Floats::new(a.0.map(|i| i as f32))
+        #[inline(always)]
+        fn wides_to_floats(a: [f64; LANES]) -> [f32; LANES] {
+            a.map(|value| value as f32)
+        }
     }
 
     #[inline(always)]
@@ -782,44 +902,11 @@ mod sse {
         _mm_shuffle_ps, _mm_sqrt_ps, _mm_storel_epi64, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps, _mm_xor_ps,
     };
 
-    use super::{Backend, Floats, Ints, LANES, Mask, Wides};
+    use super::{Backend, LANES};
 
     /// SSE on the two halves.
     #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
     pub struct Sse;
-
-    #[inline(always)]
-    pub fn add_wides(a: Wides, b: Wides) -> Wides {
-        let (a, b): ([__m128d; 4], [__m128d; 4]) = (bytemuck::cast(a.0), bytemuck::cast(b.0));
-        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
-        let quarter = |i: usize| unsafe { _mm_add_pd(a[i], b[i]) };
-        Wides(bytemuck::cast([quarter(0), quarter(1), quarter(2), quarter(3)]))
-    }
-
-    /// Two `cmpgtpd` per half, their 64-bit masks narrowed to 32 bits by taking each one's
-    /// low half (all ones or all zeros, like the whole).
-    #[inline(always)]
-    pub fn gt_wides(a: Wides, b: Wides) -> Mask {
-        let (a, b): ([__m128d; 4], [__m128d; 4]) = (bytemuck::cast(a.0), bytemuck::cast(b.0));
-        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
-        let half = |i: usize| unsafe {
-            let low = _mm_castpd_ps(_mm_cmpgt_pd(a[2 * i], b[2 * i]));
-            let high = _mm_castpd_ps(_mm_cmpgt_pd(a[2 * i + 1], b[2 * i + 1]));
-            _mm_shuffle_ps::<0b10_00_10_00>(low, high)
-        };
-        Mask::from_bits(bytemuck::cast([half(0), half(1)]))
-    }
-
-    /// `cvtpd2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's `as f32`.
-    #[inline(always)]
-    pub fn wides_to_floats(a: Wides) -> Floats {
-        let quarters: [__m128d; 4] = bytemuck::cast(a.0);
-        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
-        let half = |i: usize| unsafe {
-            _mm_movelh_ps(_mm_cvtpd_ps(quarters[2 * i]), _mm_cvtpd_ps(quarters[2 * i + 1]))
-        };
-        Floats::new(bytemuck::cast([half(0), half(1)]))
-    }
 
     const _: () = assert!(LANES == 8, "the lanes are two SSE registers");
 
@@ -839,36 +926,11 @@ mod sse {
     /// Applies an SSE2 integer operation to both halves of two integer lane arrays.
     macro_rules! int_halves {
         ($op:ident($a:expr, $b:expr)) => {{
-            let (a, b): ([__m128i; 2], [__m128i; 2]) = (bytemuck::cast($a.0), bytemuck::cast($b.0));
+            let (a, b): ([__m128i; 2], [__m128i; 2]) = (bytemuck::cast($a), bytemuck::cast($b));
             // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
             let pair = |i: usize| unsafe { $op(a[i], b[i]) };
             bytemuck::cast([pair(0), pair(1)])
         }};
-    }
-
-    #[inline(always)]
-    pub fn add_ints(a: Ints, b: Ints) -> Ints {
-        Ints(int_halves!(_mm_add_epi32(a, b)))
-    }
-
-    #[inline(always)]
-    pub fn sub_ints(a: Ints, b: Ints) -> Ints {
-        Ints(int_halves!(_mm_sub_epi32(a, b)))
-    }
-
-    #[inline(always)]
-    pub fn and_ints(a: Ints, b: Ints) -> Ints {
-        Ints(int_halves!(_mm_and_si128(a, b)))
-    }
-
-    #[inline(always)]
-    pub fn gt_ints(a: Ints, b: Ints) -> Mask {
-        Mask::from_bits(int_halves!(_mm_cmpgt_epi32(a, b)))
-    }
-
-    #[inline(always)]
-    pub fn eq_ints(a: Ints, b: Ints) -> Mask {
-        Mask::from_bits(int_halves!(_mm_cmpeq_epi32(a, b)))
     }
 
     /// Four samples per `pcmpeqd` and `movmskps`; patterns whose sample count is not a
@@ -923,24 +985,6 @@ mod sse {
                 _mm_storeu_ps(floats.add(4 * quad), patterns[quad % 3]);
             }
         }
-    }
-
-    /// `cvtdq2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's `as f32`.
-    #[inline(always)]
-    pub fn to_floats(a: Ints) -> Floats {
-        let halves: [__m128i; 2] = bytemuck::cast(a.0);
-        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
-        let converted = |half: __m128i| unsafe { _mm_cvtepi32_ps(half) };
-        Floats::new(bytemuck::cast(halves.map(converted)))
-    }
-
-    /// `cvttps2dq`: towards zero, −2³¹ out of range ([`super::truncate`]).
-    #[inline(always)]
-    pub fn truncate_to_ints(a: Floats) -> Ints {
-        let halves: [__m128; 2] = bytemuck::cast(a.0);
-        // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
-        let truncated = |half: __m128| unsafe { _mm_cvttps_epi32(half) };
-        Ints(bytemuck::cast(halves.map(truncated)))
     }
 
     impl Backend for Sse {
@@ -1060,6 +1104,84 @@ mod sse {
                 )
             };
             bytemuck::cast([pick(0), pick(1)])
+        }
+
+        #[inline(always)]
+        fn add_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            int_halves!(_mm_add_epi32(a, b))
+        }
+
+        #[inline(always)]
+        fn sub_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            int_halves!(_mm_sub_epi32(a, b))
+        }
+
+        #[inline(always)]
+        fn and_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            int_halves!(_mm_and_si128(a, b))
+        }
+
+        #[inline(always)]
+        fn gt_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES] {
+            int_halves!(_mm_cmpgt_epi32(a, b))
+        }
+
+        #[inline(always)]
+        fn eq_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES] {
+            int_halves!(_mm_cmpeq_epi32(a, b))
+        }
+
+        /// `cvtdq2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's
+        /// `as f32`.
+        #[inline(always)]
+        fn ints_to_floats(a: [i32; LANES]) -> [f32; LANES] {
+            let halves: [__m128i; 2] = bytemuck::cast(a);
+            // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+            let converted = |half: __m128i| unsafe { _mm_cvtepi32_ps(half) };
+            bytemuck::cast(halves.map(converted))
+        }
+
+        /// `cvttps2dq`: towards zero, −2³¹ out of range ([`super::truncate`]).
+        #[inline(always)]
+        fn truncate_to_ints(a: [f32; LANES]) -> [i32; LANES] {
+            let halves: [__m128; 2] = bytemuck::cast(a);
+            // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+            let truncated = |half: __m128| unsafe { _mm_cvttps_epi32(half) };
+            bytemuck::cast(halves.map(truncated))
+        }
+
+        #[inline(always)]
+        fn add_wides(a: [f64; LANES], b: [f64; LANES]) -> [f64; LANES] {
+            let (a, b): ([__m128d; 4], [__m128d; 4]) = (bytemuck::cast(a), bytemuck::cast(b));
+            // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+            let quarter = |i: usize| unsafe { _mm_add_pd(a[i], b[i]) };
+            bytemuck::cast([quarter(0), quarter(1), quarter(2), quarter(3)])
+        }
+
+        /// Two `cmpgtpd` per half, their 64-bit masks narrowed to 32 bits by taking each one's
+        /// low half (all ones or all zeros, like the whole).
+        #[inline(always)]
+        fn gt_wides(a: [f64; LANES], b: [f64; LANES]) -> [u32; LANES] {
+            let (a, b): ([__m128d; 4], [__m128d; 4]) = (bytemuck::cast(a), bytemuck::cast(b));
+            // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+            let half = |i: usize| unsafe {
+                let low = _mm_castpd_ps(_mm_cmpgt_pd(a[2 * i], b[2 * i]));
+                let high = _mm_castpd_ps(_mm_cmpgt_pd(a[2 * i + 1], b[2 * i + 1]));
+                _mm_shuffle_ps::<0b10_00_10_00>(low, high)
+            };
+            bytemuck::cast([half(0), half(1)])
+        }
+
+        /// `cvtpd2ps`, which rounds as the MXCSR says: to nearest, ties to even, as Rust's
+        /// `as f32`.
+        #[inline(always)]
+        fn wides_to_floats(a: [f64; LANES]) -> [f32; LANES] {
+            let quarters: [__m128d; 4] = bytemuck::cast(a);
+            // SAFETY: SSE2 is enabled on every x86-64 target (see the module).
+            let half = |i: usize| unsafe {
+                _mm_movelh_ps(_mm_cvtpd_ps(quarters[2 * i]), _mm_cvtpd_ps(quarters[2 * i + 1]))
+            };
+            bytemuck::cast([half(0), half(1)])
         }
     }
 }
@@ -1269,20 +1391,20 @@ impl Sub for Vec2s {
 }
 
 /// `i32::wrapping_add` per lane.
-impl Add for Ints {
-    type Output = Ints;
+impl<B: Backend> Add for Ints<B> {
+    type Output = Ints<B>;
     #[inline(always)]
-    fn add(self, other: Ints) -> Ints {
-        native::add_ints(self, other)
+    fn add(self, other: Ints<B>) -> Ints<B> {
+        Ints::new(B::add_ints(self.0, other.0))
     }
 }
 
 /// `i32::wrapping_sub` per lane.
-impl Sub for Ints {
-    type Output = Ints;
+impl<B: Backend> Sub for Ints<B> {
+    type Output = Ints<B>;
     #[inline(always)]
-    fn sub(self, other: Ints) -> Ints {
-        native::sub_ints(self, other)
+    fn sub(self, other: Ints<B>) -> Ints<B> {
+        Ints::new(B::sub_ints(self.0, other.0))
     }
 }
 
@@ -1551,8 +1673,8 @@ mod tests {
     /// bit for bit; a mask holds in all lanes or not.
     #[test]
     fn integer_lanes_and_masks() {
-        let a = Ints([0, -1, i32::MAX, i32::MIN, 7, -8, 1 << 20, 3]);
-        let b = Ints([1, 1, 1, 1, -7, 8, 12, -3]);
+        let a: Ints = Ints::new([0, -1, i32::MAX, i32::MIN, 7, -8, 1 << 20, 3]);
+        let b = Ints::new([1, 1, 1, 1, -7, 8, 12, -3]);
         let mask = a.gt(b);
         for i in 0..LANES {
             assert_eq!((a + b).0[i], a.0[i].wrapping_add(b.0[i]));
@@ -1565,11 +1687,14 @@ mod tests {
             );
             assert_eq!(mask.to_ints().0[i], -i32::from(a.0[i] > b.0[i]));
         }
-        assert_eq!(Floats::splat(1.5).to_bits(), Ints::splat(1.5f32.to_bits() as i32));
+        assert_eq!(
+            Floats::<Native>::splat(1.5).to_bits(),
+            Ints::splat(1.5f32.to_bits() as i32)
+        );
         assert!(Mask::<Native>::ALL.all() && !mask.all() && !(!Mask::<Native>::ALL).all());
         let items = [3u32, 1, 4, 1, 5, 9, 2, 6];
         assert_eq!(
-            Ints::gather(&items, |&n| n as i32 * 2).0,
+            Ints::<Native>::gather(&items, |&n| n as i32 * 2).0,
             items.map(|n| n as i32 * 2)
         );
         assert_eq!(
@@ -1618,20 +1743,17 @@ mod tests {
             -(5 << 30) + 1,
             1 << 31,
         ];
-        let a = Wides(whole.map(|n| n as f64));
-        let b = Wides([1.0, -1.0, 0.5, -2e12, 4e15, 3.0, -7.0, 2147483648.0]);
+        let a: Wides = Wides::new(whole.map(|n| n as f64));
+        let b = Wides::new([1.0, -1.0, 0.5, -2e12, 4e15, 3.0, -7.0, 2147483648.0]);
+        let (pa, pb) = (a.on::<Portable>(), b.on::<Portable>());
         for (sum, mask, converted) in [
-            (a + b, a.gt(b), a.to_floats()),
-            (
-                portable::add_wides(a, b),
-                portable::gt_wides(a, b),
-                portable::wides_to_floats(a),
-            ),
+            ((a + b).0, a.gt(b).0, a.to_floats().0),
+            ((pa + pb).0, pa.gt(pb).0, pa.to_floats().0),
         ] {
             for (i, &n) in whole.iter().enumerate() {
-                assert_eq!(sum.0[i].to_bits(), (a.0[i] + b.0[i]).to_bits());
-                assert_eq!(mask.lane(i), a.0[i] > b.0[i]);
-                assert_eq!(converted.0[i].to_bits(), (n as f32).to_bits(), "lane {i}");
+                assert_eq!(sum[i].to_bits(), (a.0[i] + b.0[i]).to_bits());
+                assert_eq!(mask[i] != 0, a.0[i] > b.0[i]);
+                assert_eq!(converted[i].to_bits(), (n as f32).to_bits(), "lane {i}");
             }
         }
     }
@@ -1710,8 +1832,8 @@ mod tests {
             assert_eq!(bits(x.sqrt()), portable_bits(px.sqrt()), "sqrt");
             assert_eq!(bits(Real::trunc(x)), portable_bits(Real::trunc(px)), "trunc");
             assert_eq!(
-                x.truncate_to_ints(),
-                portable::truncate_to_ints(x),
+                x.truncate_to_ints().0,
+                px.truncate_to_ints().0,
                 "truncate_to_ints"
             );
             assert_eq!(x.gt(y).0, px.gt(py).0, "gt");
@@ -1726,15 +1848,16 @@ mod tests {
             assert_eq!(m.any(), pm.any(), "any");
             assert_eq!(bits(m.select(x, y)), portable_bits(pm.select(px, py)), "select");
             let (i, j) = (x.to_bits(), y.to_bits());
-            assert_eq!(i + j, portable::add_ints(i, j), "add_ints");
-            assert_eq!(i - j, portable::sub_ints(i, j), "sub_ints");
-            assert_eq!(i.and(j), portable::and_ints(i, j), "and_ints");
-            assert_eq!(i.gt(j), portable::gt_ints(i, j), "gt_ints");
-            let partly_i = Ints(std::array::from_fn(|lane| {
+            let (pi, pj) = (i.on::<Portable>(), j.on::<Portable>());
+            assert_eq!((i + j).0, (pi + pj).0, "add_ints");
+            assert_eq!((i - j).0, (pi - pj).0, "sub_ints");
+            assert_eq!(i.and(j).0, pi.and(pj).0, "and_ints");
+            assert_eq!(i.gt(j).0, pi.gt(pj).0, "gt_ints");
+            let partly_i = Ints::new(std::array::from_fn(|lane| {
                 if lane % 3 == 0 { i.0[lane] } else { j.0[lane] }
             }));
-            assert_eq!(i.eq(partly_i), portable::eq_ints(i, partly_i), "eq_ints");
-            assert_eq!(bits(i.to_floats()), bits(portable::to_floats(i)), "to_floats");
+            assert_eq!(i.eq(partly_i).0, pi.eq(partly_i.on()).0, "eq_ints");
+            assert_eq!(bits(i.to_floats()), portable_bits(pi.to_floats()), "to_floats");
         }
     }
 
@@ -1766,6 +1889,25 @@ mod tests {
                     results.extend(floats.map(|f| f.0.map(f32::to_bits)));
                     results.extend(masks.map(|m| m.0));
                     results.push([u32::from(m.any()), u32::from(m.and(!m).any()), 0, 0, 0, 0, 0, 0]);
+                    // Integer lanes: the bits of one side against the other truncated.
+                    let (i, j) = (x.to_bits(), y.truncate_to_ints());
+                    let ints = [
+                        i + j,
+                        i - j,
+                        i.and(j),
+                        m.select_ints(i, j),
+                        i.gt(j).to_ints(),
+                        i.eq(i).to_ints(),
+                    ];
+                    results.extend(ints.map(|lanes| lanes.0.map(|lane| lane as u32)));
+                    results.extend([i.to_floats(), j.to_floats()].map(|f| f.0.map(f32::to_bits)));
+                    // `f64` lanes, some of them not held by `f32` (each side scaled off its grid).
+                    let (u, v) = (
+                        Wides::<B>::new(x.0.map(|x| f64::from(x) * (1.0 + f64::EPSILON * 3.0))),
+                        Wides::<B>::new(y.0.map(|y| f64::from(y) * 1_000_003.0)),
+                    );
+                    results.extend([u + v, v + u, u].map(|w| w.to_floats().0.map(f32::to_bits)));
+                    results.extend([u.gt(v), v.gt(u), u.gt(u)].map(|m| m.0));
                 }
                 let normal = a.normalize_or_zero();
                 let d = normal.dot(b).max(Floats::splat(0.0)) / b.length();
@@ -1810,7 +1952,7 @@ mod tests {
         ];
         for values in edges {
             let truncated: Floats = Real::trunc(Floats::new(values));
-            let integers = Floats::new(values).truncate_to_ints();
+            let integers = Floats::<Native>::new(values).truncate_to_ints();
             for (lane, &x) in values.iter().enumerate() {
                 assert_eq!(truncated.0[lane].to_bits(), truncate(x).to_bits(), "{x}");
                 assert_eq!(integers.0[lane] as f32, truncate(x), "{x}");

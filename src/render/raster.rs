@@ -34,7 +34,7 @@
 
 use crate::render::TILE_SIZE;
 use crate::render::bin::{RasterChunk, raster_id};
-use crate::render::lanes::{Floats, Ints, LANES, Mask, Wides};
+use crate::render::lanes::{Backend, Floats, Ints, LANES, LaneWork, Mask, Wides, run_widest};
 use glam::Vec3;
 
 /// Fractional bits of the fixed-point screen coordinates.
@@ -729,7 +729,8 @@ impl Visibility {
 
     /// Rasterizes tile `tile` (the pixels `rect`) into this buffer, replacing what it held:
     /// every chunk's triangles binned to it, chunk by chunk and in order within each, keeping
-    /// the nearest at every sample. The arrays keep their capacity from tile to tile. Always
+    /// the nearest at every sample (at one sample, on the widest lanes: [`SingleSampleTile`]).
+    /// The arrays keep their capacity from tile to tile. Always
     /// inlined into the frame's band loop, as `shade::shade_tile` is (the inspector calls both).
     #[inline(always)]
     pub fn rasterize(
@@ -748,6 +749,14 @@ impl Visibility {
         self.triangle.resize(sample_count, NO_TRIANGLE);
         self.raster_ids.clear();
         debug_assert!(rect.width() <= TILE_SIZE);
+        if pattern.len() == 1 {
+            run_widest(SingleSampleTile {
+                visibility: self,
+                chunks,
+                tile,
+            });
+            return;
+        }
         for (chunk_index, chunk) in chunks.iter().enumerate() {
             for &index in chunk.tile_triangles(tile) {
                 let triangle = &chunk.triangles[index as usize];
@@ -759,11 +768,11 @@ impl Visibility {
     }
 
     /// The depth test of `triangle`, the tile's triangle `local`, at every sample of the tile,
-    /// by the loop written for the pattern's sample count.
+    /// by the loop written for the pattern's sample count (more than one: a one-sample tile
+    /// takes [`SingleSampleTile`]).
     #[inline]
     fn rasterize_triangle(&mut self, triangle: &RasterTriangle, local: u32) {
         match self.pattern.len() {
-            1 => rasterize_single_sample(triangle, local, self),
             2 => rasterize_samples::<2>(triangle, local, self),
             4 => rasterize_samples::<4>(triangle, local, self),
             8 => rasterize_samples::<8>(triangle, local, self),
@@ -790,6 +799,35 @@ impl Visibility {
     #[inline]
     pub fn raster_id(&self, local: u32) -> u32 {
         self.raster_ids[local as usize]
+    }
+}
+
+/// A one-sample tile's triangles rasterized on the widest lanes (see [`Visibility::rasterize`]):
+/// one call of [`run_widest`] per tile, so that its cost is spread over every triangle.
+struct SingleSampleTile<'v> {
+    visibility: &'v mut Visibility,
+    chunks: &'v [RasterChunk],
+    tile: usize,
+}
+
+impl LaneWork for SingleSampleTile<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<B: Backend>(self) {
+        let SingleSampleTile {
+            visibility,
+            chunks,
+            tile,
+        } = self;
+        for (chunk_index, chunk) in chunks.iter().enumerate() {
+            for &index in chunk.tile_triangles(tile) {
+                let triangle = &chunk.triangles[index as usize];
+                let local = visibility.raster_ids.len() as u32;
+                visibility.raster_ids.push(raster_id(chunk_index, index as usize));
+                rasterize_single_sample::<B>(triangle, local, visibility);
+            }
+        }
     }
 }
 
@@ -1037,7 +1075,7 @@ impl<E: EdgeLanes> LaneEdges<E> {
             let mut most = [f32::NEG_INFINITY; 3];
             for (group, group_offsets) in offsets.iter_mut().enumerate().take(groups) {
                 let [x, y, pixel] =
-                    [lanes.x[group], lanes.y[group], lanes.pixel[group]].map(|l| Ints(l).to_floats());
+                    [lanes.x[group], lanes.y[group], lanes.pixel[group]].map(|l| Ints::new(l).to_floats());
                 for (k, edge) in edges.iter().enumerate() {
                     let [along_x, along_y, step] =
                         [edge.along_x, edge.along_y, edge.step_x].map(|value| Floats::splat(value as f32));
@@ -1143,7 +1181,7 @@ fn rasterize_sample_lanes<const S: usize, E: EdgeLanes>(
                     let nearer = inside.and(depth.gt(old));
                     if nearer.any() {
                         *group_depths = nearer.select(depth, old).0;
-                        let old_ids = Ints(bytemuck::cast(*group_ids));
+                        let old_ids = Ints::new(bytemuck::cast(*group_ids));
                         *group_ids = bytemuck::cast(nearer.select_ints(id_lanes, old_ids).0);
                     }
                 }
@@ -1155,14 +1193,16 @@ fn rasterize_sample_lanes<const S: usize, E: EdgeLanes>(
 }
 
 /// The depth test of one triangle at every pixel centre of the tile: [`for_each_covered_sample`]
-/// with one sample, written for the common case (see [`depth_test_single_sample`]).
-fn rasterize_single_sample(triangle: &RasterTriangle, id: u32, visibility: &mut Visibility) {
+/// with one sample, written for the common case (see [`depth_test_single_sample`]), on lanes of
+/// backend `B`.
+#[inline(always)]
+fn rasterize_single_sample<B: Backend>(triangle: &RasterTriangle, id: u32, visibility: &mut Visibility) {
     let rect = visibility.rect;
     let rows = RowLayout {
         stride: rect.width() as usize,
         x_origin: rect.x0,
     };
-    depth_test_single_sample::<true>(
+    depth_test_single_sample::<true, B>(
         triangle,
         rect,
         rows,
@@ -1176,12 +1216,17 @@ fn rasterize_single_sample(triangle: &RasterTriangle, id: u32, visibility: &mut 
 /// `depth`, the image's rows from `rect.y0` on, `stride` apart (a band of a shadow map): where
 /// the triangle is nearer than what a texel holds, the texel gets its depth, as in
 /// [`Visibility::rasterize`] with one sample, and nothing else is written (no triangle numbers,
-/// no buffer of the tile's own).
-#[inline]
-pub fn rasterize_depth_only(triangle: &RasterTriangle, rect: PixelRect, depth: &mut [f32], stride: usize) {
+/// no buffer of the tile's own). On lanes of backend `B` (see [`run_widest`]).
+#[inline(always)]
+pub fn rasterize_depth_only<B: Backend>(
+    triangle: &RasterTriangle,
+    rect: PixelRect,
+    depth: &mut [f32],
+    stride: usize,
+) {
     debug_assert!(rect.width() <= TILE_SIZE);
     let rows = RowLayout { stride, x_origin: 0 };
-    depth_test_single_sample::<false>(triangle, rect, rows, depth, &mut [], 0);
+    depth_test_single_sample::<false, B>(triangle, rect, rows, depth, &mut [], 0);
 }
 
 /// A bound on the depth a triangle with corner depths `depths` can write: no depth
@@ -1217,7 +1262,7 @@ const LANE_COLUMNS: usize = LANES / 2;
 /// one sign check of their bitwise or. Depth is computed from the unbiased values, exactly as
 /// the general loop does.
 #[inline(always)]
-fn depth_test_single_sample<const IDS: bool>(
+fn depth_test_single_sample<const IDS: bool, B: Backend>(
     triangle: &RasterTriangle,
     rect: PixelRect,
     rows: RowLayout,
@@ -1240,24 +1285,24 @@ fn depth_test_single_sample<const IDS: bool>(
     // scalar loop); narrower triangles, a pixel or two wide, stay scalar.
     // Rows of one or two groups (most of a mesh's triangles) are tested whole, without a
     // `RowSpan`: finding a row's span costs about as much as testing a group.
-    if (LANE_COLUMNS..=2 * LANES).contains(&columns) && RowLanes::<Ints>::fit(&edges, area) {
-        let lanes = RowLanes::<Ints>::new::<false>(&edges, triangle.depth, inv_area);
+    if (LANE_COLUMNS..=2 * LANES).contains(&columns) && RowLanes::<Ints<B>>::fit(&edges, area) {
+        let lanes = RowLanes::<Ints<B>>::new::<false>(&edges, triangle.depth, inv_area);
         lanes.depth_test::<IDS, false>(rect, area, rows, depth, ids, id);
         return;
     }
     if columns > 2 * LANES {
-        if RowLanes::<Ints>::fit(&edges, area) {
-            let lanes = RowLanes::<Ints>::new::<true>(&edges, triangle.depth, inv_area);
+        if RowLanes::<Ints<B>>::fit(&edges, area) {
+            let lanes = RowLanes::<Ints<B>>::new::<true>(&edges, triangle.depth, inv_area);
             lanes.depth_test::<IDS, true>(rect, area, rows, depth, ids, id);
             return;
         }
-        if RowLanes::<Wides>::fit(&edges, area) {
-            let lanes = RowLanes::<Wides>::new::<true>(&edges, triangle.depth, inv_area);
+        if RowLanes::<Wides<B>>::fit(&edges, area) {
+            let lanes = RowLanes::<Wides<B>>::new::<true>(&edges, triangle.depth, inv_area);
             lanes.depth_test::<IDS, true>(rect, area, rows, depth, ids, id);
             return;
         }
-    } else if columns >= LANE_COLUMNS && RowLanes::<Wides>::fit(&edges, area) {
-        let lanes = RowLanes::<Wides>::new::<false>(&edges, triangle.depth, inv_area);
+    } else if columns >= LANE_COLUMNS && RowLanes::<Wides<B>>::fit(&edges, area) {
+        let lanes = RowLanes::<Wides<B>>::new::<false>(&edges, triangle.depth, inv_area);
         lanes.depth_test::<IDS, false>(rect, area, rows, depth, ids, id);
         return;
     }
@@ -1308,6 +1353,8 @@ fn depth_test_single_sample<const IDS: bool>(
 /// triangle's values over the area fit (the cheaper), `f64` lanes (exact below 2⁵³) for large
 /// triangles, whose edge functions grow with their size squared.
 trait EdgeLanes: Copy + std::ops::Add<Output = Self> {
+    /// Whose operations the lanes take, and so the depths and masks formed from them.
+    type Backend: Backend;
     /// The largest magnitude a lane holds exactly.
     const LIMIT: i64;
     /// The scalar beside the lanes, as wide as they are: a loop over `i32` lanes steps its rows
@@ -1320,13 +1367,14 @@ trait EdgeLanes: Copy + std::ops::Add<Output = Self> {
     /// Each lane's `value(lane)` (`|value| ≤ LIMIT`).
     fn from_whole(value: impl Fn(usize) -> i64) -> Self;
     /// Each lane of `whole`, whose lanes hold whole numbers below 2²⁴ in magnitude.
-    fn from_whole_floats(whole: Floats) -> Self;
-    fn gt(self, other: Self) -> Mask;
+    fn from_whole_floats(whole: Floats<Self::Backend>) -> Self;
+    fn gt(self, other: Self) -> Mask<Self::Backend>;
     /// Each lane as `f32`, rounded as converting the same `i64` rounds.
-    fn to_floats(self) -> Floats;
+    fn to_floats(self) -> Floats<Self::Backend>;
 }
 
-impl EdgeLanes for Ints {
+impl<B: Backend> EdgeLanes for Ints<B> {
+    type Backend = B;
     const LIMIT: i64 = i32::MAX as i64;
     type Whole = i32;
     #[inline(always)]
@@ -1339,23 +1387,24 @@ impl EdgeLanes for Ints {
     }
     #[inline(always)]
     fn from_whole(value: impl Fn(usize) -> i64) -> Self {
-        Ints(std::array::from_fn(|lane| value(lane) as i32))
+        Ints::new(std::array::from_fn(|lane| value(lane) as i32))
     }
     #[inline(always)]
-    fn from_whole_floats(whole: Floats) -> Self {
+    fn from_whole_floats(whole: Floats<B>) -> Self {
         whole.truncate_to_ints()
     }
     #[inline(always)]
-    fn gt(self, other: Self) -> Mask {
+    fn gt(self, other: Self) -> Mask<B> {
         Ints::gt(self, other)
     }
     #[inline(always)]
-    fn to_floats(self) -> Floats {
+    fn to_floats(self) -> Floats<B> {
         Ints::to_floats(self)
     }
 }
 
-impl EdgeLanes for Wides {
+impl<B: Backend> EdgeLanes for Wides<B> {
+    type Backend = B;
     const LIMIT: i64 = 1 << 53;
     type Whole = i64;
     #[inline(always)]
@@ -1368,18 +1417,18 @@ impl EdgeLanes for Wides {
     }
     #[inline(always)]
     fn from_whole(value: impl Fn(usize) -> i64) -> Self {
-        Wides(std::array::from_fn(|lane| value(lane) as f64))
+        Wides::new(std::array::from_fn(|lane| value(lane) as f64))
     }
     #[inline(always)]
-    fn from_whole_floats(whole: Floats) -> Self {
-        Wides(whole.0.map(f64::from))
+    fn from_whole_floats(whole: Floats<B>) -> Self {
+        Wides::new(whole.0.map(f64::from))
     }
     #[inline(always)]
-    fn gt(self, other: Self) -> Mask {
+    fn gt(self, other: Self) -> Mask<B> {
         Wides::gt(self, other)
     }
     #[inline(always)]
-    fn to_floats(self) -> Floats {
+    fn to_floats(self) -> Floats<B> {
         Wides::to_floats(self)
     }
 }
@@ -1414,7 +1463,7 @@ impl Whole for i64 {
 /// [`depth_test_single_sample`]: each row is walked in groups of [`LANES`] pixels from the
 /// area's first column, lane `i` at the `i`-th pixel of its group. The rows and groups are
 /// stepped in exact `i64` scalars, splatted once per group.
-struct RowLanes<E> {
+struct RowLanes<E: EdgeLanes> {
     /// Each edge's value at the centre of the area's first pixel.
     row_start: [i64; 3],
     step_y: [i64; 3],
@@ -1425,8 +1474,8 @@ struct RowLanes<E> {
     /// Per edge, the fill rule's bound: a lane's centre is inside where each edge value is
     /// above it (`E > min_inside − 1` is `E ≥ min_inside`).
     above: [E; 3],
-    corner_depths: [Floats; 3],
-    inv_area: Floats,
+    corner_depths: [Floats<E::Backend>; 3],
+    inv_area: Floats<E::Backend>,
     /// Where along each row the triangle can be: see [`RowSpan`].
     span: RowSpan,
 }
@@ -1665,11 +1714,11 @@ impl<E: EdgeLanes> RowLanes<E> {
         centre: [i64; 3],
         depths: &mut [f32; LANES],
         ids: Option<&mut [u32; LANES]>,
-        id: Ints,
+        id: Ints<E::Backend>,
     ) {
         let [e0, e1, e2]: [E; 3] = std::array::from_fn(|k| E::splat_whole(centre[k]) + self.offsets[k]);
         let inside = if INSIDE {
-            Mask::ALL
+            Mask::<E::Backend>::ALL
         } else {
             e0.gt(self.above[0])
                 .and(e1.gt(self.above[1]))
@@ -1685,7 +1734,7 @@ impl<E: EdgeLanes> RowLanes<E> {
         let nearer = inside.and(depth.gt(old));
         *depths = nearer.select(depth, old).0;
         if let Some(ids) = ids {
-            *ids = bytemuck::cast(nearer.select_ints(id, Ints(bytemuck::cast(*ids))).0);
+            *ids = bytemuck::cast(nearer.select_ints(id, Ints::new(bytemuck::cast(*ids))).0);
         }
     }
 }
@@ -1752,6 +1801,7 @@ pub fn for_each_covered_sample(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::lanes::Native;
 
     fn vertex(x: f32, y: f32) -> ScreenVertex {
         ScreenVertex {
@@ -2082,7 +2132,7 @@ mod tests {
                 for chunk in &frame.raster {
                     for &index in chunk.tile_triangles(tile) {
                         let triangle = &chunk.triangles[index as usize];
-                        rasterize_depth_only(triangle, grid.rect(tile), band, stride);
+                        rasterize_depth_only::<Native>(triangle, grid.rect(tile), band, stride);
                     }
                 }
             }

@@ -1399,7 +1399,7 @@ impl ShownPixels<'_> {
             let (whole_groups, rest) = ids.as_chunks::<LANES>();
             let groups = whole_groups
                 .iter()
-                .map(|ids| Ints(bytemuck::cast(*ids)).eq(local))
+                .map(|ids| Ints::new(bytemuck::cast(*ids)).eq(local))
                 .chain((!rest.is_empty()).then(|| {
                     Mask::from_bools(std::array::from_fn(|lane| rest.get(lane) == Some(&self.local)))
                 }));
@@ -1460,7 +1460,7 @@ impl LaneSteps {
     /// [`LaneSteps::exact_over`] the area (so each product is a whole number below 2⁵³, exact).
     #[inline(always)]
     fn of(step_x: [i64; 3]) -> Self {
-        LaneSteps(step_x.map(|step| Wides(std::array::from_fn(|lane| step as f64 * lane as f64))))
+        LaneSteps(step_x.map(|step| Wides::new(std::array::from_fn(|lane| step as f64 * lane as f64))))
     }
 
     /// The edge functions at a group's pixels, the first pixel's values `start`, in `f32`.
