@@ -749,34 +749,23 @@ impl Visibility {
         self.triangle.resize(sample_count, NO_TRIANGLE);
         self.raster_ids.clear();
         debug_assert!(rect.width() <= TILE_SIZE);
-        if pattern.len() == 1 {
-            run_widest(SingleSampleTile {
-                visibility: self,
-                chunks,
-                tile,
-            });
-            return;
-        }
-        for (chunk_index, chunk) in chunks.iter().enumerate() {
-            for &index in chunk.tile_triangles(tile) {
-                let triangle = &chunk.triangles[index as usize];
-                let local = self.raster_ids.len() as u32;
-                self.raster_ids.push(raster_id(chunk_index, index as usize));
-                self.rasterize_triangle(triangle, local);
-            }
-        }
+        run_widest(TileTriangles {
+            visibility: self,
+            chunks,
+            tile,
+        });
     }
 
     /// The depth test of `triangle`, the tile's triangle `local`, at every sample of the tile,
-    /// by the loop written for the pattern's sample count (more than one: a one-sample tile
-    /// takes [`SingleSampleTile`]).
-    #[inline]
-    fn rasterize_triangle(&mut self, triangle: &RasterTriangle, local: u32) {
+    /// by the loop written for the pattern's sample count, on lanes of backend `B`.
+    #[inline(always)]
+    fn rasterize_triangle<B: Backend>(&mut self, triangle: &RasterTriangle, local: u32) {
         match self.pattern.len() {
-            2 => rasterize_samples::<2>(triangle, local, self),
-            4 => rasterize_samples::<4>(triangle, local, self),
-            8 => rasterize_samples::<8>(triangle, local, self),
-            16 => rasterize_samples::<16>(triangle, local, self),
+            1 => rasterize_single_sample::<B>(triangle, local, self),
+            2 => rasterize_samples::<2, B>(triangle, local, self),
+            4 => rasterize_samples::<4, B>(triangle, local, self),
+            8 => rasterize_samples::<8, B>(triangle, local, self),
+            16 => rasterize_samples::<16, B>(triangle, local, self),
             _ => self.rasterize_any_samples(triangle, local),
         }
     }
@@ -802,20 +791,20 @@ impl Visibility {
     }
 }
 
-/// A one-sample tile's triangles rasterized on the widest lanes (see [`Visibility::rasterize`]):
-/// one call of [`run_widest`] per tile, so that its cost is spread over every triangle.
-struct SingleSampleTile<'v> {
+/// A tile's triangles rasterized on the widest lanes (see [`Visibility::rasterize`]): one call
+/// of [`run_widest`] per tile, so that its cost is spread over every triangle.
+struct TileTriangles<'v> {
     visibility: &'v mut Visibility,
     chunks: &'v [RasterChunk],
     tile: usize,
 }
 
-impl LaneWork for SingleSampleTile<'_> {
+impl LaneWork for TileTriangles<'_> {
     type Output = ();
 
     #[inline(always)]
     fn run<B: Backend>(self) {
-        let SingleSampleTile {
+        let TileTriangles {
             visibility,
             chunks,
             tile,
@@ -825,7 +814,7 @@ impl LaneWork for SingleSampleTile<'_> {
                 let triangle = &chunk.triangles[index as usize];
                 let local = visibility.raster_ids.len() as u32;
                 visibility.raster_ids.push(raster_id(chunk_index, index as usize));
-                rasterize_single_sample::<B>(triangle, local, visibility);
+                visibility.rasterize_triangle::<B>(triangle, local);
             }
         }
     }
@@ -884,7 +873,12 @@ fn sample_edge_offsets<const S: usize>(edges: &[Edge; 3], pattern: &[(i32, i32)]
 /// (nearly every triangle of a mesh), else in `f64` lanes where they stay below 2⁵³ (a ground
 /// plane of two triangles, a close-up's large ones); the loop here takes two samples, areas of
 /// an odd tile width and triangles reaching past that.
-fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibility: &mut Visibility) {
+#[inline(always)]
+fn rasterize_samples<const S: usize, B: Backend>(
+    triangle: &RasterTriangle,
+    id: u32,
+    visibility: &mut Visibility,
+) {
     let rect = visibility.rect;
     let Some(area) = triangle.bounds.intersect(&rect) else {
         return;
@@ -896,12 +890,12 @@ fn rasterize_samples<const S: usize>(triangle: &RasterTriangle, id: u32, visibil
         && let Some(lane_area) = whole_blocks::<S>(area, rect)
     {
         let samples = visibility.pattern;
-        if let Some(lane_edges) = LaneEdges::<Ints>::new::<S>(triangle, &samples, lane_area) {
-            rasterize_sample_lanes::<S, Ints>(&lane_edges, triangle, lane_area, id, visibility);
+        if let Some(lane_edges) = LaneEdges::<Ints<B>>::new::<S>(triangle, &samples, lane_area) {
+            rasterize_sample_lanes::<S, Ints<B>>(&lane_edges, triangle, lane_area, id, visibility);
             return;
         }
-        if let Some(lane_edges) = LaneEdges::<Wides>::new::<S>(triangle, &samples, lane_area) {
-            rasterize_sample_lanes::<S, Wides>(&lane_edges, triangle, lane_area, id, visibility);
+        if let Some(lane_edges) = LaneEdges::<Wides<B>>::new::<S>(triangle, &samples, lane_area) {
+            rasterize_sample_lanes::<S, Wides<B>>(&lane_edges, triangle, lane_area, id, visibility);
             return;
         }
     }
@@ -1127,6 +1121,7 @@ impl<E: EdgeLanes> LaneEdges<E> {
 /// whole blocks ([`whole_blocks`]): a block's samples (two pixels at four samples, else one
 /// pixel) are tested and their depths interpolated eight at a time, in the same operations as
 /// the scalar loop, and the nearer ones written with a select.
+#[inline(always)]
 fn rasterize_sample_lanes<const S: usize, E: EdgeLanes>(
     edges: &LaneEdges<E>,
     triangle: &RasterTriangle,
@@ -1803,6 +1798,25 @@ mod tests {
     use super::*;
     use crate::render::lanes::Native;
 
+    /// `triangle` (the tile's `local`) rasterized into `visibility` by the loops for its
+    /// pattern on the native lanes, after checking that the widest lanes give the same bits.
+    fn rasterize_on_both(visibility: &mut Visibility, triangle: &RasterTriangle, local: u32) {
+        struct Widest<'v>(&'v mut Visibility, &'v RasterTriangle, u32);
+        impl LaneWork for Widest<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn run<B: Backend>(self) {
+                self.0.rasterize_triangle::<B>(self.1, self.2);
+            }
+        }
+        let mut widest = visibility.clone();
+        run_widest(Widest(&mut widest, triangle, local));
+        visibility.rasterize_triangle::<Native>(triangle, local);
+        assert_eq!(widest.triangle, visibility.triangle);
+        let bits = |depths: &[f32]| depths.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&widest.depth), bits(&visibility.depth));
+    }
+
     fn vertex(x: f32, y: f32) -> ScreenVertex {
         ScreenVertex {
             x,
@@ -2257,7 +2271,7 @@ mod tests {
         };
         let (mut fast, mut general) = (empty(), empty());
         for (local, triangle) in (0..).zip(&triangles) {
-            fast.rasterize_triangle(triangle, local);
+            rasterize_on_both(&mut fast, triangle, local);
             general.rasterize_any_samples(triangle, local);
         }
         let shown = |visibility: &Visibility| {
@@ -2475,7 +2489,7 @@ mod tests {
                 .expect("a triangle");
                 fast.rasterize_any_samples(&before, 1);
                 general.rasterize_any_samples(&before, 1);
-                fast.rasterize_triangle(&triangle, 0);
+                rasterize_on_both(&mut fast, &triangle, 0);
                 general.rasterize_any_samples(&triangle, 0);
                 let covered = fast.triangle.iter().filter(|&&id| id == 0).count();
                 assert!(
@@ -2590,7 +2604,7 @@ mod tests {
             };
             let (mut fast, mut general) = (empty(), empty());
             for (local, triangle) in (0..).zip(&triangles) {
-                fast.rasterize_triangle(triangle, local);
+                rasterize_on_both(&mut fast, triangle, local);
                 general.rasterize_any_samples(triangle, local);
             }
             assert_eq!(triangles.len(), 24);
