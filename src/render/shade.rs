@@ -20,7 +20,8 @@ use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
 use crate::render::lanes::{
-    Floats, Ints, LANES, Mask, Vec3s, Wides, fill_vec3s, mark_shown, samples_showing,
+    Backend, Floats, Ints, LANES, LaneWork, Mask, Native, Vec3s, Wides, fill_vec3s, mark_shown, run_widest,
+    samples_showing,
 };
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
@@ -261,13 +262,13 @@ impl GouraudPlane {
     /// on (within the tile's row), lane-wise and bit for bit, written into `colors`; false
     /// (and nothing written) where the edge values are not held exactly in `f64` lanes (a
     /// triangle reaching far off the tile).
-    #[inline]
-    fn write_group_colors(&self, column: i64, row: i64, colors: &mut [Vec3; LANES]) -> bool {
+    #[inline(always)]
+    fn write_group_colors<B: Backend>(&self, column: i64, row: i64, colors: &mut [Vec3; LANES]) -> bool {
         let Some(lane_steps) = self.lane_steps.as_ref() else {
             return false;
         };
         self.colors
-            .at_lanes(lane_steps.edges(self.edges.at(column, row)))
+            .at_lanes(lane_steps.edges::<B>(self.edges.at(column, row)))
             .write_to(colors);
         true
     }
@@ -326,7 +327,7 @@ impl GouraudColors {
     /// in lanes: each channel's products, sums and division in the scalar's order, lane by
     /// lane.
     #[inline(always)]
-    fn at_lanes(&self, edges: [Floats; 3]) -> Vec3s {
+    fn at_lanes<B: Backend>(&self, edges: [Floats<B>; 3]) -> Vec3s<B> {
         let [e0, e1, e2] = edges;
         let [w0, w1, w2] = self.inv_w.map(Floats::splat);
         let [c0, c1, c2] = self.over_w.map(|c| Vec3s::splat(Vec3::from(c)));
@@ -1184,15 +1185,63 @@ fn shade_single_sample<'f>(
         phong.flush(target.color);
         return shaded;
     }
+    if per_pixel {
+        // On the widest lanes, for the Gouraud groups.
+        run_widest(LastPassRows {
+            visibility,
+            pass: &pass,
+            color: target.color,
+        });
+        return shaded;
+    }
     for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
         let row_start = row * stride + rect.x0 as usize;
         let colors = &mut target.color[row_start..row_start + tile_width];
-        if per_pixel {
+        for (colors, ids) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)) {
+            // A group showing one triangle takes its colour once.
+            if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
+                && samples_showing(group_ids, group_ids[0]) == ALL_LANES
+            {
+                fill_group(colors, fills[entry(group_ids[0])]);
+                continue;
+            }
+            for (color, &id) in colors.iter_mut().zip(ids) {
+                *color = fills[entry(id)];
+            }
+        }
+    }
+    shaded
+}
+
+/// [`shade_single_sample`]'s last pass over a tile whose pixels are not all fills (and which
+/// has no small Phong triangle): the fills, the Gouraud planes' groups in lanes and their
+/// pixels one by one, as lane work (one call of [`run_widest`] a tile).
+struct LastPassRows<'p> {
+    visibility: &'p Visibility,
+    pass: &'p LastPass<'p>,
+    color: &'p mut [Vec3],
+}
+
+impl LaneWork for LastPassRows<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<B: Backend>(self) {
+        let LastPassRows {
+            visibility,
+            pass,
+            color,
+        } = self;
+        let rect = visibility.rect;
+        let tile_width = rect.width() as usize;
+        for (row, ids) in visibility.triangle.chunks_exact(tile_width).enumerate() {
+            let row_start = row * pass.stride + rect.x0 as usize;
+            let colors = &mut color[row_start..row_start + tile_width];
             for (group, (colors, ids)) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)).enumerate() {
                 let first_column = group * LANES;
                 if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
                     && let Ok(group) = <&mut [Vec3; LANES]>::try_from(&mut *colors)
-                    && pass.write_whole_group(group_ids, first_column, row, group)
+                    && pass.write_whole_group::<B>(group_ids, first_column, row, group)
                 {
                     continue;
                 }
@@ -1202,22 +1251,8 @@ fn shade_single_sample<'f>(
                     pass.write_pixel(id, column, row, color);
                 }
             }
-        } else {
-            for (colors, ids) in colors.chunks_mut(LANES).zip(ids.chunks(LANES)) {
-                // A group showing one triangle takes its colour once.
-                if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
-                    && samples_showing(group_ids, group_ids[0]) == ALL_LANES
-                {
-                    fill_group(colors, fills[entry(group_ids[0])]);
-                    continue;
-                }
-                for (color, &id) in colors.iter_mut().zip(ids) {
-                    *color = fills[entry(id)];
-                }
-            }
         }
     }
-    shaded
 }
 
 /// What the last pass over a single-sample tile's pixels reads: each triangle's source, the
@@ -1243,7 +1278,7 @@ impl LastPass<'_> {
     /// them at once: a fill, or a Gouraud plane in lanes. False (nothing written) for any other
     /// group, whose pixels are taken one by one.
     #[inline(always)]
-    fn write_whole_group(
+    fn write_whole_group<B: Backend>(
         &self,
         ids: &[u32; LANES],
         first_column: usize,
@@ -1259,9 +1294,11 @@ impl LastPass<'_> {
                 fill_vec3s(colors, self.fills[self.entry(id)]);
                 true
             }
-            PixelSource::Gouraud(plane) => {
-                self.gouraud[usize::from(plane)].write_group_colors(first_column as i64, row as i64, colors)
-            }
+            PixelSource::Gouraud(plane) => self.gouraud[usize::from(plane)].write_group_colors::<B>(
+                first_column as i64,
+                row as i64,
+                colors,
+            ),
             PixelSource::Phong(_) => false,
             PixelSource::Shaded => true,
         }
@@ -1305,7 +1342,7 @@ fn last_pass_with_phong<'f>(
                 let colors: &mut [Vec3; LANES] = (&mut color[first..first + LANES])
                     .try_into()
                     .expect("a group of lanes");
-                if pass.write_whole_group(group_ids, first_column, row, colors) {
+                if pass.write_whole_group::<Native>(group_ids, first_column, row, colors) {
                     continue;
                 }
             }
@@ -1465,8 +1502,8 @@ impl LaneSteps {
 
     /// The edge functions at a group's pixels, the first pixel's values `start`, in `f32`.
     #[inline(always)]
-    fn edges(&self, start: [i64; 3]) -> [Floats; 3] {
-        std::array::from_fn(|k| (Wides::splat(start[k] as f64) + self.0[k]).to_floats())
+    fn edges<B: Backend>(&self, start: [i64; 3]) -> [Floats<B>; 3] {
+        std::array::from_fn(|k| (Wides::splat(start[k] as f64) + self.0[k].on::<B>()).to_floats())
     }
 }
 
@@ -2317,11 +2354,27 @@ mod tests {
                                 };
                                 let mut group = [Vec3::NAN; LANES];
                                 assert!(
-                                    plane.write_group_colors(column - lane as i64, row, &mut group),
+                                    plane.write_group_colors::<Native>(column - lane as i64, row, &mut group),
                                     "the test's triangles are near their tiles"
                                 );
                                 let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                                 assert_eq!(bits(group[lane]), bits(color), "Gouraud lanes at {px}, {py}");
+                                // The same group on the widest lanes.
+                                struct Widest<'p>(&'p GouraudPlane, i64, i64, &'p mut [Vec3; LANES]);
+                                impl LaneWork for Widest<'_> {
+                                    type Output = bool;
+                                    #[inline(always)]
+                                    fn run<B: Backend>(self) -> bool {
+                                        self.0.write_group_colors::<B>(self.1, self.2, self.3)
+                                    }
+                                }
+                                let mut widest = [Vec3::NAN; LANES];
+                                assert!(run_widest(Widest(&plane, column - lane as i64, row, &mut widest)));
+                                assert_eq!(
+                                    widest.map(bits),
+                                    group.map(bits),
+                                    "Gouraud widest lanes at {px}, {py}"
+                                );
                                 in_rows += 1;
                                 color
                             }
