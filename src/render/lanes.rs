@@ -14,10 +14,12 @@
 //! Where the processor has AVX2, [`run_widest`] runs a piece of lane code ([`LaneWork`],
 //! generic over the backend) on a third backend, `Avx`, inside an `avx2` function: one 256-bit
 //! instruction per operation, half the SSE backend's. Elsewhere it runs the same code on the
-//! native backend: the same operations, so the same bits, on every machine. The lighting runs
-//! there, with the Phong interpolation around it; the rest stays on the native backend, where
-//! the rasterizer's masks, integer and `f64` lanes are (the whole program built for AVX2 was
-//! slower on flat and Gouraud frames: docs/performance.md).
+//! native backend: the same operations, so the same bits, on every machine. What runs there
+//! comes in units of a few hundred operations or more: a tile's rasterization (one sample or
+//! several, and a shadow map's tiles), a tile's last shading pass, the lighting with the Phong
+//! interpolation around it, and a batch of pixels whose surface varies (weights, texture
+//! sampling, the surface stage). The rest stays on the native backend (the whole program built
+//! for AVX2 was slower on flat and Gouraud frames: docs/performance.md).
 
 use std::fmt::Debug;
 use std::marker::PhantomData;
@@ -30,8 +32,8 @@ use glam::{Mat3, Vec2, Vec3};
 pub const LANES: usize = 8;
 
 /// The lane operations a backend provides, on the arrays of [`Floats`] and [`Mask`]: each one
-/// the scalar IEEE operation lane by lane, bit for bit. Integer and `f64` lanes ([`Ints`],
-/// [`Wides`]) are the native backend's alone.
+/// the scalar IEEE operation lane by lane, bit for bit, on `f32`, integer and `f64` lanes
+/// ([`Floats`], [`Ints`], [`Wides`]).
 pub trait Backend: Copy + Default + Debug + PartialEq + Send + Sync + 'static {
     fn add(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES];
     fn sub(a: [f32; LANES], b: [f32; LANES]) -> [f32; LANES];
@@ -1326,12 +1328,12 @@ impl<B: Backend> Vec3s<B> {
 
 /// One `Vec2` per lane (texture coordinates), stored as two lane arrays.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Vec2s {
-    pub x: Floats,
-    pub y: Floats,
+pub struct Vec2s<B = Native> {
+    pub x: Floats<B>,
+    pub y: Floats<B>,
 }
 
-impl Vec2s {
+impl<B: Backend> Vec2s<B> {
     /// The lanes from `vectors`.
     #[inline(always)]
     pub fn from_array(vectors: &[Vec2; LANES]) -> Self {
@@ -1352,9 +1354,18 @@ impl Vec2s {
         lanes
     }
 
+    /// The same lanes, for backend `C`'s operations.
+    #[inline(always)]
+    pub fn on<C: Backend>(self) -> Vec2s<C> {
+        Vec2s {
+            x: self.x.on(),
+            y: self.y.on(),
+        }
+    }
+
     /// Each component times the lane's `factor` (`Vec2 * f32`).
     #[inline(always)]
-    pub fn scale(self, factor: Floats) -> Self {
+    pub fn scale(self, factor: Floats<B>) -> Self {
         Vec2s {
             x: self.x * factor,
             y: self.y * factor,
@@ -1363,15 +1374,15 @@ impl Vec2s {
 
     /// `Vec2::length`: `sqrt((x·x) + (y·y))`.
     #[inline(always)]
-    pub fn length(self) -> Floats {
+    pub fn length(self) -> Floats<B> {
         (self.x * self.x + self.y * self.y).sqrt()
     }
 }
 
-impl Add for Vec2s {
-    type Output = Vec2s;
+impl<B: Backend> Add for Vec2s<B> {
+    type Output = Vec2s<B>;
     #[inline(always)]
-    fn add(self, other: Vec2s) -> Vec2s {
+    fn add(self, other: Vec2s<B>) -> Vec2s<B> {
         Vec2s {
             x: self.x + other.x,
             y: self.y + other.y,
@@ -1379,10 +1390,10 @@ impl Add for Vec2s {
     }
 }
 
-impl Sub for Vec2s {
-    type Output = Vec2s;
+impl<B: Backend> Sub for Vec2s<B> {
+    type Output = Vec2s<B>;
     #[inline(always)]
-    fn sub(self, other: Vec2s) -> Vec2s {
+    fn sub(self, other: Vec2s<B>) -> Vec2s<B> {
         Vec2s {
             x: self.x - other.x,
             y: self.y - other.y,
@@ -1604,7 +1615,7 @@ mod tests {
         let matrix = Mat3::from_cols(a[0], a[7], b[3]);
         let transformed = lb.transformed_by(matrix).to_array();
         let crossed = la.cross(lb).to_array();
-        let planar_a = Vec2s::gather(&a, |v| v.truncate());
+        let planar_a = Vec2s::<Native>::gather(&a, |v| v.truncate());
         let planar_b = Vec2s::from_array(&b.map(|v| v.truncate()));
         let planar_lengths = planar_a.length();
         let planar = planar_a + planar_b.scale(Floats::splat(2.0)) - planar_a;

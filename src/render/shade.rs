@@ -1878,24 +1878,53 @@ impl<'f> ModulatedBatch<'f> {
             edges,
             triangles,
         } = self.pixels.take();
-        let planes = triangles.map(|(plane, _)| plane);
-        let vertices = triangles.map(|(_, vertices)| *vertices);
-        let points = SurfacePoints {
+        run_widest(ModulatedLanes {
+            frame,
+            texture,
+            offsets,
+            edges,
+            triangles,
+            colors: &self.colors,
+            color,
+        });
+    }
+}
+
+/// A [`ModulatedBatch`]'s waiting pixels modulated into `color`, as lane work: the pixels'
+/// weights, their texels and the products, about two thousand operations a batch.
+struct ModulatedLanes<'q, 'c> {
+    frame: &'q Frame,
+    texture: &'q TextureBinding,
+    offsets: &'q [usize],
+    edges: &'q [[i64; 3]; LANES],
+    triangles: [&'q (RasterPlane, [u32; 3]); LANES],
+    colors: &'q [(Vec3, Vec3); LANES],
+    color: &'c mut [Vec3],
+}
+
+impl LaneWork for ModulatedLanes<'_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<B: Backend>(self) {
+        let planes = self.triangles.map(|(plane, _)| plane);
+        let vertices = self.triangles.map(|(_, vertices)| *vertices);
+        let points = SurfacePoints::<B> {
             vertices: &vertices,
-            weights: &WeightLanes::of(edges, &planes),
+            weights: &WeightLanes::of(self.edges, &planes),
         };
         // `rest + textured·texel` in lanes (each lane the `Vec3` operations' bits), each lane
         // then stored as a `Vec3`. Taking the texels apart as an array of `Vec3`s instead let
         // the compiler read them with 16-byte loads straddling the sampler's stores, which
         // cannot be forwarded: a sixth of a textured flat frame's time.
-        let texels = texture_colors(frame, texture, &points);
+        let texels = texture_colors(self.frame, self.texture, &points);
         let part = |pick: fn(&(Vec3, Vec3)) -> Vec3| {
-            Vec3s::from_array(&std::array::from_fn(|lane| pick(&self.colors[lane])))
+            Vec3s::<B>::from_array(&std::array::from_fn(|lane| pick(&self.colors[lane])))
         };
         let (textured, rest) = (part(|colors| colors.0), part(|colors| colors.1));
         let shaded = rest + textured * texels;
-        for (lane, &offset) in offsets.iter().enumerate() {
-            color[offset] = shaded.lane(lane);
+        for (lane, &offset) in self.offsets.iter().enumerate() {
+            self.color[offset] = shaded.lane(lane);
         }
     }
 }

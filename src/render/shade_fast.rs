@@ -1203,17 +1203,52 @@ impl<'f> SurfaceBatch<'f> {
         if self.pixels.is_empty() {
             return;
         }
-        let frame = lighting.frame;
         let QueuedPixels {
             offsets,
             edges,
             triangles,
         } = self.pixels.take();
-        let weights = WeightLanes::of(edges, &triangles.map(|triangle| &triangle.plane));
+        run_widest(SurfaceLanesWork {
+            lighting,
+            slerping: self.slerping,
+            offsets,
+            edges,
+            triangles,
+            color,
+        });
+    }
+}
+
+/// A [`SurfaceBatch`]'s waiting pixels shaded into `color`, as lane work: weights,
+/// interpolation, the surface stage and the lighting, a few thousand operations a batch.
+struct SurfaceLanesWork<'q, 'f, 'c> {
+    lighting: FastLighting<'f>,
+    slerping: bool,
+    offsets: &'q [usize],
+    edges: &'q [[i64; 3]; LANES],
+    triangles: [&'q SurfaceTriangle<'f>; LANES],
+    color: &'c mut [Vec3],
+}
+
+impl LaneWork for SurfaceLanesWork<'_, '_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<B: Backend>(self) {
+        let Self {
+            lighting,
+            slerping,
+            offsets,
+            edges,
+            triangles,
+            color,
+        } = self;
+        let frame = lighting.frame;
+        let weights = WeightLanes::<B>::of(edges, &triangles.map(|triangle| &triangle.plane));
         let frame_triangles = triangles.map(|triangle| triangle.triangle);
         let vertices = frame_triangles.map(|triangle| triangle.expect("every lane holds a pixel").vertices);
         let positions = interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.positions[k]);
-        let normals = if self.slerping {
+        let normals = if slerping {
             surface_normals(&triangles, &weights.at)
         } else {
             interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.normals[k])
@@ -1227,7 +1262,7 @@ impl<'f> SurfaceBatch<'f> {
         let (surface, normals) = surface_lanes(frame, lighting.material, &points, normals);
         let reversed = Mask::from_bools(triangles.map(|triangle| triangle.reversed));
         let normals = reversed.select3(-normals, normals);
-        let lit = lighting.light_surface_lanes(positions, normals, &surface);
+        let lit = lighting.light_surface_lanes_on(positions, normals, &surface);
         let lit = (lit.textured + lit.rest).to_array();
         for (&offset, &lit) in offsets.iter().zip(&lit) {
             color[offset] = lit;

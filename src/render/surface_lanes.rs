@@ -79,22 +79,23 @@ impl Default for RasterPlane {
 /// The source weights of eight points (`at`) and of their neighbours one pixel right and one
 /// down, one lane array per vertex of their triangles.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WeightLanes {
-    pub at: [Floats; 3],
-    pub right: [Floats; 3],
-    pub down: [Floats; 3],
+pub struct WeightLanes<B = Native> {
+    pub at: [Floats<B>; 3],
+    pub right: [Floats<B>; 3],
+    pub down: [Floats<B>; 3],
 }
 
-impl WeightLanes {
+impl<B: Backend> WeightLanes<B> {
     /// `shade::weights_from_edges` at each point, where the edge functions of its raster
     /// triangle `planes[lane]` take the values `edges[lane]`, and at its two neighbours:
     /// lane-wise, `perspective_weights`' operations in its order (from the edge functions
     /// converted to `f32`, its first step), then the corner weights (`Corners::apply`: a swap
     /// of two lane arrays where setup swapped corners, the sum lane by lane where a triangle
     /// was clipped).
+    #[inline(always)]
     pub fn of(edges: &[[i64; 3]; LANES], planes: &[&RasterPlane; LANES]) -> Self {
         let inv_area = Floats::gather(planes, |p| p.inv_area);
-        let inv_w: [Floats; 3] = std::array::from_fn(|k| Floats::gather(planes, |p| p.inv_w[k]));
+        let inv_w: [Floats<B>; 3] = std::array::from_fn(|k| Floats::gather(planes, |p| p.inv_w[k]));
         let swapped = Mask::from_bools(std::array::from_fn(|lane| {
             matches!(planes[lane].corners, Corners::Swapped)
         }));
@@ -108,31 +109,48 @@ impl WeightLanes {
                 converted[2][k][lane] = (edges[k] + plane.steps[1][k]) as f32;
             }
         }
-        let weights = |edges: &[[f32; LANES]; 3]| -> [Floats; 3] {
-            let screen = edges.map(|edge| Floats::new(edge) * inv_area);
-            let over_w = [screen[0] * inv_w[0], screen[1] * inv_w[1], screen[2] * inv_w[2]];
-            let sum = over_w[0] + over_w[1] + over_w[2];
-            let positive = sum.gt(Floats::splat(0.0));
-            let [x, y, z]: [Floats; 3] = std::array::from_fn(|k| positive.select(over_w[k] / sum, screen[k]));
-            let (y, z) = (swapped.select(z, y), swapped.select(y, z));
-            if !clipped {
-                return [x, y, z];
-            }
-            let mut lanes = Vec3s { x, y, z }.to_array();
-            for (weights, plane) in lanes.iter_mut().zip(planes) {
-                if let Corners::Clipped(_) = plane.corners {
-                    *weights = plane.corners.apply(*weights);
-                }
-            }
-            let lanes = Vec3s::from_array(&lanes);
-            [lanes.x, lanes.y, lanes.z]
-        };
         WeightLanes {
-            at: weights(&converted[0]),
-            right: weights(&converted[1]),
-            down: weights(&converted[2]),
+            at: source_weights(&converted[0], inv_area, &inv_w, swapped, clipped, planes),
+            right: source_weights(&converted[1], inv_area, &inv_w, swapped, clipped, planes),
+            down: source_weights(&converted[2], inv_area, &inv_w, swapped, clipped, planes),
         }
     }
+}
+
+/// `perspective_weights` lane-wise from edge functions converted to `f32`, then the corner
+/// weights (see [`WeightLanes::of`]).
+#[inline(always)]
+fn source_weights<B: Backend>(
+    edges: &[[f32; LANES]; 3],
+    inv_area: Floats<B>,
+    inv_w: &[Floats<B>; 3],
+    swapped: Mask<B>,
+    clipped: bool,
+    planes: &[&RasterPlane; LANES],
+) -> [Floats<B>; 3] {
+    let screen = [
+        Floats::new(edges[0]) * inv_area,
+        Floats::new(edges[1]) * inv_area,
+        Floats::new(edges[2]) * inv_area,
+    ];
+    let over_w = [screen[0] * inv_w[0], screen[1] * inv_w[1], screen[2] * inv_w[2]];
+    let sum = over_w[0] + over_w[1] + over_w[2];
+    let positive = sum.gt(Floats::splat(0.0));
+    let x = positive.select(over_w[0] / sum, screen[0]);
+    let y = positive.select(over_w[1] / sum, screen[1]);
+    let z = positive.select(over_w[2] / sum, screen[2]);
+    let (y, z) = (swapped.select(z, y), swapped.select(y, z));
+    if !clipped {
+        return [x, y, z];
+    }
+    let mut lanes = Vec3s { x, y, z }.to_array();
+    for (weights, plane) in lanes.iter_mut().zip(planes) {
+        if let Corners::Clipped(_) = plane.corners {
+            *weights = plane.corners.apply(*weights);
+        }
+    }
+    let lanes = Vec3s::<B>::from_array(&lanes);
+    [lanes.x, lanes.y, lanes.z]
 }
 
 /// Up to [`LANES`] pixels waiting for the surface stage, each known by where its colour goes
@@ -244,32 +262,33 @@ fn has_texture(material: &Material) -> bool {
 
 /// Eight shading points: per lane its source triangle's vertices, and the weights of the
 /// point and its neighbours.
-pub struct SurfacePoints<'a> {
+pub struct SurfacePoints<'a, B: Backend = Native> {
     pub vertices: &'a [[u32; 3]; LANES],
-    pub weights: &'a WeightLanes,
+    pub weights: &'a WeightLanes<B>,
 }
 
 /// A texture's coordinates at eight points, and their changes one pixel right and one down.
 #[derive(Clone, Copy)]
-struct UvFootprint {
-    at: Vec2s,
-    right: Vec2s,
-    down: Vec2s,
+struct UvFootprint<B: Backend> {
+    at: Vec2s<B>,
+    right: Vec2s<B>,
+    down: Vec2s<B>,
 }
 
 /// What the stage reads of eight points, gathered into lanes as it is first needed: weights,
 /// each vertex attribute, each texture coordinate set.
-struct Gathered<'a> {
-    points: &'a SurfacePoints<'a>,
+struct Gathered<'a, B: Backend> {
+    points: &'a SurfacePoints<'a, B>,
     /// The frame's vertex attributes (empty when no mesh has any: every vertex then has
     /// `VertexAttributes::default()`, as `Frame::attributes` gives).
     attributes: &'a [VertexAttributes],
     /// Per texture coordinate set, once a texture asks for it.
-    uvs: [Option<UvFootprint>; 2],
+    uvs: [Option<UvFootprint<B>>; 2],
 }
 
-impl<'a> Gathered<'a> {
-    fn new(frame: &'a Frame, points: &'a SurfacePoints<'a>) -> Self {
+impl<'a, B: Backend> Gathered<'a, B> {
+    #[inline(always)]
+    fn new(frame: &'a Frame, points: &'a SurfacePoints<'a, B>) -> Self {
         Gathered {
             points,
             attributes: &frame.vertex_attributes,
@@ -311,7 +330,11 @@ impl<'a> Gathered<'a> {
 
     /// A `Vec3` attribute interpolated with `weights`: `a·w₀ + b·w₁ + c·w₂`, as `Vec3`s.
     #[inline(always)]
-    fn interpolate3(&self, weights: &[Floats; 3], attribute: impl Fn(&VertexAttributes) -> Vec3) -> Vec3s {
+    fn interpolate3(
+        &self,
+        weights: &[Floats<B>; 3],
+        attribute: impl Fn(&VertexAttributes) -> Vec3,
+    ) -> Vec3s<B> {
         let [a, b, c] = self.corners(attribute).map(|corner| Vec3s::from_array(&corner));
         a.scale(weights[0]) + b.scale(weights[1]) + c.scale(weights[2])
     }
@@ -319,14 +342,15 @@ impl<'a> Gathered<'a> {
     /// The tangents' `w` (the bitangent's handedness) interpolated with `weights`, the fourth
     /// component of the general path's `Vec4` interpolation.
     #[inline(always)]
-    fn interpolate_w(&self, weights: &[Floats; 3]) -> Floats {
+    fn interpolate_w(&self, weights: &[Floats<B>; 3]) -> Floats<B> {
         let [a, b, c] = self.corners(|vertex| vertex.tangent.w).map(Floats::new);
         a * weights[0] + b * weights[1] + c * weights[2]
     }
 
     /// The coordinates of set `uv_set` and their footprint (the general path's `uv_at` at the
     /// point and its neighbours, less the point's).
-    fn uv(&mut self, uv_set: u8) -> UvFootprint {
+    #[inline(always)]
+    fn uv(&mut self, uv_set: u8) -> UvFootprint<B> {
         let set = usize::from(uv_set == 1);
         if let Some(uv) = self.uvs[set] {
             return uv;
@@ -334,20 +358,20 @@ impl<'a> Gathered<'a> {
         let corners = self
             .corners(|vertex| if set == 1 { vertex.uv1 } else { vertex.uv })
             .map(|corner| Vec2s::from_array(&corner));
-        let at = |w: &[Floats; 3]| corners[0].scale(w[0]) + corners[1].scale(w[1]) + corners[2].scale(w[2]);
         let weights = self.points.weights;
-        let uv = at(&weights.at);
+        let uv = interpolate2(&corners, &weights.at);
         let footprint = UvFootprint {
             at: uv,
-            right: at(&weights.right) - uv,
-            down: at(&weights.down) - uv,
+            right: interpolate2(&corners, &weights.right) - uv,
+            down: interpolate2(&corners, &weights.down) - uv,
         };
         self.uvs[set] = Some(footprint);
         footprint
     }
 
     /// The texel of `binding` at each point (the general path's `sample`), its RGB.
-    fn sample(&mut self, frame: &Frame, binding: &TextureBinding) -> Vec3s {
+    #[inline(always)]
+    fn sample(&mut self, frame: &Frame, binding: &TextureBinding) -> Vec3s<B> {
         let uv = self.uv(binding.uv_set);
         let texels = sample_lanes(
             &frame.textures[binding.texture as usize],
@@ -361,15 +385,22 @@ impl<'a> Gathered<'a> {
     }
 }
 
+/// `a·w₀ + b·w₁ + c·w₂` of the three corners' `Vec2`s.
+#[inline(always)]
+fn interpolate2<B: Backend>(corners: &[Vec2s<B>; 3], w: &[Floats<B>; 3]) -> Vec2s<B> {
+    corners[0].scale(w[0]) + corners[1].scale(w[1]) + corners[2].scale(w[2])
+}
+
 /// The surface of `material` at `points` of `frame`, whose interpolated and renormalised
 /// (front) normals are `normals`: per lane `k_a` and `k_d`, and the normal after the normal
 /// map. Each lane has the bits the general path's material and normal have at its point.
-pub fn surface_lanes(
+#[inline(always)]
+pub fn surface_lanes<B: Backend>(
     frame: &Frame,
     material: &Material,
-    points: &SurfacePoints,
-    normals: Vec3s,
-) -> (SurfaceLanes, Vec3s) {
+    points: &SurfacePoints<B>,
+    normals: Vec3s<B>,
+) -> (SurfaceLanes<B>, Vec3s<B>) {
     let mut surface = SurfaceLanes::of(material);
     if !varies(frame, material) {
         return (surface, normals);
@@ -403,7 +434,12 @@ pub fn surface_lanes(
 
 /// The diffuse texture's colour (its texel's RGB) at each point: what multiplies the textured
 /// part of a flat or Gouraud pixel.
-pub fn texture_colors(frame: &Frame, binding: &TextureBinding, points: &SurfacePoints) -> Vec3s {
+#[inline(always)]
+pub fn texture_colors<B: Backend>(
+    frame: &Frame,
+    binding: &TextureBinding,
+    points: &SurfacePoints<B>,
+) -> Vec3s<B> {
     Gathered::new(frame, points).sample(frame, binding)
 }
 
@@ -411,16 +447,15 @@ pub fn texture_colors(frame: &Frame, binding: &TextureBinding, points: &SurfaceP
 /// made perpendicular to `normal`, the texel mapped from [0, 1] to [−1, 1], and the normal
 /// where the tangent is unusable, the texel not finite or the result of no length.
 #[inline(always)]
-fn perturb_normal_lanes(
-    normal: Vec3s,
-    tangent: Vec3s,
-    handedness: Floats,
-    texel: Vec3s,
+fn perturb_normal_lanes<B: Backend>(
+    normal: Vec3s<B>,
+    tangent: Vec3s<B>,
+    handedness: Floats<B>,
+    texel: Vec3s<B>,
     scale: f32,
-) -> Vec3s {
+) -> Vec3s<B> {
     let zero = Floats::splat(0.0);
     let t = (tangent - normal.scale(normal.dot(tangent))).normalize_or_zero();
-    let is_zero = |c: Floats| c.le(zero).and(zero.le(c));
     let no_tangent = is_zero(t.x).and(is_zero(t.y)).and(is_zero(t.z));
     let finite = texel
         .x
@@ -447,14 +482,48 @@ fn perturb_normal_lanes(
     keep.select3(normal, perturbed.scale(reciprocal))
 }
 
+/// `c == 0` per lane, as `c ≤ 0 ∧ 0 ≤ c`.
+#[inline(always)]
+fn is_zero<B: Backend>(c: Floats<B>) -> Mask<B> {
+    let zero = Floats::splat(0.0);
+    c.le(zero).and(zero.le(c))
+}
+
 #[cfg(test)]
 mod tests {
     use glam::Vec4;
 
     use super::*;
+    use crate::render::lanes::{LaneWork, run_widest};
     use crate::render::normals::perturb_normal;
 
-    /// The normal map's lanes against `perturb_normal`, bit for bit, on awkward frames:
+    /// [`perturb_normal_lanes`] of eight points, as lane work.
+    #[derive(Clone, Copy)]
+    struct Perturb {
+        normals: [Vec3; LANES],
+        tangents: [Vec4; LANES],
+        texels: [Vec3; LANES],
+        scale: f32,
+    }
+
+    impl LaneWork for Perturb {
+        type Output = [Vec3; LANES];
+
+        #[inline(always)]
+        fn run<B: Backend>(self) -> [Vec3; LANES] {
+            perturb_normal_lanes(
+                Vec3s::<B>::from_array(&self.normals),
+                Vec3s::from_array(&self.tangents.map(|t| t.truncate())),
+                Floats::new(self.tangents.map(|t| t.w)),
+                Vec3s::from_array(&self.texels),
+                self.scale,
+            )
+            .to_array()
+        }
+    }
+
+    /// The normal map's lanes, on the native backend and on the widest, against
+    /// `perturb_normal`, bit for bit, on awkward frames:
     /// tangents along the normal, zero, non-finite texels, both handednesses.
     #[test]
     fn perturbed_normals_equal_the_scalar_ones_bit_for_bit() {
@@ -492,21 +561,21 @@ mod tests {
             for rotation in 0..LANES {
                 let mut t = tangents;
                 t.rotate_left(rotation);
-                let lanes = perturb_normal_lanes(
-                    Vec3s::from_array(&normals),
-                    Vec3s::from_array(&t.map(|t| t.truncate())),
-                    Floats::new(t.map(|t| t.w)),
-                    Vec3s::from_array(&texels),
+                let work = Perturb {
+                    normals,
+                    tangents: t,
+                    texels,
                     scale,
-                )
-                .to_array();
-                for lane in 0..LANES {
-                    let scalar = perturb_normal(normals[lane], t[lane], texels[lane], scale);
-                    assert_eq!(
-                        lanes[lane].to_array().map(f32::to_bits),
-                        scalar.to_array().map(f32::to_bits),
-                        "scale {scale}, rotation {rotation}, lane {lane}"
-                    );
+                };
+                for (backend, lanes) in [("native", work.run::<Native>()), ("widest", run_widest(work))] {
+                    for lane in 0..LANES {
+                        let scalar = perturb_normal(normals[lane], t[lane], texels[lane], scale);
+                        assert_eq!(
+                            lanes[lane].to_array().map(f32::to_bits),
+                            scalar.to_array().map(f32::to_bits),
+                            "scale {scale}, rotation {rotation}, lane {lane}, {backend} lanes"
+                        );
+                    }
                 }
             }
         }

@@ -27,7 +27,7 @@ mod log2;
 
 use glam::{Vec2, Vec4};
 
-use crate::render::lanes::{Floats, Ints, LANES, Mask, Vec2s};
+use crate::render::lanes::{Backend, Floats, Ints, LANES, Mask, Vec2s};
 use crate::texture::{MipLevel, Sampler, Texture, Wrap};
 use log2::log2_lanes;
 
@@ -37,12 +37,14 @@ use log2::log2_lanes;
 const INTEGER_RANGE: f32 = (1u32 << 20) as f32;
 
 /// [`Texture::sample`] of each lane: the filtered value at `uv` for a pixel whose footprint
-/// spans `uv_dx` and `uv_dy`, with the bits of the scalar call on the lane's inputs.
-pub fn sample_lanes(
+/// spans `uv_dx` and `uv_dy`, with the bits of the scalar call on the lane's inputs. On lanes
+/// of backend `B` (see `lanes::run_widest`).
+#[inline(always)]
+pub fn sample_lanes<B: Backend>(
     texture: &Texture,
-    uv: Vec2s,
-    uv_dx: Vec2s,
-    uv_dy: Vec2s,
+    uv: Vec2s<B>,
+    uv_dx: Vec2s<B>,
+    uv_dy: Vec2s<B>,
     sampler: &Sampler,
     mip_bias: f32,
 ) -> [Vec4; LANES] {
@@ -54,23 +56,16 @@ pub fn sample_lanes(
         x: Floats::splat(base.width as f32),
         y: Floats::splat(base.height as f32),
     };
-    let scaled = |d: Vec2s| {
-        let d = finite_or_zero(d);
-        Vec2s {
-            x: d.x * size.x,
-            y: d.y * size.y,
-        }
-    };
     // `f32::max` of the two lengths: neither is NaN (the lengths of finite vectors are finite
     // or +∞) nor −0, so the larger by `>` is the same value.
-    let (along_x, along_y) = (scaled(uv_dx).length(), scaled(uv_dy).length());
+    let (along_x, along_y) = (texel_length(uv_dx, size), texel_length(uv_dy, size));
     let footprint = along_x.gt(along_y).select(along_x, along_y);
     let last_level = texture.levels.len() - 1;
     // With a bias of at most 0, `λ + bias > 0` needs `ρ > 1`; a positive bias can make any
     // footprint above 0 minified.
     let may_be_minified = Floats::splat(if mip_bias > 0.0 { 0.0 } else { 1.0 });
     let minified = if last_level == 0 {
-        !Mask::ALL
+        !Mask::<B>::ALL
     } else {
         footprint.gt(may_be_minified)
     };
@@ -94,8 +89,7 @@ pub fn sample_lanes(
     let blended = minified.and(last_index.gt(lower)).and(fraction.gt(zero));
     // Lanes beyond the integer range are sampled by `Texture::sample`; the lanes take 0 there.
     let limit = Floats::splat(INTEGER_RANGE);
-    let within = |t: Floats| limit.gt(t).and(t.gt(-limit));
-    let integral = within(at.x).and(within(at.y));
+    let integral = within(at.x, limit).and(within(at.y, limit));
     let at = Vec2s {
         x: integral.select(at.x, zero),
         y: integral.select(at.y, zero),
@@ -121,16 +115,34 @@ pub fn sample_lanes(
     }
     for (lane, value) in near.iter_mut().enumerate() {
         if !integral.lane(lane) {
-            let pick = |v: Vec2s| Vec2::new(v.x.0[lane], v.y.0[lane]);
+            let pick = |v: Vec2s<B>| Vec2::new(v.x.0[lane], v.y.0[lane]);
             *value = texture.sample_biased(pick(uv), pick(uv_dx), pick(uv_dy), sampler, mip_bias);
         }
     }
     near
 }
 
+/// The length of the change `d` in texture coordinates, in texels of a level of `size`
+/// (non-finite components taken as 0).
+#[inline(always)]
+fn texel_length<B: Backend>(d: Vec2s<B>, size: Vec2s<B>) -> Floats<B> {
+    let d = finite_or_zero(d);
+    Vec2s {
+        x: d.x * size.x,
+        y: d.y * size.y,
+    }
+    .length()
+}
+
+/// Whether each lane of `t` lies strictly between `−limit` and `limit`.
+#[inline(always)]
+fn within<B: Backend>(t: Floats<B>, limit: Floats<B>) -> Mask<B> {
+    limit.gt(t).and(t.gt(-limit))
+}
+
 /// Each component where it is finite, else 0 (`texture::finite_or_zero`).
 #[inline(always)]
-fn finite_or_zero(v: Vec2s) -> Vec2s {
+fn finite_or_zero<B: Backend>(v: Vec2s<B>) -> Vec2s<B> {
     let zero = Floats::splat(0.0);
     Vec2s {
         x: v.x.is_finite().select(v.x, zero),
@@ -146,7 +158,7 @@ const ROUND: f32 = 12_582_912.0;
 /// The floor of each lane (below 2²² in magnitude), as a float and as an integer: the value
 /// rounded by [`ROUND`], one less where that rounded up.
 #[inline(always)]
-fn floor_lanes(x: Floats) -> (Floats, Ints) {
+fn floor_lanes<B: Backend>(x: Floats<B>) -> (Floats<B>, Ints<B>) {
     let sum = x + Floats::splat(ROUND);
     let nearest = sum - Floats::splat(ROUND);
     let above = nearest.gt(x);
@@ -161,15 +173,14 @@ fn floor_lanes(x: Floats) -> (Floats, Ints) {
 /// ([`texel_pairs`]). Lanes with coordinates beyond [`INTEGER_RANGE`] get a value that is not
 /// used.
 #[inline(always)]
-fn bilinear_lanes(
+fn bilinear_lanes<B: Backend>(
     texture: &Texture,
-    levels: Ints,
-    uv: Vec2s,
+    levels: Ints<B>,
+    uv: Vec2s<B>,
     sampler: &Sampler,
     mut put: impl FnMut(usize, Vec4),
 ) {
     let level = |lane: usize| &texture.levels[levels.0[lane] as usize];
-    let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
     if levels.0.iter().all(|&l| l == levels.0[0]) {
         let level = level(0);
         let (width, height) = (level.width, level.height);
@@ -205,6 +216,12 @@ fn bilinear_lanes(
     }
 }
 
+/// `a + (b − a)·f`, `texture::bilinear`'s filter step.
+#[inline(always)]
+fn lerp(a: Vec4, b: Vec4, f: f32) -> Vec4 {
+    a + (b - a) * f
+}
+
 /// Whether `level` holds its `width·height` texels (`MipLevel`'s invariant, which every
 /// constructor keeps; its fields are public, so the fast path checks it once per lookup).
 #[inline(always)]
@@ -215,12 +232,12 @@ fn holds_every_texel(level: &MipLevel) -> bool {
 /// The sizes of an axis of each lane's level, as integers (those above 2²⁴, which are not
 /// exact as `f32`, marked as no power of two) and as floats.
 #[derive(Clone, Copy)]
-struct Sizes {
-    integers: Ints,
-    floats: Floats,
+struct Sizes<B: Backend> {
+    integers: Ints<B>,
+    floats: Floats<B>,
 }
 
-impl Sizes {
+impl<B: Backend> Sizes<B> {
     #[inline(always)]
     fn integer(size: u32) -> i32 {
         if size <= 1 << 24 { size as i32 } else { 3 }
@@ -229,7 +246,7 @@ impl Sizes {
     #[inline(always)]
     fn splat(size: u32) -> Self {
         Sizes {
-            integers: Ints::splat(Sizes::integer(size)),
+            integers: Ints::splat(Self::integer(size)),
             floats: Floats::splat(size as f32),
         }
     }
@@ -237,7 +254,7 @@ impl Sizes {
     #[inline(always)]
     fn of(sizes: &[u32; LANES]) -> Self {
         Sizes {
-            integers: Ints::gather(sizes, |&size| Sizes::integer(size)),
+            integers: Ints::gather(sizes, |&size| Self::integer(size)),
             floats: Floats::gather(sizes, |&size| size as f32),
         }
     }
@@ -245,17 +262,17 @@ impl Sizes {
 
 /// Texel pairs on one axis, lane-wise ([`texel_pairs`]): the two wrapped indices and the
 /// weight of the second where `exact`.
-struct TexelPairs {
-    first: Ints,
-    second: Ints,
-    fraction: Floats,
-    exact: Mask,
+struct TexelPairs<B: Backend> {
+    first: Ints<B>,
+    second: Ints<B>,
+    fraction: Floats<B>,
+    exact: Mask<B>,
 }
 
-impl TexelPairs {
+impl<B: Backend> TexelPairs<B> {
     /// `texture::texel_pair` of `lane`, whose coordinate is in `t` and size in `sizes`.
     #[inline(always)]
-    fn lane(&self, lane: usize, t: Floats, sizes: &[u32; LANES], wrap: Wrap) -> (usize, usize, f32) {
+    fn lane(&self, lane: usize, t: Floats<B>, sizes: &[u32; LANES], wrap: Wrap) -> (usize, usize, f32) {
         if self.exact.lane(lane) {
             self.exact_lane(lane)
         } else {
@@ -288,7 +305,7 @@ impl TexelPairs {
 /// coordinates, sizes that are no power of two) are not `exact`: they take the
 /// specification's steps lane by lane ([`texel_pair`]).
 #[inline(always)]
-fn texel_pairs(t: Floats, sizes: Sizes, wrap: Wrap) -> TexelPairs {
+fn texel_pairs<B: Backend>(t: Floats<B>, sizes: Sizes<B>, wrap: Wrap) -> TexelPairs<B> {
     let Sizes {
         integers: size,
         floats,
@@ -305,7 +322,21 @@ fn texel_pairs(t: Floats, sizes: Sizes, wrap: Wrap) -> TexelPairs {
         .le(product)
         .and(Floats::splat((1u32 << 22) as f32).gt(product))
         .and(power_of_two);
-    let wrapped = |index: Ints| match wrap {
+    TexelPairs {
+        first: wrap_lanes(first, size, wrap),
+        second: wrap_lanes(first + one, size, wrap),
+        fraction,
+        exact,
+    }
+}
+
+/// Each lane's `index` wrapped into an axis of `size` texels (a power of two where the result
+/// is used) as `wrap` says.
+#[inline(always)]
+fn wrap_lanes<B: Backend>(index: Ints<B>, size: Ints<B>, wrap: Wrap) -> Ints<B> {
+    let zero = Ints::splat(0);
+    let last = size - Ints::splat(1);
+    match wrap {
         Wrap::Repeat => index.and(last),
         Wrap::MirroredRepeat => {
             let twice = size + last;
@@ -316,12 +347,6 @@ fn texel_pairs(t: Floats, sizes: Sizes, wrap: Wrap) -> TexelPairs {
             let below = index.gt(last).select_ints(last, index);
             zero.gt(below).select_ints(zero, below)
         }
-    };
-    TexelPairs {
-        first: wrapped(first),
-        second: wrapped(first + one),
-        fraction,
-        exact,
     }
 }
 
@@ -373,6 +398,7 @@ fn modulo(index: i64, size: i64) -> i64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::lanes::{LaneWork, Native, run_widest};
 
     /// A texture of `width`×`height` texels whose every component differs from its
     /// neighbours', so that any wrong texel or weight shows.
@@ -395,29 +421,54 @@ mod tests {
         a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
     }
 
-    /// The lanes against `Texture::sample`, lane by lane, for `points` (uv, uv_dx, uv_dy),
-    /// eight at a time (the last group padded with the first points).
-    fn check(texture: &Texture, sampler: &Sampler, mip_bias: f32, points: &[(Vec2, Vec2, Vec2)], what: &str) {
-        for group in points.chunks(LANES) {
-            let point = |lane: usize| group.get(lane).copied().unwrap_or(points[lane % points.len()]);
-            let lanes = |pick: fn((Vec2, Vec2, Vec2)) -> Vec2| {
-                Vec2s::from_array(&std::array::from_fn(|lane| pick(point(lane))))
-            };
-            let sampled = sample_lanes(
-                texture,
+    /// [`sample_lanes`] of eight points (uv, uv_dx, uv_dy), as lane work.
+    #[derive(Clone, Copy)]
+    struct Sample<'t> {
+        texture: &'t Texture,
+        points: [(Vec2, Vec2, Vec2); LANES],
+        sampler: &'t Sampler,
+        mip_bias: f32,
+    }
+
+    impl LaneWork for Sample<'_> {
+        type Output = [Vec4; LANES];
+
+        #[inline(always)]
+        fn run<B: Backend>(self) -> [Vec4; LANES] {
+            let lanes = |pick: fn(&(Vec2, Vec2, Vec2)) -> Vec2| Vec2s::<B>::gather(&self.points, pick);
+            sample_lanes(
+                self.texture,
                 lanes(|p| p.0),
                 lanes(|p| p.1),
                 lanes(|p| p.2),
+                self.sampler,
+                self.mip_bias,
+            )
+        }
+    }
+
+    /// The lanes, on the native backend and on the widest (`run_widest`), against
+    /// `Texture::sample`, lane by lane, for `points` (uv, uv_dx, uv_dy), eight at a time (the
+    /// last group padded with the first points).
+    fn check(texture: &Texture, sampler: &Sampler, mip_bias: f32, points: &[(Vec2, Vec2, Vec2)], what: &str) {
+        for group in points.chunks(LANES) {
+            let point = |lane: usize| group.get(lane).copied().unwrap_or(points[lane % points.len()]);
+            let work = Sample {
+                texture,
+                points: std::array::from_fn(point),
                 sampler,
                 mip_bias,
-            );
-            for (lane, &value) in sampled.iter().enumerate() {
-                let (uv, dx, dy) = point(lane);
-                let expected = texture.sample_biased(uv, dx, dy, sampler, mip_bias);
-                assert!(
-                    same_bits(value, expected),
-                    "{what} {sampler:?} bias {mip_bias}: uv {uv} dx {dx} dy {dy}: {value} against {expected}"
-                );
+            };
+            for (backend, sampled) in [("native", work.run::<Native>()), ("widest", run_widest(work))] {
+                for (lane, &value) in sampled.iter().enumerate() {
+                    let (uv, dx, dy) = point(lane);
+                    let expected = texture.sample_biased(uv, dx, dy, sampler, mip_bias);
+                    assert!(
+                        same_bits(value, expected),
+                        "{what} {sampler:?} bias {mip_bias}, {backend} lanes: uv {uv} dx {dx} dy {dy}: {value} \
+                         against {expected}"
+                    );
+                }
             }
         }
     }
@@ -615,7 +666,7 @@ mod tests {
             levels: Vec::new(),
             file: None,
         };
-        let zero = Vec2s::from_array(&[Vec2::ZERO; LANES]);
+        let zero = Vec2s::<Native>::from_array(&[Vec2::ZERO; LANES]);
         assert_eq!(
             sample_lanes(&empty, zero, zero, zero, &sampler, 0.0),
             [Vec4::ZERO; LANES]

@@ -27,11 +27,18 @@
 
 use std::sync::LazyLock;
 
-use crate::render::lanes::{Floats, LANES, Mask};
+use crate::render::lanes::{Backend, Floats, LANES, Mask, Native};
 
 /// `log₂` of the lanes of `x` in `wanted`, each with the bits of `f32::log2`; other lanes 0.
+/// Its lanes are computed in a function of their own, compiled for AVX2 and FMA, whatever
+/// backend `B` the caller's lanes take.
+#[inline(always)]
+pub fn log2_lanes<B: Backend>(x: Floats<B>, wanted: Mask<B>) -> Floats<B> {
+    log2_native(x.on(), wanted.on()).on()
+}
+
 #[inline]
-pub fn log2_lanes(x: Floats, wanted: Mask) -> Floats {
+fn log2_native(x: Floats<Native>, wanted: Mask<Native>) -> Floats<Native> {
     let mut log = Floats::splat(0.0);
     let mut by_libm = wanted;
     if *SAME_AS_LIBM && let Some((computed, regular)) = glibc_fma::log2(x) {
@@ -175,7 +182,7 @@ mod tests {
         let mut lanes = [0.0; LANES];
         let mut filled = 0;
         let compare = |lanes: &[f32; LANES], filled: usize| {
-            let log = log2_lanes(Floats::new(*lanes), Mask::ALL);
+            let log = log2_lanes(Floats::<Native>::new(*lanes), Mask::ALL);
             for (lane, &x) in lanes.iter().enumerate().take(filled) {
                 let expected = x.log2();
                 assert_eq!(
