@@ -21,7 +21,9 @@
 //!   coordinate) is sampled by `Texture::sample` itself.
 //!
 //! The texel fetches and the filter (`a + (b − a)·f`, then the blend between levels) stay per
-//! lane, in `Vec4`s: each lane reads its own texels, at its own level.
+//! lane, in `Vec4`s: each lane reads its own texels, at its own level. The lane-wise part is
+//! generic over the lanes' backend, so a textured batch runs it on the widest lanes
+//! (`lanes::run_widest`).
 
 mod log2;
 
