@@ -1251,7 +1251,7 @@ impl LaneWork for SurfaceLanesWork<'_, '_, '_> {
         let normals = if slerping {
             surface_normals(&triangles, &weights.at)
         } else {
-            interpolate_corners(&triangles, &weights.at, |triangle, k| triangle.normals[k])
+            nlerped_normals(&triangles, &weights.at)
         };
         let normals = renormalize_lanes(frame, normals, &frame_triangles);
         // The normal map perturbs the front normal, before the side is chosen.
@@ -1276,25 +1276,36 @@ impl LaneWork for SurfaceLanesWork<'_, '_, '_> {
 /// light alike, so each lane takes its own).
 #[inline(always)]
 fn surface_normals<B: Backend>(triangles: &[&SurfaceTriangle; LANES], weights: &[Floats<B>; 3]) -> Vec3s<B> {
-    let nlerped = || interpolate_corners(triangles, weights, |triangle, k| triangle.normals[k]);
     let Some(any_arc) = triangles.iter().find_map(|triangle| triangle.slerp) else {
-        return nlerped();
+        return nlerped_normals(triangles, weights);
     };
     // Lanes with Nlerp take another lane's arc for the slerp, whose result they drop.
     let arcs = triangles.map(|triangle| triangle.slerp.unwrap_or(any_arc));
-    let weights = Vec3s {
+    let point_weights = Vec3s {
         x: weights[0],
         y: weights[1],
         z: weights[2],
     }
     .to_array();
-    let slerped = slerp_triangle_lanes(&arcs.map(|(arc, _)| arc), &arcs.map(|(_, third)| third), &weights);
+    let slerped = slerp_triangle_lanes(
+        &arcs.map(|(arc, _)| arc),
+        &arcs.map(|(_, third)| third),
+        &point_weights,
+    );
     let slerping = Mask::from_bools(triangles.map(|triangle| triangle.slerp.is_some()));
     if slerping.all() {
         slerped
     } else {
-        slerping.select3(slerped, nlerped())
+        slerping.select3(slerped, nlerped_normals(triangles, weights))
     }
+}
+
+/// The normals of a [`SurfaceBatch`]'s lanes interpolated component by component (Nlerp,
+/// before renormalising). A function rather than a closure: lane code in a closure is compiled
+/// apart from `run_widest`'s `avx2` function, its intrinsics then calls.
+#[inline(always)]
+fn nlerped_normals<B: Backend>(triangles: &[&SurfaceTriangle; LANES], weights: &[Floats<B>; 3]) -> Vec3s<B> {
+    interpolate_corners(triangles, weights, |triangle, k| triangle.normals[k])
 }
 
 /// The lit pixels of one [`FastPhong`] triangle with Nlerp normals, shaded a group of
