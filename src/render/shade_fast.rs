@@ -71,7 +71,7 @@ use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer, shown_comp
 use crate::render::lanes::{Backend, Floats, LANES, LaneWork, Mask, Native, Vec3s, run_widest};
 use crate::render::normals::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
 use crate::render::raster::Corners;
-use crate::render::shadow::{ShadowMap, shadow_visibility_lanes};
+use crate::render::shadow::shadow_visibility_lanes;
 use crate::render::surface_lanes::{
     EdgeQueue, QueuedPixels, RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, surface_lanes, varies,
 };
@@ -398,7 +398,7 @@ impl<'f> FastLighting<'f> {
             // there, as the general path asks it only for lights that face the surface; then
             // its `strength <= 0` test, which turns away the lanes in full shadow.
             let map = self.frame.shadows.get(index).and_then(Option::as_deref);
-            let strength = strength * shadow_visibility(map, position, normal, to_light, lit);
+            let strength = strength * shadow_visibility_lanes(map, position, normal, to_light, lit);
             lit = lit.and(!strength.le(Floats::splat(0.0)));
             if !lit.any() {
                 continue;
@@ -447,22 +447,6 @@ impl LaneWork for LightingWork<'_, '_> {
         self.lighting
             .light_surface_lanes_on(self.position.on::<B>(), self.normal.on(), &self.surface.on())
             .on()
-    }
-}
-
-/// `shadow_visibility_lanes` from lanes of any backend: the shadow lookups run on the native
-/// one (their integer lanes are its alone).
-#[inline(always)]
-fn shadow_visibility<B: Backend>(
-    map: Option<&ShadowMap>,
-    position: Vec3s<B>,
-    normal: Vec3s<B>,
-    to_light: Vec3s<B>,
-    wanted: Mask<B>,
-) -> Floats<B> {
-    match map {
-        None => Floats::splat(1.0),
-        Some(_) => shadow_visibility_lanes(map, position.on(), normal.on(), to_light.on(), wanted.on()).on(),
     }
 }
 

@@ -29,7 +29,7 @@ use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
 
 use crate::render::depth::render_depth;
 use crate::render::geometry::{CameraSetup, SpareBuffers};
-use crate::render::lanes::{Floats, Ints, LANES, Mask, Real, Vec3s};
+use crate::render::lanes::{Backend, Floats, Ints, LANES, Mask, Native, Real, Vec3s};
 use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
 
 /// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
@@ -60,11 +60,11 @@ struct ShadowFace {
 /// Where eight points are compared with a face ([`ShadowFace::lookup_lanes`]): the lanes
 /// looked up, their texels' columns and rows (meaningless in the other lanes) and depths.
 #[derive(Debug, Clone, Copy)]
-struct TexelLanes {
-    looked_up: Mask,
-    columns: Ints,
-    rows: Ints,
-    depth: Floats,
+struct TexelLanes<B: Backend> {
+    looked_up: Mask<B>,
+    columns: Ints<B>,
+    rows: Ints<B>,
+    depth: Floats<B>,
 }
 
 /// A light's shadow map: one face, or six for a point light.
@@ -94,12 +94,21 @@ impl ShadowMap {
     /// normal offset and the tests that the point is in the map are computed lane-wise; for
     /// filters up to radius 2 the (2r+1)² depth compares too, once each lane's block has been
     /// gathered from wherever its point falls (radius 3 and up, and eight points of which some
-    /// block reaches over the map's border, count lane after lane).
-    #[inline]
-    pub fn visibility_lanes(&self, position: Vec3s, normal: Vec3s, to_light: Vec3s, wanted: Mask) -> Floats {
+    /// block reaches over the map's border, count lane after lane). A one-face map is looked up
+    /// on the caller's backend `B`; a cube on the native one, out of line.
+    #[inline(always)]
+    pub fn visibility_lanes<B: Backend>(
+        &self,
+        position: Vec3s<B>,
+        normal: Vec3s<B>,
+        to_light: Vec3s<B>,
+        wanted: Mask<B>,
+    ) -> Floats<B> {
         match self.faces.as_slice() {
             [face] => face.visibility_lanes(position, normal, &self.settings, wanted),
-            _ => self.cube_visibility_lanes(position, normal, to_light, wanted),
+            _ => self
+                .cube_visibility_lanes(position.on(), normal.on(), to_light.on(), wanted.on())
+                .on(),
         }
     }
 
@@ -145,14 +154,14 @@ impl ShadowMap {
 /// The visibility of eight points from a light with shadow map `map`
 /// ([`ShadowMap::visibility_lanes`] where `wanted` holds, 1 elsewhere), or 1 everywhere for a
 /// light without one.
-#[inline]
-pub fn shadow_visibility_lanes(
+#[inline(always)]
+pub fn shadow_visibility_lanes<B: Backend>(
     map: Option<&ShadowMap>,
-    position: Vec3s,
-    normal: Vec3s,
-    to_light: Vec3s,
-    wanted: Mask,
-) -> Floats {
+    position: Vec3s<B>,
+    normal: Vec3s<B>,
+    to_light: Vec3s<B>,
+    wanted: Mask<B>,
+) -> Floats<B> {
     match map {
         Some(map) => map.visibility_lanes(position, normal, to_light, wanted),
         None => Floats::splat(1.0),
@@ -199,24 +208,24 @@ impl ShadowFace {
     }
 
     /// [`ShadowFace::visibility`] lane by lane where `wanted` holds (1 elsewhere).
-    #[inline]
-    fn visibility_lanes(
+    #[inline(always)]
+    fn visibility_lanes<B: Backend>(
         &self,
-        position: Vec3s,
-        normal: Vec3s,
+        position: Vec3s<B>,
+        normal: Vec3s<B>,
         settings: &ShadowSettings,
-        wanted: Mask,
-    ) -> Floats {
+        wanted: Mask<B>,
+    ) -> Floats<B> {
         let one = Floats::splat(1.0);
         let texels = self.lookup_lanes(position, normal, settings, wanted);
         if !texels.looked_up.any() {
             return one;
         }
         let lit = match settings.filter_radius {
-            0 => self.lit_lanes::<1>(texels),
-            1 => self.lit_lanes::<3>(texels),
-            2 => self.lit_lanes::<5>(texels),
-            radius => self.lit_lanes_clamped(texels, i64::from(radius)),
+            0 => self.lit_lanes::<B, 1>(texels),
+            1 => self.lit_lanes::<B, 3>(texels),
+            2 => self.lit_lanes::<B, 5>(texels),
+            radius => self.lit_lanes_clamped(texels.on(), i64::from(radius)).on(),
         };
         let side = 2 * i64::from(settings.filter_radius) + 1;
         texels
@@ -230,7 +239,7 @@ impl ShadowFace {
     /// with one bounds check each and compared lane-wise, texel by texel; the count is the
     /// same integer. Otherwise lane by lane, clamping at the border.
     #[inline(always)]
-    fn lit_lanes<const SIDE: usize>(&self, texels: TexelLanes) -> Floats {
+    fn lit_lanes<B: Backend, const SIDE: usize>(&self, texels: TexelLanes<B>) -> Floats<B> {
         let TexelLanes {
             looked_up,
             columns,
@@ -247,7 +256,7 @@ impl ShadowFace {
             .and(high.gt(columns))
             .and(high.gt(rows));
         if looked_up.and(!inside).any() {
-            return self.lit_lanes_clamped(texels, i64::from(radius));
+            return self.lit_lanes_clamped(texels.on(), i64::from(radius)).on();
         }
         // The lanes not looked up read the map's first block (some lane's block is inside, so
         // the map holds one); their counts are not used.
@@ -268,15 +277,17 @@ impl ShadowFace {
             }
         }
         // A mask is −1 where it holds: subtracting each texel's counts it.
-        let lit = blocks.iter().flatten().fold(Ints::splat(0), |lit, &texels| {
-            lit - Floats::new(texels).le(depth).to_ints()
-        });
+        let mut lit = Ints::splat(0);
+        for &texels in blocks.iter().flatten() {
+            lit = lit - Floats::new(texels).le(depth).to_ints();
+        }
         lit.to_floats()
     }
 
-    /// [`lit_texels`] of the lanes looked up (0 elsewhere) one lane at a time, as floats.
+    /// [`lit_texels`] of the lanes looked up (0 elsewhere) one lane at a time, as floats: out
+    /// of line, on the native backend.
     #[inline(never)]
-    fn lit_lanes_clamped(&self, texels: TexelLanes, radius: i64) -> Floats {
+    fn lit_lanes_clamped(&self, texels: TexelLanes<Native>, radius: i64) -> Floats {
         Floats::new(std::array::from_fn(|lane| {
             if !texels.looked_up.lane(lane) {
                 return 0.0;
@@ -296,14 +307,14 @@ impl ShadowFace {
     /// [`ShadowFace::lookup`] of eight points, where `wanted` holds. The same
     /// operations in the same order, glam's `Mat4 * Vec4` being
     /// `((x_axis·x + y_axis·y) + z_axis·z) + w_axis·w`, each `None` a mask.
-    #[inline]
-    fn lookup_lanes(
+    #[inline(always)]
+    fn lookup_lanes<B: Backend>(
         &self,
-        position: Vec3s,
-        normal: Vec3s,
+        position: Vec3s<B>,
+        normal: Vec3s<B>,
         settings: &ShadowSettings,
-        wanted: Mask,
-    ) -> TexelLanes {
+        wanted: Mask<B>,
+    ) -> TexelLanes<B> {
         let texel = if self.perspective {
             let along = (position - Vec3s::splat(self.origin)).dot(Vec3s::splat(self.forward));
             Floats::splat(self.texel_size) * along.max(Floats::splat(0.0))
@@ -313,16 +324,10 @@ impl ShadowFace {
         let reach = settings.filter_radius as f32 + 0.5;
         let offset = position + normal.scale(Floats::splat(settings.bias + reach) * texel);
         let matrix = &self.clip_from_frame;
-        let row = |axis: usize| {
-            let column = |c: glam::Vec4| Floats::splat(c[axis]);
-            ((column(matrix.x_axis) * offset.x + column(matrix.y_axis) * offset.y)
-                + column(matrix.z_axis) * offset.z)
-                + Floats::splat(matrix.w_axis[axis] * 1.0)
-        };
         let clip = Vec3s {
-            x: row(0),
-            y: row(1),
-            z: row(2),
+            x: matrix_row(matrix, 0, offset),
+            y: matrix_row(matrix, 1, offset),
+            z: matrix_row(matrix, 2, offset),
         };
         let (ndc, in_front) = if self.affine {
             // `w = ((0·x + 0·y) + 0·z) + 1·1` is exactly 1 for a finite offset, and dividing by
@@ -330,7 +335,7 @@ impl ShadowFace {
             // `a·∞` both are), which the test below turns away as the scalar test of `w` does.
             (clip, Mask::ALL)
         } else {
-            let w = row(3);
+            let w = matrix_row(matrix, 3, offset);
             // `w > 0` is false for NaN: the scalar test's `is_nan() || <= 0`, negated.
             (clip.divide(w), w.gt(Floats::splat(0.0)))
         };
@@ -357,14 +362,10 @@ impl ShadowFace {
         // the low bits of its mantissa.
         debug_assert!(self.size <= 1 << 23);
         let last = Floats::splat((self.size - 1) as f32);
-        let texel = |coordinate: Floats| {
-            let mantissa = Floats::splat((1 << 23) as f32);
-            (coordinate.min(last).trunc() + mantissa).to_bits() - mantissa.to_bits()
-        };
         TexelLanes {
             looked_up,
-            columns: texel(columns),
-            rows: texel(rows),
+            columns: texel_index(columns, last),
+            rows: texel_index(rows, last),
             depth: ndc.z,
         }
     }
@@ -513,6 +514,38 @@ fn lights_any(light: &Light, seen: &[BoundingSphere]) -> bool {
 /// Any unit vector not parallel to `forward`, for a camera's `up`.
 fn up_for(forward: DVec3) -> DVec3 {
     if forward.y.abs() < 0.9 { DVec3::Y } else { DVec3::Z }
+}
+
+/// Row `axis` of `matrix · (offset, 1)` in lanes, in glam's order for `Mat4 * Vec4`:
+/// `((x_axis·x + y_axis·y) + z_axis·z) + w_axis·1`. A function rather than a closure, so that
+/// it inlines into the widest lanes' code.
+#[inline(always)]
+fn matrix_row<B: Backend>(matrix: &Mat4, axis: usize, offset: Vec3s<B>) -> Floats<B> {
+    let column = |c: glam::Vec4| Floats::<B>::splat(c[axis]);
+    ((column(matrix.x_axis) * offset.x + column(matrix.y_axis) * offset.y) + column(matrix.z_axis) * offset.z)
+        + column(matrix.w_axis * 1.0)
+}
+
+/// The texel of each lane's `coordinate` (in [0, size]), limited to the last texel `last` and
+/// truncated: the truncated value, a whole number below 2²³, plus 2²³ has the number in the
+/// low bits of its mantissa.
+#[inline(always)]
+fn texel_index<B: Backend>(coordinate: Floats<B>, last: Floats<B>) -> Ints<B> {
+    let mantissa = Floats::splat((1 << 23) as f32);
+    (coordinate.min(last).trunc() + mantissa).to_bits() - mantissa.to_bits()
+}
+
+impl<B: Backend> TexelLanes<B> {
+    /// The same lanes on backend `C`.
+    #[inline(always)]
+    fn on<C: Backend>(self) -> TexelLanes<C> {
+        TexelLanes {
+            looked_up: self.looked_up.on(),
+            columns: self.columns.on(),
+            rows: self.rows.on(),
+            depth: self.depth.on(),
+        }
+    }
 }
 
 /// How many texels of the (2r+1)² block centred on texel `(x, y)` of a `size`² map do not hold a
@@ -672,6 +705,7 @@ fn render_face(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    use crate::render::lanes::{LaneWork, run_widest};
 
     /// A shadow-casting light of each kind and map shape: directional (orthographic), a narrow
     /// spot (one perspective face), a wide spot and a point light (six cube faces); filters of
@@ -718,7 +752,33 @@ pub(crate) mod tests {
         ]
     }
 
-    /// Eight points at once against the one-point lookup, bit for bit, for every kind of light
+    /// [`ShadowMap::visibility_lanes`] of eight points, as lane work.
+    #[derive(Clone, Copy)]
+    struct Lookup<'m> {
+        map: &'m ShadowMap,
+        positions: [Vec3; LANES],
+        normals: [Vec3; LANES],
+        to_light: [Vec3; LANES],
+        wanted: [bool; LANES],
+    }
+
+    impl LaneWork for Lookup<'_> {
+        type Output = [f32; LANES];
+
+        fn run<B: Backend>(self) -> [f32; LANES] {
+            self.map
+                .visibility_lanes(
+                    Vec3s::<B>::from_array(&self.positions),
+                    Vec3s::from_array(&self.normals),
+                    Vec3s::from_array(&self.to_light),
+                    Mask::from_bools(self.wanted),
+                )
+                .0
+        }
+    }
+
+    /// Eight points at once against the one-point lookup, bit for bit, on the native and the
+    /// widest lanes, for every kind of light
     /// and map: points on the surfaces (with their normals, reversed, zero, and grazing the
     /// light), points all around and behind the light, points that fall on the map's border
     /// texels and just outside it, groups whose filter blocks all end at or reach over the
@@ -821,13 +881,22 @@ pub(crate) mod tests {
                 let positions: [Vec3; LANES] = std::array::from_fn(|i| lanes[i].0);
                 let normals: [Vec3; LANES] = std::array::from_fn(|i| lanes[i].1);
                 let to_light: [Vec3; LANES] = std::array::from_fn(|i| to_light_from(positions[i]));
-                let wanted = Mask::from_bools(std::array::from_fn(|i| (group + i) % 11 != 0));
-                let lanes = map.visibility_lanes(
-                    Vec3s::from_array(&positions),
-                    Vec3s::from_array(&normals),
-                    Vec3s::from_array(&to_light),
-                    wanted,
+                let wanted_lanes: [bool; LANES] = std::array::from_fn(|i| (group + i) % 11 != 0);
+                let wanted = Mask::<Native>::from_bools(wanted_lanes);
+                let work = Lookup {
+                    map,
+                    positions,
+                    normals,
+                    to_light,
+                    wanted: wanted_lanes,
+                };
+                let (native, widest) = (work.run::<Native>(), run_widest(work));
+                assert_eq!(
+                    native.map(f32::to_bits),
+                    widest.map(f32::to_bits),
+                    "{light:?}: group {group} on the native and the widest lanes"
                 );
+                let lanes = Floats::<Native>::new(native);
                 if let [face] = map.faces.as_slice() {
                     let TexelLanes {
                         looked_up,
