@@ -25,7 +25,7 @@
 
 use std::sync::Arc;
 
-use glam::{DMat4, DVec3, Mat4, Vec3, Vec4Swizzles};
+use glam::{DMat4, DVec3, Mat4, Vec3, Vec4, Vec4Swizzles};
 
 use crate::render::depth::render_depth;
 use crate::render::geometry::{CameraSetup, SpareBuffers};
@@ -263,6 +263,11 @@ impl ShadowFace {
         let first_columns = looked_up.select_ints(columns - Ints::splat(radius), Ints::splat(0));
         let first_rows = looked_up.select_ints(rows - Ints::splat(radius), Ints::splat(0));
         let stride = self.size as usize;
+        if SIDE <= 4 {
+            if let Some(lit) = self.lit_in_rows_of_four::<SIDE>(first_rows.0, first_columns.0, depth.0) {
+                return Ints::<B>::new(lit).to_floats();
+            }
+        }
         // Each lane's block, by row and column.
         let mut blocks = [[[0.0f32; LANES]; SIDE]; SIDE];
         let firsts = first_rows.0.iter().zip(&first_columns.0);
@@ -282,6 +287,34 @@ impl ShadowFace {
             lit = lit - Floats::new(texels).le(depth).to_ints();
         }
         lit.to_floats()
+    }
+
+    /// [`lit_texels`] of the `SIDE`² blocks (`SIDE` ≤ 4) whose first rows and columns are
+    /// `first_rows` and `first_columns`, each lane against its `depth`: each row of a block read
+    /// as four texels and compared at once (`cmpleps`), the comparisons' bits beyond the block
+    /// masked off and counted. `None` when some lane's last row has fewer than four texels
+    /// left in the map (the blocks at its last texel), which the caller counts another way.
+    /// The counts are the same integers.
+    #[inline(always)]
+    fn lit_in_rows_of_four<const SIDE: usize>(
+        &self,
+        first_rows: [i32; LANES],
+        first_columns: [i32; LANES],
+        depth: [f32; LANES],
+    ) -> Option<[i32; LANES]> {
+        let stride = self.size as usize;
+        let in_block = (1u32 << SIDE) - 1;
+        let mut lit = [0i32; LANES];
+        for lane in 0..LANES {
+            let first = first_rows[lane] as usize * stride + first_columns[lane] as usize;
+            let block = self.depth.get(first..first + (SIDE - 1) * stride + 4)?;
+            let depth = Vec4::splat(depth[lane]);
+            for row in 0..SIDE {
+                let texels = Vec4::from_slice(&block[row * stride..]);
+                lit[lane] += (texels.cmple(depth).bitmask() & in_block).count_ones() as i32;
+            }
+        }
+        Some(lit)
     }
 
     /// [`lit_texels`] of the lanes looked up (0 elsewhere) one lane at a time, as floats: out
