@@ -263,10 +263,10 @@ impl ShadowFace {
         let first_columns = looked_up.select_ints(columns - Ints::splat(radius), Ints::splat(0));
         let first_rows = looked_up.select_ints(rows - Ints::splat(radius), Ints::splat(0));
         let stride = self.size as usize;
-        if SIDE <= 4 {
-            if let Some(lit) = self.lit_in_rows_of_four::<SIDE>(first_rows.0, first_columns.0, depth.0) {
-                return Ints::<B>::new(lit).to_floats();
-            }
+        if SIDE <= 4
+            && let Some(lit) = self.lit_in_rows_of_four::<SIDE>(first_rows.0, first_columns.0, depth.0)
+        {
+            return Ints::<B>::new(lit).to_floats();
         }
         // Each lane's block, by row and column.
         let mut blocks = [[[0.0f32; LANES]; SIDE]; SIDE];
