@@ -46,6 +46,9 @@ struct ShadowFace {
     size: u32,
     /// Reversed-Z depth of the nearest surface per texel, row-major from the top; −∞ where none.
     depth: Vec<f32>,
+    /// Per tile of the map, whether every texel of it is −∞ (see `depth::render_depth`): kept
+    /// with `depth` for the next frame's map.
+    blank_tiles: Vec<bool>,
     /// World size of one texel: at unit distance along `forward` (perspective) or everywhere
     /// (orthographic).
     texel_size: f32,
@@ -406,11 +409,13 @@ impl ShadowFace {
 
 /// The texel arrays of the last frame's shadow maps, to render the next frame's maps in: a
 /// stream of frames then allocates nothing big for its maps after the first (their triangles are
-/// set up in the image's spare arrays, `geometry::SpareBuffers`). Which arrays are reused
-/// changes no texel: the depth pass writes every texel.
+/// set up in the image's spare arrays, `geometry::SpareBuffers`), and the depth pass leaves the
+/// tiles that stay empty alone. Which arrays are reused changes no texel: the depth pass writes
+/// every texel it does not know to hold −∞ already.
 #[derive(Default)]
 pub struct ShadowBuffers {
-    texels: Vec<Vec<f32>>,
+    /// Each array with its blank tiles (`ShadowFace::blank_tiles`).
+    texels: Vec<(Vec<f32>, Vec<bool>)>,
 }
 
 impl ShadowBuffers {
@@ -418,20 +423,30 @@ impl ShadowBuffers {
     pub fn keep(&mut self, maps: Vec<Option<Arc<ShadowMap>>>) {
         for map in maps.into_iter().flatten() {
             if let Ok(map) = Arc::try_unwrap(map) {
-                self.texels.extend(map.faces.into_iter().map(|face| face.depth));
+                self.texels
+                    .extend(map.faces.into_iter().map(|face| (face.depth, face.blank_tiles)));
             }
         }
     }
 
-    /// A texel array of `count` elements, whose values are to be overwritten.
-    fn texels(&mut self, count: usize) -> Vec<f32> {
-        match self.texels.pop() {
-            Some(mut texels) => {
-                texels.resize(count, 0.0);
-                texels
+    /// A texel array of `count` elements, whose values are to be overwritten, with the tiles
+    /// known to be blank in it (none, unless it held a map of the same size).
+    fn texels(&mut self, count: usize) -> (Vec<f32>, Vec<bool>) {
+        // An array of the same size first: its blank tiles stay known.
+        let same = self.texels.iter().position(|(texels, _)| texels.len() == count);
+        match same
+            .map(|at| self.texels.swap_remove(at))
+            .or_else(|| self.texels.pop())
+        {
+            Some((mut texels, mut blank_tiles)) => {
+                if texels.len() != count {
+                    texels.resize(count, 0.0);
+                    blank_tiles.clear();
+                }
+                (texels, blank_tiles)
             }
             // Zeroed pages from the allocator, not a fill.
-            None => vec![0.0; count],
+            None => (vec![0.0; count], Vec::new()),
         }
     }
 }
@@ -712,8 +727,8 @@ fn render_face(
     spare: &mut SpareBuffers,
 ) -> ShadowFace {
     let side = size as usize;
-    let mut depth = buffers.texels(side * side);
-    render_depth(scene, camera, size, &mut depth, spare);
+    let (mut depth, mut blank_tiles) = buffers.texels(side * side);
+    render_depth(scene, camera, size, &mut depth, &mut blank_tiles, spare);
     let setup = CameraSetup::new(camera, 1.0);
     let clip_from_frame = setup.clip_from_world * DMat4::from_translation(frame_eye - camera.eye);
     let (texel_size, perspective) = match camera.projection {
@@ -728,6 +743,7 @@ fn render_face(
         affine: clip_from_frame.as_mat4().row(3) == glam::Vec4::W,
         size,
         depth,
+        blank_tiles,
         texel_size,
         perspective,
         origin: (camera.eye - frame_eye).as_vec3(),
