@@ -17,9 +17,10 @@
 //! native backend: the same operations, so the same bits, on every machine. What runs there
 //! comes in units of a few hundred operations or more: a tile's rasterization (one sample or
 //! several, and a shadow map's tiles), a tile's last shading pass, the lighting with the Phong
-//! interpolation around it, and a batch of pixels whose surface varies (weights, texture
-//! sampling, the surface stage). The rest stays on the native backend (the whole program built
-//! for AVX2 was slower on flat and Gouraud frames: docs/performance.md).
+//! interpolation around it (with a one-face shadow map's lookups), and a batch of pixels whose
+//! surface varies (weights, texture sampling, the surface stage). The rest stays on the native
+//! backend (the whole program built for AVX2 was slower on flat and Gouraud frames:
+//! docs/performance.md).
 
 use std::fmt::Debug;
 use std::marker::PhantomData;
