@@ -827,11 +827,11 @@ pub(crate) mod tests {
     }
 
     /// Eight points at once against the one-point lookup, bit for bit, on the native and the
-    /// widest lanes, for every kind of light
-    /// and map: points on the surfaces (with their normals, reversed, zero, and grazing the
-    /// light), points all around and behind the light, points that fall on the map's border
-    /// texels and just outside it, groups whose filter blocks all end at or reach over the
-    /// border, and lanes left out.
+    /// widest lanes, for every kind of light and map: points on the surfaces (with their
+    /// normals, reversed, zero, and grazing the light), points all around and behind the light,
+    /// points that fall on the map's border texels and just outside it, groups whose filter
+    /// blocks all end at or reach over the border or end at the map's last texel, and lanes
+    /// left out.
     #[test]
     fn lookups_in_lanes_equal_the_one_point_lookup_bit_for_bit() {
         use crate::render::shade_fast::tests::{LIGHTS, scene};
@@ -921,6 +921,19 @@ pub(crate) mod tests {
                             let clip = frame_from_clip * glam::Vec4::new(x, y, random(), 1.0);
                             points.push((clip.truncate() / clip.w, Vec3::ZERO));
                         }
+                    }
+                }
+            }
+            // Groups of eight points at the centre of the texel `k` in from the last row and
+            // column (the map's last corner): a block there ends within a texel or two of the
+            // map's last texel, where a row of four texels would read past it.
+            for face in &map.faces {
+                let frame_from_clip = face.clip_from_frame.inverse();
+                for k in 0..4 {
+                    let side = 1.0 - (k as f32 + 0.5) * 2.0 / face.size as f32;
+                    for _ in 0..LANES {
+                        let clip = frame_from_clip * glam::Vec4::new(side, -side, random(), 1.0);
+                        points.push((clip.truncate() / clip.w, Vec3::ZERO));
                     }
                 }
             }
