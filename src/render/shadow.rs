@@ -16,8 +16,9 @@
 //! (percentage-closer filtering): the share of texels that do not hold a nearer surface is the
 //! light's visibility, between 0 and 1. Points outside a map are lit. The lane lighting looks
 //! eight points up at once ([`ShadowMap::visibility_lanes`]: the projection, the tests that a
-//! point is in the map and that its block is inside it, and the block's compares lane-wise; the
-//! texels gathered per lane, one bounds check a block), with the bits of the one-point lookup.
+//! point is in the map and that its block is inside it lane-wise; a 3×3 block read a row of
+//! four texels at a time and compared at once, a 5×5 one gathered into lanes and compared
+//! lane-wise), with the bits of the one-point lookup.
 //!
 //! Depth is reversed (1 at the light's near plane), so "nearer to the light" is "greater".
 //! Everything is computed in the frame's eye-relative space, and the maps are deterministic
@@ -95,9 +96,9 @@ impl ShadowMap {
     /// [`ShadowMap::visibility`] of eight points at once, where `wanted` holds (1 elsewhere):
     /// each lane has the bits of the one-point call. The projection into the light's view, the
     /// normal offset and the tests that the point is in the map are computed lane-wise; for
-    /// filters up to radius 2 the (2r+1)² depth compares too, once each lane's block has been
-    /// gathered from wherever its point falls (radius 3 and up, and eight points of which some
-    /// block reaches over the map's border, count lane after lane). A one-face map is looked up
+    /// filters up to radius 2 each lane's block is counted with one bounds check
+    /// ([`ShadowFace::lit_lanes`]; radius 3 and up, and eight points of which some block
+    /// reaches over the map's border, count lane after lane, clamping). A one-face map is looked up
     /// on the caller's backend `B`; a cube on the native one, out of line.
     #[inline(always)]
     pub fn visibility_lanes<B: Backend>(
@@ -238,9 +239,10 @@ impl ShadowFace {
 
     /// [`lit_texels`] of the `SIDE`² blocks (`SIDE` = 2r + 1) around the texels of the lanes
     /// looked up (anything elsewhere), as floats. When every such block lies inside the map
-    /// (nearly always), the border is tested once per lane, lane-wise, and the blocks are read
-    /// with one bounds check each and compared lane-wise, texel by texel; the count is the
-    /// same integer. Otherwise lane by lane, clamping at the border.
+    /// (nearly always), the border is tested once per lane, lane-wise, and each block is read
+    /// with one bounds check: up to four texels wide a row at a time
+    /// ([`ShadowFace::lit_in_rows_of_four`]), else gathered into lanes and compared texel by
+    /// texel; the count is the same integer. Otherwise lane by lane, clamping at the border.
     #[inline(always)]
     fn lit_lanes<B: Backend, const SIDE: usize>(&self, texels: TexelLanes<B>) -> Floats<B> {
         let TexelLanes {
