@@ -97,7 +97,7 @@ impl ShadowMap {
     /// each lane has the bits of the one-point call. The projection into the light's view, the
     /// normal offset and the tests that the point is in the map are computed lane-wise; for
     /// filters up to radius 2 each lane's block is counted with one bounds check
-    /// ([`ShadowFace::lit_lanes`]; radius 3 and up, and eight points of which some block
+    /// (`ShadowFace::lit_lanes`; radius 3 and up, and eight points of which some block
     /// reaches over the map's border, count lane after lane, clamping). A one-face map is looked up
     /// on the caller's backend `B`; a cube on the native one, out of line.
     #[inline(always)]
