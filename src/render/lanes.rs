@@ -68,6 +68,8 @@ pub trait Backend: Copy + Default + Debug + PartialEq + Send + Sync + 'static {
     /// `i32::wrapping_sub`.
     fn sub_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES];
     fn and_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES];
+    /// `i32::wrapping_mul`.
+    fn mul_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES];
     /// `>`, signed.
     fn gt_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES];
     fn eq_ints(a: [i32; LANES], b: [i32; LANES]) -> [u32; LANES];
@@ -148,9 +150,9 @@ mod avx2 {
         __m256, __m256d, __m256i, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm256_add_epi32, _mm256_add_pd,
         _mm256_add_ps, _mm256_and_ps, _mm256_and_si256, _mm256_andnot_ps, _mm256_blendv_ps, _mm256_castpd_ps,
         _mm256_cmp_pd, _mm256_cmp_ps, _mm256_cmpeq_epi32, _mm256_cmpgt_epi32, _mm256_cvtepi32_ps,
-        _mm256_cvtpd_ps, _mm256_cvttps_epi32, _mm256_div_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_or_ps,
-        _mm256_permute4x64_pd, _mm256_set_m128, _mm256_set1_epi32, _mm256_shuffle_ps, _mm256_sqrt_ps,
-        _mm256_sub_epi32, _mm256_sub_ps, _mm256_xor_ps,
+        _mm256_cvtpd_ps, _mm256_cvttps_epi32, _mm256_div_ps, _mm256_movemask_ps, _mm256_mul_ps,
+        _mm256_mullo_epi32, _mm256_or_ps, _mm256_permute4x64_pd, _mm256_set_m128, _mm256_set1_epi32,
+        _mm256_shuffle_ps, _mm256_sqrt_ps, _mm256_sub_epi32, _mm256_sub_ps, _mm256_xor_ps,
     };
 
     use super::{Backend, LANES, LaneWork};
@@ -305,6 +307,11 @@ mod avx2 {
         #[inline(always)]
         fn and_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
             int_wide!(_mm256_and_si256(a, b))
+        }
+
+        #[inline(always)]
+        fn mul_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            int_wide!(_mm256_mullo_epi32(a, b))
         }
 
         #[inline(always)]
@@ -526,6 +533,12 @@ impl<B: Backend> Ints<B> {
     #[inline(always)]
     pub fn and(self, other: Self) -> Self {
         Ints::new(B::and_ints(self.0, other.0))
+    }
+
+    /// `i32::wrapping_mul` per lane.
+    #[inline(always)]
+    pub fn wrapping_mul(self, other: Self) -> Self {
+        Ints::new(B::mul_ints(self.0, other.0))
     }
 
     /// `>` per lane.
@@ -786,6 +799,11 @@ mod portable {
         #[inline(always)]
         fn and(a: [u32; LANES], b: [u32; LANES]) -> [u32; LANES] {
             std::array::from_fn(|i| a[i] & b[i])
+        }
+
+        #[inline(always)]
+        fn mul_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            std::array::from_fn(|i| a[i].wrapping_mul(b[i]))
         }
 
         #[inline(always)]
@@ -1122,6 +1140,12 @@ mod sse {
         #[inline(always)]
         fn and_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
             int_halves!(_mm_and_si128(a, b))
+        }
+
+        /// SSE2 has no 32-bit product (`pmulld` is SSE4.1): the portable loop.
+        #[inline(always)]
+        fn mul_ints(a: [i32; LANES], b: [i32; LANES]) -> [i32; LANES] {
+            std::array::from_fn(|i| a[i].wrapping_mul(b[i]))
         }
 
         #[inline(always)]
@@ -1864,6 +1888,7 @@ mod tests {
             assert_eq!((i + j).0, (pi + pj).0, "add_ints");
             assert_eq!((i - j).0, (pi - pj).0, "sub_ints");
             assert_eq!(i.and(j).0, pi.and(pj).0, "and_ints");
+            assert_eq!(i.wrapping_mul(j).0, pi.wrapping_mul(pj).0, "mul_ints");
             assert_eq!(i.gt(j).0, pi.gt(pj).0, "gt_ints");
             let partly_i = Ints::new(std::array::from_fn(|lane| {
                 if lane % 3 == 0 { i.0[lane] } else { j.0[lane] }
@@ -1907,6 +1932,7 @@ mod tests {
                         i + j,
                         i - j,
                         i.and(j),
+                        i.wrapping_mul(j),
                         m.select_ints(i, j),
                         i.gt(j).to_ints(),
                         i.eq(i).to_ints(),

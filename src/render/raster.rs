@@ -1250,6 +1250,31 @@ struct RowLayout {
 /// takes in lanes (see [`depth_test_single_sample`]).
 const LANE_COLUMNS: usize = LANES / 2;
 
+/// Which [`BlockLanes`] take a triangle's area over a tile, if any: areas at most half a group
+/// wide and two rows or more tall in blocks of two rows, areas of one group in blocks of one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum NarrowArea {
+    Blocks4,
+    Blocks8,
+    No,
+}
+
+impl NarrowArea {
+    /// For an area of `columns` by `rows` pixels. A single row of one to three pixels stays
+    /// in the scalar loop: a block of eight there changed the far koala's and nefertiti's
+    /// instructions by under 0.3 %, either way.
+    #[inline(always)]
+    fn of(columns: usize, rows: usize) -> NarrowArea {
+        if columns <= LANES / 2 && rows >= 2 {
+            NarrowArea::Blocks4
+        } else if (LANE_COLUMNS..=LANES).contains(&columns) {
+            NarrowArea::Blocks8
+        } else {
+            NarrowArea::No
+        }
+    }
+}
+
 /// The depth test of one triangle at every pixel centre of `rect`: [`for_each_covered_sample`]
 /// with one sample, written for the common case, into `depth` laid out as `rows` says; with
 /// `IDS`, the winning pixels of `ids` (laid out alike) get `id`, else `ids` is not touched. The
@@ -1272,14 +1297,32 @@ fn depth_test_single_sample<const IDS: bool, B: Backend>(
     let [d0, d1, d2] = triangle.depth;
     let inv_area = triangle.inv_area;
     let columns = (area.x1 - area.x0) as usize;
-    // Triangles at least half a group of lanes wide: eight pixels at a time, in `i32` lanes
-    // where their edge functions fit, else (large triangles) in `f64` lanes. A row of four to
-    // seven pixels costs the lanes a few more instructions than the scalar loop but no branch
-    // per pixel on whether it is inside, which mispredicts on a scan's small triangles (the
-    // koala's raster and a shadow map's pass take about 0.9 of the time they took in the
-    // scalar loop); narrower triangles, a pixel or two wide, stay scalar.
-    // Rows of one or two groups (most of a mesh's triangles) are tested whole, without a
-    // `RowSpan`: finding a row's span costs about as much as testing a group.
+    // Eight pixels at a time wherever that pays, in `i32` lanes where the edge functions fit,
+    // else (large triangles) in `f64` lanes. Lanes cost no branch per pixel on whether it is
+    // inside, which mispredicts on a scan's small triangles (the koala's raster and a shadow
+    // map's pass took about 0.9 of the time they took in the scalar loop).
+    // - Areas at most a group wide (most of a mesh's and a shadow map's triangles): blocks of
+    //   two rows of four pixels, or rows of eight (`BlockLanes`; a single row of one to three
+    //   pixels stays scalar).
+    // - Wider areas in rows of groups (`RowLanes`). Rows of two groups are tested whole; wider
+    //   ones only where their `RowSpan` reaches (finding a row's span costs about as much as
+    //   testing a group).
+    let narrow = NarrowArea::of(columns, (area.y1 - area.y0) as usize);
+    if narrow != NarrowArea::No && RowLanes::<Ints<B>>::fit(&edges, area) {
+        // `if let`s, not closures: a closure's lane operations would be compiled out of line,
+        // without the lanes' target features.
+        let depths = triangle.depth;
+        if narrow == NarrowArea::Blocks4 {
+            if let Some(blocks) = BlockLanes::<B, { LANES / 2 }>::place(&edges, area, rect, depths, inv_area)
+            {
+                blocks.depth_test::<IDS>(rect, rows, depth, ids, id);
+                return;
+            }
+        } else if let Some(blocks) = BlockLanes::<B, LANES>::place(&edges, area, rect, depths, inv_area) {
+            blocks.depth_test::<IDS>(rect, rows, depth, ids, id);
+            return;
+        }
+    }
     if (LANE_COLUMNS..=2 * LANES).contains(&columns) && RowLanes::<Ints<B>>::fit(&edges, area) {
         let lanes = RowLanes::<Ints<B>>::new::<false>(&edges, triangle.depth, inv_area);
         lanes.depth_test::<IDS, false>(rect, area, rows, depth, ids, id);
@@ -1731,6 +1774,170 @@ impl<E: EdgeLanes> RowLanes<E> {
         if let Some(ids) = ids {
             *ids = bytemuck::cast(nearer.select_ints(id, Ints::new(bytemuck::cast(*ids))).0);
         }
+    }
+}
+
+/// A triangle at most `COLUMNS` pixels wide over a tile, for [`depth_test_single_sample`]: its
+/// area tested in blocks of [`LANES`] pixels, `LANES / COLUMNS` rows of `COLUMNS`, lane `i` at
+/// column `i % COLUMNS` and row `i / COLUMNS` of its block, down a column of blocks. A scan's
+/// and a shadow map's triangles are a few pixels wide and several tall: one row per group
+/// (most of [`RowLanes`]' groups a row's only one) left half the lanes idle, and each row paid
+/// for its indices and edge values in `i64` scalars. Here the edge values stay in lanes from
+/// block to block (one addition per edge), and the blocks are placed so that they never leave
+/// the tile: shifted left and up where the area ends near its right or bottom side. The
+/// shifted lanes lie outside the triangle's bounds, so outside the triangle (the edge
+/// functions are exact), and their pixels are left as they are.
+struct BlockLanes<B: Backend, const COLUMNS: usize> {
+    /// The first block's top-left pixel and the number of blocks.
+    x0: u32,
+    y0: u32,
+    blocks: u32,
+    /// Per edge, each lane's value in the first block.
+    edges: [Ints<B>; 3],
+    /// Per edge, one block's step down: `LANES / COLUMNS` rows.
+    block_step: [Ints<B>; 3],
+    /// Per edge, the fill rule's bound, as in [`RowLanes`].
+    above: [Ints<B>; 3],
+    corner_depths: [Floats<B>; 3],
+    inv_area: Floats<B>,
+}
+
+impl<B: Backend, const COLUMNS: usize> BlockLanes<B, COLUMNS> {
+    /// Rows of a block.
+    const ROWS: usize = LANES / COLUMNS;
+
+    /// The blocks of a triangle whose `edges` (at the first pixel of `area`, its bounds within
+    /// `rect`) [`RowLanes::fit`] `i32` lanes and whose area is at most `COLUMNS` wide; `None`
+    /// where the blocks cannot be placed inside `rect` (a tile narrower than a block, or an
+    /// area as tall as a tile of an odd height).
+    ///
+    /// Every value the lanes form is exact in `i32`: they lie at most `COLUMNS − 1` columns
+    /// left of the area and one row above it (the shift), within its rows below (the
+    /// blocks' rows end inside the area or, when shifted, inside the tile, which ends less
+    /// than a block below the area), so at most `columns + 2·LANES` columns and `rows + 1` rows
+    /// from its first pixel, where `fit` bounds them. The sum after the last block, one step
+    /// further, is never used (`i32` lanes wrap).
+    #[inline(always)]
+    fn place(
+        edges: &[Edge; 3],
+        area: PixelRect,
+        rect: PixelRect,
+        depths: [f32; 3],
+        inv_area: f32,
+    ) -> Option<Self> {
+        debug_assert!(area.x1 - area.x0 <= COLUMNS as u32);
+        let (block_columns, block_rows) = (COLUMNS as u32, Self::ROWS as u32);
+        let blocks = (area.y1 - area.y0).div_ceil(block_rows);
+        if rect.width() < block_columns || rect.height() < blocks * block_rows {
+            return None;
+        }
+        let x0 = area.x0.min(rect.x1 - block_columns);
+        let y0 = area.y0.min(rect.y1 - blocks * block_rows);
+        let (shift_x, shift_y) = (
+            i64::from(x0) - i64::from(area.x0),
+            i64::from(y0) - i64::from(area.y0),
+        );
+        let column = Ints::new(std::array::from_fn(|lane| (lane % COLUMNS) as i32));
+        let row = Ints::new(std::array::from_fn(|lane| (lane / COLUMNS) as i32));
+        let [a, b, c] = edges.map(|edge| {
+            let first = edge.row_start + shift_x * edge.step_x + shift_y * edge.step_y;
+            (first as i32, edge.step_x as i32, edge.step_y as i32)
+        });
+        Some(BlockLanes {
+            x0,
+            y0,
+            blocks,
+            edges: [
+                block_edge_lanes(a, column, row),
+                block_edge_lanes(b, column, row),
+                block_edge_lanes(c, column, row),
+            ],
+            block_step: edges.map(|edge| Ints::splat((edge.step_y * Self::ROWS as i64) as i32)),
+            above: edges.map(|edge| Ints::splat((edge.min_inside - 1) as i32)),
+            corner_depths: depths.map(Floats::splat),
+            inv_area: Floats::splat(inv_area),
+        })
+    }
+
+    /// The depth test at every pixel of the blocks, as [`RowLanes::depth_test`] does it for a
+    /// group (the same operations on the same values, lane by lane), into `depth` (and `ids`)
+    /// within `rect`, laid out as `rows` says.
+    #[inline(always)]
+    fn depth_test<const IDS: bool>(
+        &self,
+        rect: PixelRect,
+        rows: RowLayout,
+        depth: &mut [f32],
+        ids: &mut [u32],
+        id: u32,
+    ) {
+        let id = Ints::<B>::splat(id as i32);
+        let [d0, d1, d2] = self.corner_depths;
+        let [above0, above1, above2] = self.above;
+        let mut first = (self.y0 - rect.y0) as usize * rows.stride + (self.x0 - rows.x_origin) as usize;
+        let [mut e0, mut e1, mut e2] = self.edges;
+        for _ in 0..self.blocks {
+            let inside = e0.gt(above0).and(e1.gt(above1)).and(e2.gt(above2));
+            if inside.any() {
+                let values =
+                    (e0.to_floats() * d0 + e1.to_floats() * d1 + e2.to_floats() * d2) * self.inv_area;
+                let old = Floats::new(load_block::<f32, COLUMNS>(depth, first, rows.stride));
+                let nearer = inside.and(values.gt(old));
+                store_block::<f32, COLUMNS>(depth, first, rows.stride, nearer.select(values, old).0);
+                if IDS {
+                    let old_ids = Ints::new(bytemuck::cast(load_block::<u32, COLUMNS>(
+                        ids,
+                        first,
+                        rows.stride,
+                    )));
+                    let new_ids = bytemuck::cast(nearer.select_ints(id, old_ids).0);
+                    store_block::<u32, COLUMNS>(ids, first, rows.stride, new_ids);
+                }
+            }
+            e0 = e0 + self.block_step[0];
+            e1 = e1 + self.block_step[1];
+            e2 = e2 + self.block_step[2];
+            first += Self::ROWS * rows.stride;
+        }
+    }
+}
+
+/// An edge's values in a block's lanes, from its value at the first pixel and its steps
+/// along `x` and `y` (`(first, step_x, step_y)`), each lane `column` and `row` steps on.
+#[inline(always)]
+fn block_edge_lanes<B: Backend>(
+    (first, step_x, step_y): (i32, i32, i32),
+    column: Ints<B>,
+    row: Ints<B>,
+) -> Ints<B> {
+    Ints::splat(first) + column.wrapping_mul(Ints::splat(step_x)) + row.wrapping_mul(Ints::splat(step_y))
+}
+
+/// The `LANES / COLUMNS` rows of `COLUMNS` values of `buffer` from `first` on, `stride` apart,
+/// as one group of lanes (row after row).
+#[inline(always)]
+fn load_block<T: Copy + Default, const COLUMNS: usize>(
+    buffer: &[T],
+    first: usize,
+    stride: usize,
+) -> [T; LANES] {
+    let mut lanes = [T::default(); LANES];
+    for (row, part) in lanes.chunks_exact_mut(COLUMNS).enumerate() {
+        part.copy_from_slice(&buffer[first + row * stride..][..COLUMNS]);
+    }
+    lanes
+}
+
+/// [`load_block`]'s inverse: `lanes` back into the rows of `buffer`.
+#[inline(always)]
+fn store_block<T: Copy, const COLUMNS: usize>(
+    buffer: &mut [T],
+    first: usize,
+    stride: usize,
+    lanes: [T; LANES],
+) {
+    for (row, part) in lanes.chunks_exact(COLUMNS).enumerate() {
+        buffer[first + row * stride..][..COLUMNS].copy_from_slice(part);
     }
 }
 
@@ -2284,6 +2491,139 @@ mod tests {
         assert_eq!(fast.triangle, general.triangle);
         let bits = |depths: &[f32]| depths.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&fast.depth), bits(&general.depth));
+    }
+
+    /// Narrow areas take [`BlockLanes`]: blocks of two rows of four pixels (areas up to four
+    /// wide and two or more tall) or of one row of eight, shifted left where the area ends near
+    /// the tile's right side and up near its bottom, and the other paths where no block fits
+    /// (an area as tall as a tile of odd height). All give the general loop's depths and
+    /// triangles bit for bit, on both backends, and the depth-only pass, into a map's band,
+    /// the same depths. The tile is 21 by 13 pixels, so shifts and the odd height both occur.
+    #[test]
+    fn block_lanes_equal_the_general_loop() {
+        let rect = PixelRect {
+            x0: 40,
+            y0: 64,
+            x1: 61,
+            y1: 77,
+        };
+        let mut rng = crate::test_support::XorShift32::new(0x9e37_79b9);
+        let mut random =
+            move |low: f32, high: f32| low + (high - low) * (rng.next_u32() as f32 / u32::MAX as f32);
+        let mut corners = Vec::new();
+        for k in 0..600 {
+            let (width, height) = if k % 10 == 0 {
+                // As tall as the tile and more.
+                (random(0.5, 4.5), random(13.0, 20.0))
+            } else {
+                (random(0.3, 9.5), random(0.3, 15.0))
+            };
+            let (x, y) = (random(36.0, 62.0), random(58.0, 79.0));
+            let (along, down) = (random(0.0, height), random(0.0, width));
+            let depths = [random(0.05, 0.95), random(0.05, 0.95), random(0.05, 0.95)];
+            let corner = |x: f32, y: f32, depth: f32| ScreenVertex {
+                depth,
+                ..vertex(x, y)
+            };
+            let (a, b, c) = (
+                corner(x, y, depths[0]),
+                corner(x + width, y + along, depths[1]),
+                corner(x + down, y + height, depths[2]),
+            );
+            // Both windings: `setup_triangle` keeps one and turns the other.
+            corners.push(if k % 2 == 0 { [a, b, c] } else { [a, c, b] });
+        }
+        let triangles: Vec<_> = corners
+            .into_iter()
+            .filter_map(|t| {
+                setup_triangle(
+                    t,
+                    80,
+                    90,
+                    SamplePattern::SINGLE,
+                    SourceTriangle::default(),
+                    &mut Vec::new(),
+                )
+            })
+            .collect();
+        // Which path each triangle takes: [blocks of 4, of 8, shifted left, shifted up, no
+        // block fits].
+        let mut paths = [0; 5];
+        for triangle in &triangles {
+            let Some(area) = triangle.bounds.intersect(&rect) else {
+                continue;
+            };
+            let edges = triangle_edges(triangle, area.x0, area.y0);
+            let (columns, rows) = (area.width() as usize, area.height() as usize);
+            let narrow = NarrowArea::of(columns, rows);
+            if narrow == NarrowArea::No || !RowLanes::<Ints>::fit(&edges, area) {
+                continue;
+            }
+            let place = |columns: u32| match columns {
+                4 => BlockLanes::<Native, 4>::place(&edges, area, rect, triangle.depth, 1.0)
+                    .map(|blocks| (blocks.x0, blocks.y0)),
+                _ => BlockLanes::<Native, 8>::place(&edges, area, rect, triangle.depth, 1.0)
+                    .map(|blocks| (blocks.x0, blocks.y0)),
+            };
+            let block_columns = if narrow == NarrowArea::Blocks4 { 4 } else { 8 };
+            match place(block_columns) {
+                Some((x0, y0)) => {
+                    paths[usize::from(block_columns == 8)] += 1;
+                    paths[2] += usize::from(x0 < area.x0);
+                    paths[3] += usize::from(y0 < area.y0);
+                }
+                None => paths[4] += 1,
+            }
+        }
+        assert!(paths.iter().all(|&n| n > 3), "paths taken: {paths:?}");
+        let empty = || Visibility {
+            rect,
+            pattern: SamplePattern::SINGLE,
+            depth: vec![f32::NEG_INFINITY; 21 * 13],
+            triangle: vec![NO_TRIANGLE; 21 * 13],
+            raster_ids: Vec::new(),
+        };
+        let (mut fast, mut general) = (empty(), empty());
+        let bits = |depths: &[f32]| depths.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
+        // A map's band: rows 64 texels apart from column 0, with a depth already in every
+        // fifth texel.
+        let stride = 64;
+        let before = |i: usize| {
+            if i.is_multiple_of(5) {
+                0.5
+            } else {
+                f32::NEG_INFINITY
+            }
+        };
+        let mut band: Vec<f32> = (0..stride * 13).map(before).collect();
+        let mut widest_band = band.clone();
+        struct DepthOnly<'b>(&'b RasterTriangle, PixelRect, &'b mut [f32], usize);
+        impl LaneWork for DepthOnly<'_> {
+            type Output = ();
+            #[inline(always)]
+            fn run<B: Backend>(self) {
+                rasterize_depth_only::<B>(self.0, self.1, self.2, self.3);
+            }
+        }
+        for (local, triangle) in (0..).zip(&triangles) {
+            rasterize_on_both(&mut fast, triangle, local);
+            general.rasterize_any_samples(triangle, local);
+            rasterize_depth_only::<Native>(triangle, rect, &mut band, stride);
+            run_widest(DepthOnly(triangle, rect, &mut widest_band, stride));
+        }
+        assert_eq!(bits(&band), bits(&widest_band));
+        assert_eq!(fast.triangle, general.triangle);
+        assert_eq!(bits(&fast.depth), bits(&general.depth));
+        for (i, &texel) in band.iter().enumerate() {
+            let (x, y) = ((i % stride) as u32, (i / stride) as u32);
+            let expected = if (rect.x0..rect.x1).contains(&x) {
+                let drawn = general.depth[(y * rect.width() + x - rect.x0) as usize];
+                if drawn > before(i) { drawn } else { before(i) }
+            } else {
+                before(i)
+            };
+            assert_eq!(texel.to_bits(), expected.to_bits(), "texel ({x}, {y})");
+        }
     }
 
     /// A row's span holds every pixel inside all three edges, and at most two more at each end
