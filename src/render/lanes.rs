@@ -123,13 +123,13 @@ pub trait LaneWork {
     fn run<B: Backend>(self) -> Self::Output;
 }
 
-/// `work` on the widest lanes the processor has: the `Avx` backend where it has AVX2, else the
-/// native backend. The result has the same bits either way. A call costs a feature test, and
+/// `work` on the widest lanes the processor has: the `Avx` backend where it has AVX2 (and
+/// POPCNT), else the native backend. The result has the same bits either way. A call costs a feature test, and
 /// its lanes cross in memory: worth it for a few hundred operations, not for a few dozen.
 #[inline(always)]
 pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
+    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("popcnt") {
         return avx2::run(work);
     }
     work.run::<Native>()
@@ -142,7 +142,7 @@ pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
 ///
 /// Soundness: [`Avx`](avx2::Avx) is private to this file, so lane code can only be
 /// instantiated with it by [`run_widest`], inside `run_on_avx2`, which runs only after the
-/// processor was found to have AVX2. Its operations' intrinsics therefore run only there.
+/// processor was found to have AVX2 and POPCNT. Its operations' intrinsics therefore run only there.
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod avx2 {
@@ -163,13 +163,14 @@ mod avx2 {
 
     #[inline(always)]
     pub fn run<W: LaneWork>(work: W) -> W::Output {
-        // SAFETY: the caller has checked that the processor has AVX2.
+        // SAFETY: the caller has checked that the processor has AVX2 and POPCNT.
         unsafe { run_on_avx2(work) }
     }
 
-    /// `work` on the [`Avx`] backend, compiled with AVX2 enabled. Called only where the
-    /// processor has AVX2.
-    #[target_feature(enable = "avx2")]
+    /// `work` on the [`Avx`] backend, compiled with AVX2 and POPCNT enabled (every processor
+    /// with AVX2 has POPCNT; without it `count_ones`, as in the shadow lookups' texel counts, is
+    /// a dozen instructions). Called only where the processor has both.
+    #[target_feature(enable = "avx2,popcnt")]
     unsafe fn run_on_avx2<W: LaneWork>(work: W) -> W::Output {
         work.run::<Avx>()
     }
