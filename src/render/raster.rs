@@ -1251,11 +1251,13 @@ struct RowLayout {
 const LANE_COLUMNS: usize = LANES / 2;
 
 /// Which [`BlockLanes`] take a triangle's area over a tile, if any: areas at most half a group
-/// wide and two rows or more tall in blocks of two rows, areas of one group in blocks of one.
+/// wide and two rows or more tall in blocks of two rows, areas of one group in blocks of one,
+/// areas of two groups in two blocks of one across.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum NarrowArea {
     Blocks4,
     Blocks8,
+    Blocks16,
     No,
 }
 
@@ -1269,6 +1271,8 @@ impl NarrowArea {
             NarrowArea::Blocks4
         } else if (LANE_COLUMNS..=LANES).contains(&columns) {
             NarrowArea::Blocks8
+        } else if (LANES + 1..=2 * LANES).contains(&columns) {
+            NarrowArea::Blocks16
         } else {
             NarrowArea::No
         }
@@ -1301,26 +1305,37 @@ fn depth_test_single_sample<const IDS: bool, B: Backend>(
     // else (large triangles) in `f64` lanes. Lanes cost no branch per pixel on whether it is
     // inside, which mispredicts on a scan's small triangles (the koala's raster and a shadow
     // map's pass took about 0.9 of the time they took in the scalar loop).
-    // - Areas at most a group wide (most of a mesh's and a shadow map's triangles): blocks of
-    //   two rows of four pixels, or rows of eight (`BlockLanes`; a single row of one to three
-    //   pixels stays scalar).
-    // - Wider areas in rows of groups (`RowLanes`). Rows of two groups are tested whole; wider
-    //   ones only where their `RowSpan` reaches (finding a row's span costs about as much as
-    //   testing a group).
+    // - Areas at most two groups wide (most of a mesh's and a shadow map's triangles): blocks
+    //   of two rows of four pixels, or rows of one or two groups (`BlockLanes`; a single row of
+    //   one to three pixels stays scalar).
+    // - Wider areas in rows of groups (`RowLanes`), each row only where its `RowSpan` reaches;
+    //   and areas whose blocks do not fit their tile, whole.
     let narrow = NarrowArea::of(columns, (area.y1 - area.y0) as usize);
     if narrow != NarrowArea::No && RowLanes::<Ints<B>>::fit(&edges, area) {
         // `if let`s, not closures: a closure's lane operations would be compiled out of line,
         // without the lanes' target features.
         let depths = triangle.depth;
-        if narrow == NarrowArea::Blocks4 {
-            if let Some(blocks) = BlockLanes::<B, { LANES / 2 }>::place(&edges, area, rect, depths, inv_area)
-            {
-                blocks.depth_test::<IDS>(rect, rows, depth, ids, id);
-                return;
+        match narrow {
+            NarrowArea::Blocks4 => {
+                if let Some(blocks) =
+                    BlockLanes::<B, { LANES / 2 }, 1>::place(&edges, area, rect, depths, inv_area)
+                {
+                    blocks.depth_test::<IDS>(rect, rows, depth, ids, id);
+                    return;
+                }
             }
-        } else if let Some(blocks) = BlockLanes::<B, LANES>::place(&edges, area, rect, depths, inv_area) {
-            blocks.depth_test::<IDS>(rect, rows, depth, ids, id);
-            return;
+            NarrowArea::Blocks8 => {
+                if let Some(blocks) = BlockLanes::<B, LANES, 1>::place(&edges, area, rect, depths, inv_area) {
+                    blocks.depth_test::<IDS>(rect, rows, depth, ids, id);
+                    return;
+                }
+            }
+            _ => {
+                if let Some(blocks) = BlockLanes::<B, LANES, 2>::place(&edges, area, rect, depths, inv_area) {
+                    blocks.depth_test::<IDS>(rect, rows, depth, ids, id);
+                    return;
+                }
+            }
         }
     }
     if (LANE_COLUMNS..=2 * LANES).contains(&columns) && RowLanes::<Ints<B>>::fit(&edges, area) {
@@ -1777,9 +1792,10 @@ impl<E: EdgeLanes> RowLanes<E> {
     }
 }
 
-/// A triangle at most `COLUMNS` pixels wide over a tile, for [`depth_test_single_sample`]: its
-/// area tested in blocks of [`LANES`] pixels, `LANES / COLUMNS` rows of `COLUMNS`, lane `i` at
-/// column `i % COLUMNS` and row `i / COLUMNS` of its block, down a column of blocks. A scan's
+/// A triangle at most `COLUMNS·ACROSS` pixels wide over a tile, for
+/// [`depth_test_single_sample`]: its area tested in blocks of [`LANES`] pixels, `LANES /
+/// COLUMNS` rows of `COLUMNS`, lane `i` at column `i % COLUMNS` and row `i / COLUMNS` of its
+/// block, `ACROSS` blocks side by side, down the area. A scan's
 /// and a shadow map's triangles are a few pixels wide and several tall: one row per group
 /// (most of [`RowLanes`]' groups a row's only one) left half the lanes idle, and each row paid
 /// for its indices and edge values in `i64` scalars. Here the edge values stay in lanes from
@@ -1787,8 +1803,8 @@ impl<E: EdgeLanes> RowLanes<E> {
 /// the tile: shifted left and up where the area ends near its right or bottom side. The
 /// shifted lanes lie outside the triangle's bounds, so outside the triangle (the edge
 /// functions are exact), and their pixels are left as they are.
-struct BlockLanes<B: Backend, const COLUMNS: usize> {
-    /// The first block's top-left pixel and the number of blocks.
+struct BlockLanes<B: Backend, const COLUMNS: usize, const ACROSS: usize> {
+    /// The first block's top-left pixel and the number of rows of blocks.
     x0: u32,
     y0: u32,
     blocks: u32,
@@ -1796,27 +1812,30 @@ struct BlockLanes<B: Backend, const COLUMNS: usize> {
     edges: [Ints<B>; 3],
     /// Per edge, one block's step down: `LANES / COLUMNS` rows.
     block_step: [Ints<B>; 3],
+    /// Per edge, one block's step across: `COLUMNS` pixels.
+    across_step: [Ints<B>; 3],
     /// Per edge, the fill rule's bound, as in [`RowLanes`].
     above: [Ints<B>; 3],
     corner_depths: [Floats<B>; 3],
     inv_area: Floats<B>,
 }
 
-impl<B: Backend, const COLUMNS: usize> BlockLanes<B, COLUMNS> {
+impl<B: Backend, const COLUMNS: usize, const ACROSS: usize> BlockLanes<B, COLUMNS, ACROSS> {
     /// Rows of a block.
     const ROWS: usize = LANES / COLUMNS;
 
     /// The blocks of a triangle whose `edges` (at the first pixel of `area`, its bounds within
-    /// `rect`) [`RowLanes::fit`] `i32` lanes and whose area is at most `COLUMNS` wide; `None`
-    /// where the blocks cannot be placed inside `rect` (a tile narrower than a block, or an
-    /// area as tall as a tile of an odd height).
+    /// `rect`) [`RowLanes::fit`] `i32` lanes and whose area is at most `COLUMNS·ACROSS` wide;
+    /// `None` where the blocks cannot be placed inside `rect` (a tile narrower than a row of
+    /// blocks, or an area as tall as a tile of an odd height).
     ///
-    /// Every value the lanes form is exact in `i32`: they lie at most `COLUMNS − 1` columns
-    /// left of the area and one row above it (the shift), within its rows below (the
-    /// blocks' rows end inside the area or, when shifted, inside the tile, which ends less
-    /// than a block below the area), so at most `columns + 2·LANES` columns and `rows + 1` rows
-    /// from its first pixel, where `fit` bounds them. The sum after the last block, one step
-    /// further, is never used (`i32` lanes wrap).
+    /// Every value the lanes form is exact in `i32`: they lie at most `COLUMNS·ACROSS − 1 <
+    /// 2·LANES` columns left or right of the area's first column (the shift, and a row of
+    /// blocks no wider than that), at most one row above it (the shift) and within its rows
+    /// below (the blocks' rows end inside the area or, when shifted, inside the tile, which
+    /// ends less than a block below the area): so within `columns + 2·LANES` columns and
+    /// `rows + 1` rows of its first pixel, where `fit` bounds them. The sums after the last
+    /// block of a row or column, one step further, are never used (`i32` lanes wrap).
     #[inline(always)]
     fn place(
         edges: &[Edge; 3],
@@ -1825,8 +1844,8 @@ impl<B: Backend, const COLUMNS: usize> BlockLanes<B, COLUMNS> {
         depths: [f32; 3],
         inv_area: f32,
     ) -> Option<Self> {
-        debug_assert!(area.x1 - area.x0 <= COLUMNS as u32);
-        let (block_columns, block_rows) = (COLUMNS as u32, Self::ROWS as u32);
+        let (block_columns, block_rows) = ((COLUMNS * ACROSS) as u32, Self::ROWS as u32);
+        debug_assert!(area.x1 - area.x0 <= block_columns);
         let blocks = (area.y1 - area.y0).div_ceil(block_rows);
         if rect.width() < block_columns || rect.height() < blocks * block_rows {
             return None;
@@ -1853,6 +1872,7 @@ impl<B: Backend, const COLUMNS: usize> BlockLanes<B, COLUMNS> {
                 block_edge_lanes(c, column, row),
             ],
             block_step: edges.map(|edge| Ints::splat((edge.step_y * Self::ROWS as i64) as i32)),
+            across_step: edges.map(|edge| Ints::splat((edge.step_x * COLUMNS as i64) as i32)),
             above: edges.map(|edge| Ints::splat((edge.min_inside - 1) as i32)),
             corner_depths: depths.map(Floats::splat),
             inv_area: Floats::splat(inv_area),
@@ -1877,21 +1897,27 @@ impl<B: Backend, const COLUMNS: usize> BlockLanes<B, COLUMNS> {
         let mut first = (self.y0 - rect.y0) as usize * rows.stride + (self.x0 - rows.x_origin) as usize;
         let [mut e0, mut e1, mut e2] = self.edges;
         for _ in 0..self.blocks {
-            let inside = e0.gt(above0).and(e1.gt(above1)).and(e2.gt(above2));
-            if inside.any() {
-                let values =
-                    (e0.to_floats() * d0 + e1.to_floats() * d1 + e2.to_floats() * d2) * self.inv_area;
-                let old = Floats::new(load_block::<f32, COLUMNS>(depth, first, rows.stride));
-                let nearer = inside.and(values.gt(old));
-                store_block::<f32, COLUMNS>(depth, first, rows.stride, nearer.select(values, old).0);
-                if IDS {
-                    let old_ids = Ints::new(bytemuck::cast(load_block::<u32, COLUMNS>(
-                        ids,
-                        first,
-                        rows.stride,
-                    )));
-                    let new_ids = bytemuck::cast(nearer.select_ints(id, old_ids).0);
-                    store_block::<u32, COLUMNS>(ids, first, rows.stride, new_ids);
+            let [mut f0, mut f1, mut f2] = [e0, e1, e2];
+            for block in 0..ACROSS {
+                let inside = f0.gt(above0).and(f1.gt(above1)).and(f2.gt(above2));
+                if inside.any() {
+                    let values =
+                        (f0.to_floats() * d0 + f1.to_floats() * d1 + f2.to_floats() * d2) * self.inv_area;
+                    let at = first + block * COLUMNS;
+                    let old = Floats::new(load_block::<f32, COLUMNS>(depth, at, rows.stride));
+                    let nearer = inside.and(values.gt(old));
+                    store_block::<f32, COLUMNS>(depth, at, rows.stride, nearer.select(values, old).0);
+                    if IDS {
+                        let old_ids =
+                            Ints::new(bytemuck::cast(load_block::<u32, COLUMNS>(ids, at, rows.stride)));
+                        let new_ids = bytemuck::cast(nearer.select_ints(id, old_ids).0);
+                        store_block::<u32, COLUMNS>(ids, at, rows.stride, new_ids);
+                    }
+                }
+                if ACROSS > 1 {
+                    f0 = f0 + self.across_step[0];
+                    f1 = f1 + self.across_step[1];
+                    f2 = f2 + self.across_step[2];
                 }
             }
             e0 = e0 + self.block_step[0];
@@ -2494,7 +2520,7 @@ mod tests {
     }
 
     /// Narrow areas take [`BlockLanes`]: blocks of two rows of four pixels (areas up to four
-    /// wide and two or more tall) or of one row of eight, shifted left where the area ends near
+    /// wide and two or more tall), of one row of eight, or two of those across, shifted left where the area ends near
     /// the tile's right side and up near its bottom, and the other paths where no block fits
     /// (an area as tall as a tile of odd height). All give the general loop's depths and
     /// triangles bit for bit, on both backends, and the depth-only pass, into a map's band,
@@ -2512,11 +2538,12 @@ mod tests {
             move |low: f32, high: f32| low + (high - low) * (rng.next_u32() as f32 / u32::MAX as f32);
         let mut corners = Vec::new();
         for k in 0..600 {
-            let (width, height) = if k % 10 == 0 {
+            let (width, height) = match k % 10 {
                 // As tall as the tile and more.
-                (random(0.5, 4.5), random(13.0, 20.0))
-            } else {
-                (random(0.3, 9.5), random(0.3, 15.0))
+                0 => (random(0.5, 4.5), random(13.0, 20.0)),
+                // Two blocks of eight wide.
+                1 | 2 => (random(8.5, 17.5), random(0.3, 15.0)),
+                _ => (random(0.3, 9.5), random(0.3, 15.0)),
             };
             let (x, y) = (random(36.0, 62.0), random(58.0, 79.0));
             let (along, down) = (random(0.0, height), random(0.0, width));
@@ -2546,9 +2573,9 @@ mod tests {
                 )
             })
             .collect();
-        // Which path each triangle takes: [blocks of 4, of 8, shifted left, shifted up, no
-        // block fits].
-        let mut paths = [0; 5];
+        // Which path each triangle takes: [blocks of 4, of 8, two blocks of 8 across, shifted
+        // left, shifted up, no block fits].
+        let mut paths = [0; 6];
         for triangle in &triangles {
             let Some(area) = triangle.bounds.intersect(&rect) else {
                 continue;
@@ -2559,20 +2586,22 @@ mod tests {
             if narrow == NarrowArea::No || !RowLanes::<Ints>::fit(&edges, area) {
                 continue;
             }
-            let place = |columns: u32| match columns {
-                4 => BlockLanes::<Native, 4>::place(&edges, area, rect, triangle.depth, 1.0)
+            let (depths, path) = (triangle.depth, narrow as usize);
+            let placed = match narrow {
+                NarrowArea::Blocks4 => BlockLanes::<Native, 4, 1>::place(&edges, area, rect, depths, 1.0)
                     .map(|blocks| (blocks.x0, blocks.y0)),
-                _ => BlockLanes::<Native, 8>::place(&edges, area, rect, triangle.depth, 1.0)
+                NarrowArea::Blocks8 => BlockLanes::<Native, 8, 1>::place(&edges, area, rect, depths, 1.0)
+                    .map(|blocks| (blocks.x0, blocks.y0)),
+                _ => BlockLanes::<Native, 8, 2>::place(&edges, area, rect, depths, 1.0)
                     .map(|blocks| (blocks.x0, blocks.y0)),
             };
-            let block_columns = if narrow == NarrowArea::Blocks4 { 4 } else { 8 };
-            match place(block_columns) {
+            match placed {
                 Some((x0, y0)) => {
-                    paths[usize::from(block_columns == 8)] += 1;
-                    paths[2] += usize::from(x0 < area.x0);
-                    paths[3] += usize::from(y0 < area.y0);
+                    paths[path] += 1;
+                    paths[3] += usize::from(x0 < area.x0);
+                    paths[4] += usize::from(y0 < area.y0);
                 }
-                None => paths[4] += 1,
+                None => paths[5] += 1,
             }
         }
         assert!(paths.iter().all(|&n| n > 3), "paths taken: {paths:?}");
