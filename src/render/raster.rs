@@ -396,11 +396,20 @@ impl Edge {
     /// half the box's width of steps, so at most the largest value at its corners.
     #[inline(always)]
     fn within(&self, columns: i64, rows: i64, margin: i64, limit: i64) -> bool {
-        let (far_x, far_y) = (columns * self.step_x, rows * self.step_y);
-        if self.row_start.abs() + far_x.abs() + far_y.abs() + margin <= limit {
+        if self.within_either_side(columns, rows, margin, limit) {
             return true;
         }
+        let (far_x, far_y) = (columns * self.step_x, rows * self.step_y);
         self.largest_at_corners(far_x, far_y) + margin <= limit
+    }
+
+    /// [`Edge::within`]'s quick bound alone, the sum of the terms' magnitudes: it holds for
+    /// the box reflected to the left of and above the row start too (up to `columns` and
+    /// `rows` steps either way), where the exact bound at the box's corners says nothing.
+    #[inline(always)]
+    fn within_either_side(&self, columns: i64, rows: i64, margin: i64, limit: i64) -> bool {
+        let (far_x, far_y) = (columns * self.step_x, rows * self.step_y);
+        self.row_start.abs() + far_x.abs() + far_y.abs() + margin <= limit
     }
 
     /// The largest magnitude of the edge's values at the corners of the box from the row
@@ -1311,7 +1320,7 @@ fn depth_test_single_sample<const IDS: bool, B: Backend>(
     // - Wider areas in rows of groups (`RowLanes`), each row only where its `RowSpan` reaches;
     //   and areas whose blocks do not fit their tile, whole.
     let narrow = NarrowArea::of(columns, (area.y1 - area.y0) as usize);
-    if narrow != NarrowArea::No && RowLanes::<Ints<B>>::fit(&edges, area) {
+    if narrow != NarrowArea::No && RowLanes::<Ints<B>>::fits_either_side(&edges, area) {
         // `if let`s, not closures: a closure's lane operations would be compiled out of line,
         // without the lanes' target features.
         let depths = triangle.depth;
@@ -1642,6 +1651,18 @@ impl<E: EdgeLanes> RowLanes<E> {
             .all(|edge| edge.within(columns + 2 * LANES as i64, rows + 1, 1, E::LIMIT))
     }
 
+    /// [`RowLanes::fit`] by the quick bound alone ([`Edge::within_either_side`]), which holds
+    /// as far to the left of and above the area's first pixel as to its right and below: for
+    /// [`BlockLanes`], whose blocks may be shifted there. Triangles it turns away (large edge
+    /// values, which only the exact bound might admit) take `RowLanes`.
+    #[inline(always)]
+    fn fits_either_side(edges: &[Edge; 3], area: PixelRect) -> bool {
+        let (columns, rows) = (i64::from(area.x1 - area.x0), i64::from(area.y1 - area.y0));
+        edges
+            .iter()
+            .all(|edge| edge.within_either_side(columns + 2 * LANES as i64, rows + 1, 1, E::LIMIT))
+    }
+
     /// The lanes of a triangle whose edges [`RowLanes::fit`] the area, with corner depths
     /// `depths` and `1/A` `inv_area`. `SPANS`: whether rows are narrowed to their [`RowSpan`] (areas of more than two groups);
     /// else it is not formed.
@@ -1825,17 +1846,18 @@ impl<B: Backend, const COLUMNS: usize, const ACROSS: usize> BlockLanes<B, COLUMN
     const ROWS: usize = LANES / COLUMNS;
 
     /// The blocks of a triangle whose `edges` (at the first pixel of `area`, its bounds within
-    /// `rect`) [`RowLanes::fit`] `i32` lanes and whose area is at most `COLUMNS·ACROSS` wide;
-    /// `None` where the blocks cannot be placed inside `rect` (a tile narrower than a row of
-    /// blocks, or an area as tall as a tile of an odd height).
+    /// `rect`, at most `COLUMNS·ACROSS` wide) [`RowLanes::fits_either_side`] `i32` lanes; `None`
+    /// where the blocks cannot be placed inside `rect` (a tile narrower than a row of blocks,
+    /// or an area as tall as a tile of an odd height).
     ///
-    /// Every value the lanes form is exact in `i32`: they lie at most `COLUMNS·ACROSS − 1 <
-    /// 2·LANES` columns left or right of the area's first column (the shift, and a row of
-    /// blocks no wider than that), at most one row above it (the shift) and within its rows
-    /// below (the blocks' rows end inside the area or, when shifted, inside the tile, which
-    /// ends less than a block below the area): so within `columns + 2·LANES` columns and
-    /// `rows + 1` rows of its first pixel, where `fit` bounds them. The sums after the last
-    /// block of a row or column, one step further, are never used (`i32` lanes wrap).
+    /// Every lane holds its pixel's exact value: the blocks' pixels lie less than `2·LANES`
+    /// columns to either side of the area's first pixel (the shift left, a row of blocks no
+    /// wider than that), at most one row above it (the shift up) and within its rows below
+    /// (the blocks' rows end inside the area or, when shifted, inside the tile, which ends less
+    /// than a block below the area), where the bound holds on both sides. The lanes' products
+    /// and sums wrap (`i32` arithmetic is exact modulo 2³², so only the results need to fit),
+    /// and the sums after the last block of a row or column, one step further, are never
+    /// used.
     #[inline(always)]
     fn place(
         edges: &[Edge; 3],
@@ -2558,6 +2580,24 @@ mod tests {
                 corner(x + down, y + height, depths[2]),
             );
             // Both windings: `setup_triangle` keeps one and turns the other.
+            corners.push(if k % 2 == 0 { [a, b, c] } else { [a, c, b] });
+        }
+        // Slivers reaching far above and below the tile, a few pixels wide in it: edge values
+        // near `i32`'s limit, some of them at the tile's right side, where blocks shift left.
+        for k in 0..300 {
+            let x = random(40.0, 62.0);
+            let (reach, width) = (random(2e5, 9e5), random(0.5, 15.0));
+            let lean = random(-3.0, 3.0);
+            let depths = [random(0.05, 0.95), random(0.05, 0.95), random(0.05, 0.95)];
+            let corner = |x: f32, y: f32, depth: f32| ScreenVertex {
+                depth,
+                ..vertex(x, y)
+            };
+            let (a, b, c) = (
+                corner(x - lean, 70.0 - reach, depths[0]),
+                corner(x + lean, 70.0 + reach, depths[1]),
+                corner(x + width, 70.0 + random(-5.0, 5.0), depths[2]),
+            );
             corners.push(if k % 2 == 0 { [a, b, c] } else { [a, c, b] });
         }
         let triangles: Vec<_> = corners
