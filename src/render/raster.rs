@@ -2072,6 +2072,36 @@ mod tests {
         assert_eq!(bits(&widest.depth), bits(&visibility.depth));
     }
 
+    /// The one-sample raster triangles of `corners` in an 80×90 image (the degenerate ones
+    /// dropped).
+    fn set_up_in_80_by_90(corners: Vec<[ScreenVertex; 3]>) -> Vec<RasterTriangle> {
+        corners
+            .into_iter()
+            .filter_map(|t| {
+                setup_triangle(
+                    t,
+                    80,
+                    90,
+                    SamplePattern::SINGLE,
+                    SourceTriangle::default(),
+                    &mut Vec::new(),
+                )
+            })
+            .collect()
+    }
+
+    /// A one-sample visibility buffer of `rect` with nothing drawn.
+    fn empty_visibility(rect: PixelRect) -> Visibility {
+        let pixels = (rect.width() * rect.height()) as usize;
+        Visibility {
+            rect,
+            pattern: SamplePattern::SINGLE,
+            depth: vec![f32::NEG_INFINITY; pixels],
+            triangle: vec![NO_TRIANGLE; pixels],
+            raster_ids: Vec::new(),
+        }
+    }
+
     fn vertex(x: f32, y: f32) -> ScreenVertex {
         ScreenVertex {
             x,
@@ -2483,19 +2513,7 @@ mod tests {
             );
             corners.extend([[a, b, c], [a, c, d], [c, b, a]]);
         }
-        let triangles: Vec<_> = corners
-            .into_iter()
-            .filter_map(|t| {
-                setup_triangle(
-                    t,
-                    80,
-                    90,
-                    SamplePattern::SINGLE,
-                    SourceTriangle::default(),
-                    &mut Vec::new(),
-                )
-            })
-            .collect();
+        let triangles = set_up_in_80_by_90(corners);
         let (mut lanes, mut wide_lanes, mut wide, mut narrow) = (0, 0, 0, 0);
         for triangle in &triangles {
             let Some(area) = triangle.bounds.intersect(&rect) else {
@@ -2517,14 +2535,7 @@ mod tests {
             lanes > 20 && wide_lanes == 2 && wide == 1 && narrow > 5,
             "{lanes} in lanes, {wide_lanes} in wide lanes, {wide} wide, {narrow} narrow"
         );
-        let empty = || Visibility {
-            rect,
-            pattern: SamplePattern::SINGLE,
-            depth: vec![f32::NEG_INFINITY; 21 * 13],
-            triangle: vec![NO_TRIANGLE; 21 * 13],
-            raster_ids: Vec::new(),
-        };
-        let (mut fast, mut general) = (empty(), empty());
+        let (mut fast, mut general) = (empty_visibility(rect), empty_visibility(rect));
         for (local, triangle) in (0..).zip(&triangles) {
             rasterize_on_both(&mut fast, triangle, local);
             general.rasterize_any_samples(triangle, local);
@@ -2600,19 +2611,7 @@ mod tests {
             );
             corners.push(if k % 2 == 0 { [a, b, c] } else { [a, c, b] });
         }
-        let triangles: Vec<_> = corners
-            .into_iter()
-            .filter_map(|t| {
-                setup_triangle(
-                    t,
-                    80,
-                    90,
-                    SamplePattern::SINGLE,
-                    SourceTriangle::default(),
-                    &mut Vec::new(),
-                )
-            })
-            .collect();
+        let triangles = set_up_in_80_by_90(corners);
         // Which path each triangle takes: [blocks of 4, of 8, two blocks of 8 across, shifted
         // left, shifted up, no block fits].
         let mut paths = [0; 6];
@@ -2645,14 +2644,7 @@ mod tests {
             }
         }
         assert!(paths.iter().all(|&n| n > 3), "paths taken: {paths:?}");
-        let empty = || Visibility {
-            rect,
-            pattern: SamplePattern::SINGLE,
-            depth: vec![f32::NEG_INFINITY; 21 * 13],
-            triangle: vec![NO_TRIANGLE; 21 * 13],
-            raster_ids: Vec::new(),
-        };
-        let (mut fast, mut general) = (empty(), empty());
+        let (mut fast, mut general) = (empty_visibility(rect), empty_visibility(rect));
         let bits = |depths: &[f32]| depths.iter().map(|d| d.to_bits()).collect::<Vec<_>>();
         // A map's band: rows 64 texels apart from column 0, with a depth already in every
         // fifth texel.
