@@ -124,8 +124,9 @@ pub trait LaneWork {
 }
 
 /// `work` on the widest lanes the processor has: the `Avx` backend where it has AVX2 (and
-/// POPCNT), else the native backend. The result has the same bits either way. A call costs a feature test, and
-/// its lanes cross in memory: worth it for a few hundred operations, not for a few dozen.
+/// POPCNT), else the native backend. The result has the same bits either way. A call costs a
+/// feature test, and its lanes cross in memory: worth it for a few hundred operations, not for
+/// a few dozen.
 #[inline(always)]
 pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
     #[cfg(target_arch = "x86_64")]
@@ -142,7 +143,8 @@ pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
 ///
 /// Soundness: [`Avx`](avx2::Avx) is private to this file, so lane code can only be
 /// instantiated with it by [`run_widest`], inside `run_on_avx2`, which runs only after the
-/// processor was found to have AVX2 and POPCNT. Its operations' intrinsics therefore run only there.
+/// processor was found to have AVX2 and POPCNT. Its operations' intrinsics therefore run only
+/// there.
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod avx2 {

@@ -1645,10 +1645,8 @@ impl<E: EdgeLanes> RowLanes<E> {
     /// bits.
     #[inline(always)]
     fn fit(edges: &[Edge; 3], area: PixelRect) -> bool {
-        let (columns, rows) = (i64::from(area.x1 - area.x0), i64::from(area.y1 - area.y0));
-        edges
-            .iter()
-            .all(|edge| edge.within(columns + 2 * LANES as i64, rows + 1, 1, E::LIMIT))
+        let (columns, rows) = Self::reach(area);
+        edges.iter().all(|edge| edge.within(columns, rows, 1, E::LIMIT))
     }
 
     /// [`RowLanes::fit`] by the quick bound alone ([`Edge::within_either_side`]), which holds
@@ -1657,10 +1655,20 @@ impl<E: EdgeLanes> RowLanes<E> {
     /// values, which only the exact bound might admit) take `RowLanes`.
     #[inline(always)]
     fn fits_either_side(edges: &[Edge; 3], area: PixelRect) -> bool {
-        let (columns, rows) = (i64::from(area.x1 - area.x0), i64::from(area.y1 - area.y0));
+        let (columns, rows) = Self::reach(area);
         edges
             .iter()
-            .all(|edge| edge.within_either_side(columns + 2 * LANES as i64, rows + 1, 1, E::LIMIT))
+            .all(|edge| edge.within_either_side(columns, rows, 1, E::LIMIT))
+    }
+
+    /// The steps from `area`'s first pixel that the lanes' values may lie at: up to two groups
+    /// past its last column and a row past its last row.
+    #[inline(always)]
+    fn reach(area: PixelRect) -> (i64, i64) {
+        (
+            i64::from(area.x1 - area.x0) + 2 * LANES as i64,
+            i64::from(area.y1 - area.y0) + 1,
+        )
     }
 
     /// The lanes of a triangle whose edges [`RowLanes::fit`] the area, with corner depths
