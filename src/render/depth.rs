@@ -36,6 +36,7 @@
 //! less but cost more than it saved (a second walk of the map, more triangles kept at block
 //! edges).
 
+use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::render::TILE_SIZE;
@@ -43,7 +44,7 @@ use crate::render::bin::{RasterChunk, TileGrid};
 use crate::render::frame::FrameTriangle;
 use crate::render::geometry::{
     CameraSetup, ObjectTransforms, ProjectedVertex, RasterOutput, SpareBuffers, TRIANGLE_CHUNK, Viewport,
-    back_faces_hidden, homogeneous_facing, set_up_raster_triangles,
+    back_faces_hidden_within, homogeneous_facing, set_up_raster_triangles,
 };
 use crate::render::lanes::{Backend, LaneWork, run_widest};
 use crate::render::raster::{
@@ -62,8 +63,12 @@ const VERTEX_CHUNK: usize = 4096;
 /// all at −∞ already: those the pass leaves alone if no triangle reaches them (on a map of a
 /// few objects, most of its tiles, frame after frame). The pass sets it to the tiles it leaves
 /// blank. Any other length counts as no tile known blank.
+///
+/// `mesh_bounds` holds each object's [`Mesh::bounds`](crate::mesh::Mesh::bounds), which the
+/// shadow maps' fit found already.
 pub fn render_depth(
     scene: &Scene,
+    mesh_bounds: &[Option<(Vec3, Vec3)>],
     camera: &Camera,
     size: u32,
     depth: &mut [f32],
@@ -79,7 +84,8 @@ pub fn render_depth(
     let hidden_back_faces: Vec<bool> = scene
         .objects
         .iter()
-        .map(|object| back_faces_hidden(object, &camera))
+        .zip(mesh_bounds)
+        .map(|(object, &bounds)| back_faces_hidden_within(object, bounds, &camera))
         .collect();
     set_up_triangles(scene, &mirrored, &hidden_back_faces, &viewport, projected, chunks);
     let grid = TileGrid::new(size, size);
@@ -393,6 +399,7 @@ mod tests {
         near_cut.eye.z = 3.0;
         views.push((near_cut, 80));
         // The same objects with no mesh known to be closed: none of their back faces is culled.
+        let mesh_bounds: Vec<_> = scene.objects.iter().map(|object| object.mesh.bounds()).collect();
         let mut open = scene.clone();
         for object in &mut open.objects {
             Arc::make_mut(&mut object.mesh).closed = false;
@@ -410,7 +417,15 @@ mod tests {
                 .entry(size)
                 .or_insert_with(|| (vec![f32::NAN; (size * size) as usize], Vec::new()));
             let blank_before = blank_tiles.clone();
-            render_depth(&scene, &camera, size, depth, blank_tiles, &mut spare);
+            render_depth(
+                &scene,
+                &mesh_bounds,
+                &camera,
+                size,
+                depth,
+                blank_tiles,
+                &mut spare,
+            );
             // Tiles left alone (blank before and after) and tiles blank before that a triangle
             // now reaches (filled again).
             for (&before, &after) in blank_before.iter().zip(blank_tiles.iter()) {
@@ -428,7 +443,15 @@ mod tests {
             };
             set_up += triangles(&mut spare);
             let mut open_depth = vec![f32::NAN; (size * size) as usize];
-            render_depth(&open, &camera, size, &mut open_depth, &mut Vec::new(), &mut spare);
+            render_depth(
+                &open,
+                &mesh_bounds,
+                &camera,
+                size,
+                &mut open_depth,
+                &mut Vec::new(),
+                &mut spare,
+            );
             set_up_open += triangles(&mut spare);
 
             // Every raster triangle of the open objects, in the stream's order (the chunks are

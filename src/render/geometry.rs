@@ -790,8 +790,17 @@ pub(crate) fn constant_lighting_point(object: &Object, scene: &Scene, viewer: &V
 /// rounding let a back face win at the silhouette. OpenGL programs enable face culling for such
 /// meshes; this does it only when it is safe.
 pub(crate) fn back_faces_hidden(object: &Object, camera: &CameraSetup) -> bool {
-    let mesh = &object.mesh;
-    let Some((lo, hi)) = mesh.bounds().filter(|_| mesh.closed) else {
+    // An open mesh's bounds are not needed: they cost a pass over its vertices.
+    object.mesh.closed && back_faces_hidden_within(object, object.mesh.bounds(), camera)
+}
+
+/// [`back_faces_hidden`] of an object whose mesh's bounds are `mesh_bounds` ([`Mesh::bounds`](crate::mesh::Mesh::bounds)).
+pub(crate) fn back_faces_hidden_within(
+    object: &Object,
+    mesh_bounds: Option<(Vec3, Vec3)>,
+    camera: &CameraSetup,
+) -> bool {
+    let Some((lo, hi)) = mesh_bounds.filter(|_| object.mesh.closed) else {
         return false;
     };
     let center = object.transform.transform_point3(((lo + hi) / 2.0).as_dvec3()) - camera.eye;

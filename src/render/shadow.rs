@@ -31,7 +31,7 @@ use glam::{DMat4, DVec3, Mat4, Vec3, Vec4, Vec4Swizzles};
 use crate::render::depth::render_depth;
 use crate::render::geometry::{CameraSetup, SpareBuffers};
 use crate::render::lanes::{Backend, Floats, Ints, LANES, Mask, Native, Real, Vec3s};
-use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, bounding_sphere};
+use crate::scene::{BoundingSphere, Camera, Light, Projection, Scene, ShadowSettings, sphere_around_boxes};
 
 /// Spot lights with a wider cutoff than this use the six-face cube, like point lights: a single
 /// perspective face would need a field of view too wide to keep texels usefully small.
@@ -462,30 +462,45 @@ pub fn render_shadow_maps(
     buffers: &mut ShadowBuffers,
     spare: &mut SpareBuffers,
 ) -> Vec<Option<Arc<ShadowMap>>> {
-    // The bounds read every vertex of the scene: computed on the first light that casts a
-    // shadow, and never for a scene without shadows.
-    let mut bounds = None;
+    // Each mesh's bounds read all its vertices: found once, on the first light that casts a
+    // shadow (never for a scene without shadows), for the test of which objects are seen, the
+    // maps' fit and their back faces.
+    let mut mesh_bounds = None;
     let mut seen = None;
+    let mut fit = None;
     scene
         .lights
         .iter()
         .map(|light| {
             let settings = light.shadow()?;
-            let seen: &Vec<BoundingSphere> = seen.get_or_insert_with(|| seen_bounds(scene));
+            let mesh_bounds: &Vec<Option<(Vec3, Vec3)>> = mesh_bounds
+                .get_or_insert_with(|| scene.objects.iter().map(|object| object.mesh.bounds()).collect());
+            let seen: &Vec<BoundingSphere> = seen.get_or_insert_with(|| seen_bounds(scene, mesh_bounds));
             if !lights_any(light, seen) {
                 return None;
             }
-            let bounds = *bounds.get_or_insert_with(|| bounding_sphere(&scene.objects));
+            let fit = *fit.get_or_insert_with(|| {
+                sphere_around_boxes(scene.objects.iter().zip(mesh_bounds.iter().copied()))
+            });
+            let casters = Casters { scene, mesh_bounds };
             Some(Arc::new(render_map(
-                scene, light, settings, bounds, frame_eye, buffers, spare,
+                casters, light, settings, fit, frame_eye, buffers, spare,
             )))
         })
         .collect()
 }
 
-/// The shadow map of `light` with `settings`, fitted to the bounds of every object.
+/// What the shadow maps are rendered of: the scene's objects, with their meshes' bounds
+/// ([`Mesh::bounds`](crate::mesh::Mesh::bounds), one per object), found once for every map.
+#[derive(Clone, Copy)]
+struct Casters<'s> {
+    scene: &'s Scene,
+    mesh_bounds: &'s [Option<(Vec3, Vec3)>],
+}
+
+/// The shadow map of `light` with `settings`, fitted to `bounds`, the bounds of every object.
 fn render_map(
-    scene: &Scene,
+    casters: Casters,
     light: &Light,
     settings: ShadowSettings,
     bounds: BoundingSphere,
@@ -495,15 +510,16 @@ fn render_map(
 ) -> ShadowMap {
     let faces = light_views(light, bounds, settings.resolution)
         .into_iter()
-        .map(|(camera, size)| render_face(scene, &camera, size, frame_eye, buffers, spare))
+        .map(|(camera, size)| render_face(casters, &camera, size, frame_eye, buffers, spare))
         .collect();
     ShadowMap { faces, settings }
 }
 
 /// The bounding spheres of the objects whose bounds reach into the camera's view volume: only
 /// points of those are ever lit (pixels, flat triangles and Gouraud vertices of triangles that
-/// cover a sample, constant colours that are shown), so only they can read a shadow map.
-fn seen_bounds(scene: &Scene) -> Vec<BoundingSphere> {
+/// cover a sample, constant colours that are shown), so only they can read a shadow map. Each
+/// object's mesh has the bounds `mesh_bounds` holds.
+fn seen_bounds(scene: &Scene, mesh_bounds: &[Option<(Vec3, Vec3)>]) -> Vec<BoundingSphere> {
     let camera = CameraSetup::new(
         &scene.camera,
         f64::from(scene.image.width) / f64::from(scene.image.height),
@@ -516,7 +532,8 @@ fn seen_bounds(scene: &Scene) -> Vec<BoundingSphere> {
     scene
         .objects
         .iter()
-        .map(|object| bounding_sphere(std::slice::from_ref(object)))
+        .zip(mesh_bounds)
+        .map(|(object, &bounds)| sphere_around_boxes([(object, bounds)]))
         .filter(|sphere| {
             let center = sphere.center - camera.eye;
             // A margin for the rounding of positions to `f32` on the way.
@@ -721,7 +738,7 @@ pub(crate) fn light_views(light: &Light, bounds: BoundingSphere, resolution: u32
 
 /// Renders one face's depth, and its mapping from the frame's eye-relative space.
 fn render_face(
-    scene: &Scene,
+    casters: Casters,
     camera: &Camera,
     size: u32,
     frame_eye: DVec3,
@@ -730,7 +747,15 @@ fn render_face(
 ) -> ShadowFace {
     let side = size as usize;
     let (mut depth, mut blank_tiles) = buffers.texels(side * side);
-    render_depth(scene, camera, size, &mut depth, &mut blank_tiles, spare);
+    render_depth(
+        casters.scene,
+        casters.mesh_bounds,
+        camera,
+        size,
+        &mut depth,
+        &mut blank_tiles,
+        spare,
+    );
     let setup = CameraSetup::new(camera, 1.0);
     let clip_from_frame = setup.clip_from_world * DMat4::from_translation(frame_eye - camera.eye);
     let (texel_size, perspective) = match camera.projection {
@@ -1056,7 +1081,12 @@ pub(crate) mod tests {
             let maps = render_shadow_maps(&scene, eye, &mut ShadowBuffers::default(), &mut spare);
             let skipped: Vec<bool> = maps.iter().map(Option::is_none).collect();
             assert_eq!(skipped, [false, false, true, false, true], "{shading:?}");
-            let bounds = bounding_sphere(&scene.objects);
+            let bounds = crate::scene::bounding_sphere(&scene.objects);
+            let mesh_bounds: Vec<_> = scene.objects.iter().map(|object| object.mesh.bounds()).collect();
+            let casters = Casters {
+                scene: &scene,
+                mesh_bounds: &mesh_bounds,
+            };
             let every: Vec<Option<Arc<ShadowMap>>> = scene
                 .lights
                 .iter()
@@ -1064,7 +1094,7 @@ pub(crate) mod tests {
                     let settings = light.shadow().expect("every light casts shadows");
                     let mut buffers = ShadowBuffers::default();
                     Some(Arc::new(render_map(
-                        &scene,
+                        casters,
                         light,
                         settings,
                         bounds,

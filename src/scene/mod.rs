@@ -379,10 +379,18 @@ pub struct BoundingSphere {
 /// The sphere around the world-space bounding box of `objects` (each mesh's box through its
 /// transform); a unit sphere at the origin when there is nothing to bound.
 pub fn bounding_sphere(objects: &[Object]) -> BoundingSphere {
+    sphere_around_boxes(objects.iter().map(|object| (object, object.mesh.bounds())))
+}
+
+/// [`bounding_sphere`] of objects given with their meshes' bounds ([`Mesh::bounds`](crate::mesh::Mesh::bounds)),
+/// for a caller that has them already: each is a pass over every vertex of the mesh.
+pub fn sphere_around_boxes<'a>(
+    objects: impl IntoIterator<Item = (&'a Object, Option<(Vec3, Vec3)>)>,
+) -> BoundingSphere {
     let mut lo = DVec3::splat(f64::INFINITY);
     let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    for object in objects {
-        let Some((min, max)) = object.mesh.bounds() else {
+    for (object, bounds) in objects {
+        let Some((min, max)) = bounds else {
             continue;
         };
         for corner in 0..8 {
