@@ -702,6 +702,15 @@ pub fn fill_vec3s(out: &mut [Vec3; LANES], value: Vec3) {
     native::fill_vec3s(out, value)
 }
 
+/// Asks the processor to bring `items[index]` into the cache, where the backend can (a
+/// `prefetcht0`; nothing elsewhere, or for an index past the end): for data a loop will read a
+/// few iterations on at an address it knows now, such as a dense mesh's vertices, scattered
+/// over arrays far larger than the cache, of the triangles a tile shades.
+#[inline(always)]
+pub fn prefetch<T>(items: &[T], index: usize) {
+    native::prefetch(items, index)
+}
+
 #[cfg(target_arch = "x86_64")]
 use sse as native;
 
@@ -905,6 +914,9 @@ mod portable {
     pub fn fill_vec3s(out: &mut [Vec3; LANES], value: Vec3) {
         out.fill(value);
     }
+
+    #[inline(always)]
+    pub fn prefetch<T>(_items: &[T], _index: usize) {}
 }
 
 /// The lane operations as SSE instructions on the two four-lane halves of the arrays. SSE and
@@ -918,12 +930,13 @@ mod portable {
 mod sse {
     use glam::Vec3;
     use std::arch::x86_64::{
-        __m128, __m128d, __m128i, _mm_add_epi32, _mm_add_pd, _mm_add_ps, _mm_and_ps, _mm_and_si128,
-        _mm_andnot_ps, _mm_andnot_si128, _mm_castpd_ps, _mm_castsi128_ps, _mm_cmpeq_epi32, _mm_cmpeq_ps,
-        _mm_cmpgt_epi32, _mm_cmpgt_pd, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32, _mm_cvtepi32_ps,
-        _mm_cvtpd_ps, _mm_cvttps_epi32, _mm_div_ps, _mm_movelh_ps, _mm_movemask_epi8, _mm_movemask_ps,
-        _mm_mul_ps, _mm_or_ps, _mm_packs_epi16, _mm_packs_epi32, _mm_set1_epi8, _mm_set1_epi32, _mm_setr_ps,
-        _mm_shuffle_ps, _mm_sqrt_ps, _mm_storel_epi64, _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps, _mm_xor_ps,
+        __m128, __m128d, __m128i, _MM_HINT_T0, _mm_add_epi32, _mm_add_pd, _mm_add_ps, _mm_and_ps,
+        _mm_and_si128, _mm_andnot_ps, _mm_andnot_si128, _mm_castpd_ps, _mm_castsi128_ps, _mm_cmpeq_epi32,
+        _mm_cmpeq_ps, _mm_cmpgt_epi32, _mm_cmpgt_pd, _mm_cmpgt_ps, _mm_cmple_ps, _mm_cmplt_epi32,
+        _mm_cvtepi32_ps, _mm_cvtpd_ps, _mm_cvttps_epi32, _mm_div_ps, _mm_movelh_ps, _mm_movemask_epi8,
+        _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_packs_epi16, _mm_packs_epi32, _mm_prefetch,
+        _mm_set1_epi8, _mm_set1_epi32, _mm_setr_ps, _mm_shuffle_ps, _mm_sqrt_ps, _mm_storel_epi64,
+        _mm_storeu_ps, _mm_sub_epi32, _mm_sub_ps, _mm_xor_ps,
     };
 
     use super::{Backend, LANES};
@@ -989,6 +1002,16 @@ mod sse {
             let flags = _mm_andnot_si128(bytes, _mm_set1_epi8(1));
             _mm_storel_epi64(shown.as_mut_ptr().cast::<__m128i>(), flags);
             LANES - (_mm_movemask_epi8(bytes) as u32 & 0xff).count_ones() as usize
+        }
+    }
+
+    /// One `prefetcht0`, within the slice.
+    #[inline(always)]
+    pub fn prefetch<T>(items: &[T], index: usize) {
+        if let Some(item) = items.get(index) {
+            // SAFETY: SSE is enabled on every x86-64 target (see the module); a prefetch reads
+            // nothing the program sees, and the address is that of an element of `items`.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(item).cast::<i8>()) }
         }
     }
 

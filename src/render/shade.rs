@@ -20,8 +20,8 @@ use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
 use crate::render::lanes::{
-    Backend, Floats, Ints, LANES, LaneWork, Mask, Native, Vec3s, Wides, fill_vec3s, mark_shown, run_widest,
-    samples_showing,
+    Backend, Floats, Ints, LANES, LaneWork, Mask, Native, Vec3s, Wides, fill_vec3s, mark_shown, prefetch,
+    run_widest, samples_showing,
 };
 use crate::render::normals::{perturb_normal, renormalize_or_else, slerp_triangle};
 use crate::render::raster::{
@@ -51,6 +51,9 @@ struct TriangleColorCache<T: Copy> {
 }
 
 const TRIANGLE_CACHE_SIZE: usize = 64;
+
+/// How many of a tile's triangles ahead of the one being shaded the vertices are prefetched of.
+const VERTEX_PREFETCH: usize = 12;
 
 /// [`samples_showing`]'s mask of a group of [`LANES`] pixels that all show one triangle.
 const ALL_LANES: u32 = (1 << LANES) - 1;
@@ -1013,6 +1016,15 @@ fn shade_single_sample<'f>(
     let mut surface = SurfaceBatch::default();
     let mut modulated = ModulatedBatch::default();
     for local in 0..count {
+        // The vertices a few triangles on, asked for now: a dense mesh's triangles in a tile
+        // use vertices scattered over arrays far larger than the cache.
+        if local + VERTEX_PREFETCH < count {
+            let ahead = frame.raster_triangle(visibility.raster_id((local + VERTEX_PREFETCH) as u32));
+            for v in ahead.triangle.vertices {
+                prefetch(&frame.vertices, v as usize);
+                prefetch(&frame.vertex_colors, v as usize);
+            }
+        }
         if !seen[local] {
             continue;
         }
