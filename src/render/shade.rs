@@ -55,6 +55,20 @@ const TRIANGLE_CACHE_SIZE: usize = 64;
 /// How many of a tile's triangles ahead of the one being shaded the vertices are prefetched of.
 const VERTEX_PREFETCH: usize = 12;
 
+/// Asks for the vertices (and their colours) of the tile's triangle `local`, if there is one,
+/// before its shader reads them: a dense mesh's triangles in a tile use vertices scattered over
+/// arrays far larger than the cache.
+#[inline(always)]
+fn prefetch_vertices(frame: &Frame, visibility: &Visibility, local: usize) {
+    if local < visibility.raster_ids.len() {
+        let ahead = frame.raster_triangle(visibility.raster_id(local as u32));
+        for v in ahead.triangle.vertices {
+            prefetch(&frame.vertices, v as usize);
+            prefetch(&frame.vertex_colors, v as usize);
+        }
+    }
+}
+
 /// [`samples_showing`]'s mask of a group of [`LANES`] pixels that all show one triangle.
 const ALL_LANES: u32 = (1 << LANES) - 1;
 
@@ -653,6 +667,7 @@ fn shade_multisampled<'f>(
     let mut surface = SurfaceBatch::default();
     let mut modulated = ModulatedBatch::default();
     for local in 0..count {
+        prefetch_vertices(frame, visibility, local + VERTEX_PREFETCH);
         let mine = &by_triangle[triangle_start[local] as usize..triangle_start[local + 1] as usize];
         if mine.is_empty() && !whole_seen[local] {
             continue;
@@ -1016,15 +1031,7 @@ fn shade_single_sample<'f>(
     let mut surface = SurfaceBatch::default();
     let mut modulated = ModulatedBatch::default();
     for local in 0..count {
-        // The vertices a few triangles on, asked for now: a dense mesh's triangles in a tile
-        // use vertices scattered over arrays far larger than the cache.
-        if local + VERTEX_PREFETCH < count {
-            let ahead = frame.raster_triangle(visibility.raster_id((local + VERTEX_PREFETCH) as u32));
-            for v in ahead.triangle.vertices {
-                prefetch(&frame.vertices, v as usize);
-                prefetch(&frame.vertex_colors, v as usize);
-            }
-        }
+        prefetch_vertices(frame, visibility, local + VERTEX_PREFETCH);
         if !seen[local] {
             continue;
         }
