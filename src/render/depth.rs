@@ -399,7 +399,7 @@ mod tests {
         near_cut.eye.z = 3.0;
         views.push((near_cut, 80));
         // The same objects with no mesh known to be closed: none of their back faces is culled.
-        let mesh_bounds: Vec<_> = scene.objects.iter().map(|object| object.mesh.bounds()).collect();
+        let mesh_bounds = crate::render::shadow::each_mesh_bounds(&scene);
         let mut open = scene.clone();
         for object in &mut open.objects {
             Arc::make_mut(&mut object.mesh).closed = false;

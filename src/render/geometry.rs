@@ -794,7 +794,8 @@ pub(crate) fn back_faces_hidden(object: &Object, camera: &CameraSetup) -> bool {
     object.mesh.closed && back_faces_hidden_within(object, object.mesh.bounds(), camera)
 }
 
-/// [`back_faces_hidden`] of an object whose mesh's bounds are `mesh_bounds` ([`Mesh::bounds`](crate::mesh::Mesh::bounds)).
+/// [`back_faces_hidden`] of an object whose mesh's bounds are `mesh_bounds`
+/// ([`Mesh::bounds`](crate::mesh::Mesh::bounds)), for a caller that has them already.
 pub(crate) fn back_faces_hidden_within(
     object: &Object,
     mesh_bounds: Option<(Vec3, Vec3)>,

@@ -473,8 +473,8 @@ pub fn render_shadow_maps(
         .iter()
         .map(|light| {
             let settings = light.shadow()?;
-            let mesh_bounds: &Vec<Option<(Vec3, Vec3)>> = mesh_bounds
-                .get_or_insert_with(|| scene.objects.iter().map(|object| object.mesh.bounds()).collect());
+            let mesh_bounds: &Vec<Option<(Vec3, Vec3)>> =
+                mesh_bounds.get_or_insert_with(|| each_mesh_bounds(scene));
             let seen: &Vec<BoundingSphere> = seen.get_or_insert_with(|| seen_bounds(scene, mesh_bounds));
             if !lights_any(light, seen) {
                 return None;
@@ -488,6 +488,11 @@ pub fn render_shadow_maps(
             )))
         })
         .collect()
+}
+
+/// [`Mesh::bounds`](crate::mesh::Mesh::bounds) of each object's mesh, in the scene's order.
+pub(crate) fn each_mesh_bounds(scene: &Scene) -> Vec<Option<(Vec3, Vec3)>> {
+    scene.objects.iter().map(|object| object.mesh.bounds()).collect()
 }
 
 /// What the shadow maps are rendered of: the scene's objects, with their meshes' bounds
@@ -1082,7 +1087,7 @@ pub(crate) mod tests {
             let skipped: Vec<bool> = maps.iter().map(Option::is_none).collect();
             assert_eq!(skipped, [false, false, true, false, true], "{shading:?}");
             let bounds = crate::scene::bounding_sphere(&scene.objects);
-            let mesh_bounds: Vec<_> = scene.objects.iter().map(|object| object.mesh.bounds()).collect();
+            let mesh_bounds = each_mesh_bounds(&scene);
             let casters = Casters {
                 scene: &scene,
                 mesh_bounds: &mesh_bounds,

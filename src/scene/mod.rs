@@ -382,8 +382,9 @@ pub fn bounding_sphere(objects: &[Object]) -> BoundingSphere {
     sphere_around_boxes(objects.iter().map(|object| (object, object.mesh.bounds())))
 }
 
-/// [`bounding_sphere`] of objects given with their meshes' bounds ([`Mesh::bounds`](crate::mesh::Mesh::bounds)),
-/// for a caller that has them already: each is a pass over every vertex of the mesh.
+/// [`bounding_sphere`] of objects given with their meshes' bounds
+/// ([`Mesh::bounds`](crate::mesh::Mesh::bounds)), for a caller that has them already: each is a
+/// pass over every vertex of the mesh.
 pub fn sphere_around_boxes<'a>(
     objects: impl IntoIterator<Item = (&'a Object, Option<(Vec3, Vec3)>)>,
 ) -> BoundingSphere {
