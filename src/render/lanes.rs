@@ -82,6 +82,23 @@ pub trait Backend: Copy + Default + Debug + PartialEq + Send + Sync + 'static {
     fn gt_wides(a: [f64; LANES], b: [f64; LANES]) -> [u32; LANES];
     /// `as f32`: to nearest, ties to even.
     fn wides_to_floats(a: [f64; LANES]) -> [f32; LANES];
+    /// `slots`, read so that a select of them stored back stays a blend and a whole store
+    /// (see [`Floats::load_to_blend`]): a plain load, but on the `Avx` backend.
+    #[inline(always)]
+    fn load_to_blend(slots: &[u32; LANES]) -> [u32; LANES] {
+        *slots
+    }
+    /// `low` then `high` as one group of lanes, read as [`Backend::load_to_blend`] reads.
+    #[inline(always)]
+    fn load_halves_to_blend(low: &[u32; LANES / 2], high: &[u32; LANES / 2]) -> [u32; LANES] {
+        std::array::from_fn(|lane| {
+            if lane < LANES / 2 {
+                low[lane]
+            } else {
+                high[lane - LANES / 2]
+            }
+        })
+    }
 }
 
 /// The target's own backend: the one every lane type uses unless told otherwise.
@@ -149,12 +166,12 @@ pub fn run_widest<W: LaneWork>(work: W) -> W::Output {
 #[allow(unsafe_code)]
 mod avx2 {
     use std::arch::x86_64::{
-        __m256, __m256d, __m256i, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm256_add_epi32, _mm256_add_pd,
-        _mm256_add_ps, _mm256_and_ps, _mm256_and_si256, _mm256_andnot_ps, _mm256_blendv_ps, _mm256_castpd_ps,
-        _mm256_cmp_pd, _mm256_cmp_ps, _mm256_cmpeq_epi32, _mm256_cmpgt_epi32, _mm256_cvtepi32_ps,
-        _mm256_cvtpd_ps, _mm256_cvttps_epi32, _mm256_div_ps, _mm256_movemask_ps, _mm256_mul_ps,
-        _mm256_mullo_epi32, _mm256_or_ps, _mm256_permute4x64_pd, _mm256_set_m128, _mm256_set1_epi32,
-        _mm256_shuffle_ps, _mm256_sqrt_ps, _mm256_sub_epi32, _mm256_sub_ps, _mm256_xor_ps,
+        __m128i, __m256, __m256d, __m256i, _CMP_EQ_OQ, _CMP_GT_OQ, _CMP_LE_OQ, _mm256_add_epi32,
+        _mm256_add_pd, _mm256_add_ps, _mm256_and_ps, _mm256_and_si256, _mm256_andnot_ps, _mm256_blendv_ps,
+        _mm256_castpd_ps, _mm256_cmp_pd, _mm256_cmp_ps, _mm256_cmpeq_epi32, _mm256_cmpgt_epi32,
+        _mm256_cvtepi32_ps, _mm256_cvtpd_ps, _mm256_cvttps_epi32, _mm256_div_ps, _mm256_movemask_ps,
+        _mm256_mul_ps, _mm256_mullo_epi32, _mm256_or_ps, _mm256_permute4x64_pd, _mm256_set_m128,
+        _mm256_set1_epi32, _mm256_shuffle_ps, _mm256_sqrt_ps, _mm256_sub_epi32, _mm256_sub_ps, _mm256_xor_ps,
     };
 
     use super::{Backend, LANES, LaneWork};
@@ -372,6 +389,37 @@ mod avx2 {
             // SAFETY: as `wide!`'s.
             bytemuck::cast(unsafe { _mm256_set_m128(_mm256_cvtpd_ps(halves[1]), _mm256_cvtpd_ps(halves[0])) })
         }
+
+        /// Volatile loads: written as a plain load, a select and a store back to the same
+        /// place, LLVM's x86 back end folds the three into a masked store (`vmaskmovps`),
+        /// which on AMD's Zen cores takes about four times as long as the load, blend and
+        /// store it replaces; it does not fold a volatile load.
+        #[inline(always)]
+        fn load_to_blend(slots: &[u32; LANES]) -> [u32; LANES] {
+            bytemuck::cast(read_unaligned_volatile::<__m256i, _>(slots))
+        }
+
+        #[inline(always)]
+        fn load_halves_to_blend(low: &[u32; LANES / 2], high: &[u32; LANES / 2]) -> [u32; LANES] {
+            let halves = [low, high].map(read_unaligned_volatile::<__m128i, _>);
+            bytemuck::cast(halves)
+        }
+    }
+
+    /// A vector type at byte alignment, for [`read_unaligned_volatile`].
+    #[repr(C, packed)]
+    #[derive(Clone, Copy)]
+    struct Unaligned<V: Copy>(V);
+
+    /// The bytes of `from` as a `V` of the same size, by one volatile load (`vmovdqu`).
+    #[inline(always)]
+    fn read_unaligned_volatile<V: Copy, T>(from: &T) -> V {
+        const { assert!(size_of::<V>() == size_of::<T>()) };
+        // SAFETY: `from` is valid for reads of `size_of::<T>()` bytes, as many as `V` has, and
+        // `Unaligned<V>` needs no alignment; every bit pattern is a valid vector.
+        let Unaligned(value) =
+            unsafe { std::ptr::read_volatile(std::ptr::from_ref(from).cast::<Unaligned<V>>()) };
+        value
     }
 }
 
@@ -421,6 +469,15 @@ impl<B: Backend> Floats<B> {
     #[inline(always)]
     pub const fn new(lanes: [f32; LANES]) -> Self {
         Floats(lanes, PhantomData)
+    }
+
+    /// The lanes of `slots`, to be blended with new values and stored back whole, as a depth
+    /// test does: `*slots = nearer.select(new, Floats::load_to_blend(slots)).0`. A plain read
+    /// gives the same lanes, but on the `Avx` backend LLVM folds that read, select and store
+    /// into a masked store, slow on AMD processors (see its `load_to_blend`).
+    #[inline(always)]
+    pub fn load_to_blend(slots: &[f32; LANES]) -> Self {
+        Floats::new(bytemuck::cast(B::load_to_blend(bytemuck::cast_ref(slots))))
     }
 
     #[inline(always)]
@@ -509,6 +566,12 @@ impl<B: Backend> Ints<B> {
     #[inline(always)]
     pub const fn new(lanes: [i32; LANES]) -> Self {
         Ints(lanes, PhantomData)
+    }
+
+    /// The lanes of `slots` (as `i32`), read as [`Floats::load_to_blend`] reads.
+    #[inline(always)]
+    pub fn load_to_blend(slots: &[u32; LANES]) -> Self {
+        Ints::new(bytemuck::cast(B::load_to_blend(slots)))
     }
 
     #[inline(always)]
@@ -700,6 +763,25 @@ pub fn mark_shown(ids: &[u32; LANES], none: u32, shown: &mut [bool; LANES]) -> u
 #[inline(always)]
 pub fn fill_vec3s(out: &mut [Vec3; LANES], value: Vec3) {
     native::fill_vec3s(out, value)
+}
+
+/// The `LANES / COLUMNS` rows of `COLUMNS` values of `buffer` from `first` on, `stride` apart,
+/// as one group of lanes (row after row; `COLUMNS` is `LANES` or `LANES / 2`), read as
+/// [`Floats::load_to_blend`] reads.
+#[inline(always)]
+pub fn load_rows_to_blend<B: Backend, const COLUMNS: usize>(
+    buffer: &[u32],
+    first: usize,
+    stride: usize,
+) -> [u32; LANES] {
+    const { assert!(COLUMNS == LANES || COLUMNS == LANES / 2) };
+    let row = |index: usize| &buffer[first + index * stride..][..COLUMNS];
+    if COLUMNS == LANES {
+        B::load_to_blend(row(0).try_into().expect("a row of a group"))
+    } else {
+        let half = |index| row(index).try_into().expect("a row of half a group");
+        B::load_halves_to_blend(half(0), half(1))
+    }
 }
 
 /// Asks the processor to bring `items[index]` into the cache, where the backend can (a
@@ -1972,6 +2054,13 @@ mod tests {
                     );
                     results.extend([u + v, v + u, u].map(|w| w.to_floats().0.map(f32::to_bits)));
                     results.extend([u.gt(v), v.gt(u), u.gt(u)].map(|m| m.0));
+                    // Loads to blend: a group, a group as integers, two rows of half a group.
+                    let bits = x.0.map(f32::to_bits);
+                    let rows: Vec<u32> = bits.iter().chain(&y.0.map(f32::to_bits)).copied().collect();
+                    results.push(Floats::<B>::load_to_blend(&x.0).0.map(f32::to_bits));
+                    results.push(Ints::<B>::load_to_blend(&bits).0.map(|lane| lane as u32));
+                    results.push(load_rows_to_blend::<B, LANES>(&rows, 3, 0));
+                    results.push(load_rows_to_blend::<B, { LANES / 2 }>(&rows, 1, 9));
                 }
                 let normal = a.normalize_or_zero();
                 let d = normal.dot(b).max(Floats::splat(0.0)) / b.length();

@@ -34,7 +34,9 @@
 
 use crate::render::TILE_SIZE;
 use crate::render::bin::{RasterChunk, raster_id};
-use crate::render::lanes::{Backend, Floats, Ints, LANES, LaneWork, Mask, Wides, run_widest};
+use crate::render::lanes::{
+    Backend, Floats, Ints, LANES, LaneWork, Mask, Wides, load_rows_to_blend, run_widest,
+};
 use glam::Vec3;
 
 /// Fractional bits of the fixed-point screen coordinates.
@@ -1181,11 +1183,11 @@ fn rasterize_sample_lanes<const S: usize, E: EdgeLanes>(
                         .expect("a group of lanes");
                     let group_ids: &mut [u32; LANES] =
                         (&mut block_ids[slots]).try_into().expect("a group of lanes");
-                    let old = Floats::new(*group_depths);
+                    let old = Floats::load_to_blend(group_depths);
                     let nearer = inside.and(depth.gt(old));
                     if nearer.any() {
                         *group_depths = nearer.select(depth, old).0;
-                        let old_ids = Ints::new(bytemuck::cast(*group_ids));
+                        let old_ids = Ints::load_to_blend(group_ids);
                         *group_ids = bytemuck::cast(nearer.select_ints(id_lanes, old_ids).0);
                     }
                 }
@@ -1812,11 +1814,11 @@ impl<E: EdgeLanes> RowLanes<E> {
         }
         let [d0, d1, d2] = self.corner_depths;
         let depth = (e0.to_floats() * d0 + e1.to_floats() * d1 + e2.to_floats() * d2) * self.inv_area;
-        let old = Floats::new(*depths);
+        let old = Floats::load_to_blend(depths);
         let nearer = inside.and(depth.gt(old));
         *depths = nearer.select(depth, old).0;
         if let Some(ids) = ids {
-            *ids = bytemuck::cast(nearer.select_ints(id, Ints::new(bytemuck::cast(*ids))).0);
+            *ids = bytemuck::cast(nearer.select_ints(id, Ints::load_to_blend(ids)).0);
         }
     }
 }
@@ -1934,12 +1936,19 @@ impl<B: Backend, const COLUMNS: usize, const ACROSS: usize> BlockLanes<B, COLUMN
                     let values =
                         (f0.to_floats() * d0 + f1.to_floats() * d1 + f2.to_floats() * d2) * self.inv_area;
                     let at = first + block * COLUMNS;
-                    let old = Floats::new(load_block::<f32, COLUMNS>(depth, at, rows.stride));
+                    let old = Floats::new(bytemuck::cast(load_rows_to_blend::<B, COLUMNS>(
+                        bytemuck::cast_slice(depth),
+                        at,
+                        rows.stride,
+                    )));
                     let nearer = inside.and(values.gt(old));
                     store_block::<f32, COLUMNS>(depth, at, rows.stride, nearer.select(values, old).0);
                     if IDS {
-                        let old_ids =
-                            Ints::new(bytemuck::cast(load_block::<u32, COLUMNS>(ids, at, rows.stride)));
+                        let old_ids = Ints::new(bytemuck::cast(load_rows_to_blend::<B, COLUMNS>(
+                            ids,
+                            at,
+                            rows.stride,
+                        )));
                         let new_ids = bytemuck::cast(nearer.select_ints(id, old_ids).0);
                         store_block::<u32, COLUMNS>(ids, at, rows.stride, new_ids);
                     }
@@ -1969,22 +1978,7 @@ fn block_edge_lanes<B: Backend>(
     Ints::splat(first) + column.wrapping_mul(Ints::splat(step_x)) + row.wrapping_mul(Ints::splat(step_y))
 }
 
-/// The `LANES / COLUMNS` rows of `COLUMNS` values of `buffer` from `first` on, `stride` apart,
-/// as one group of lanes (row after row).
-#[inline(always)]
-fn load_block<T: Copy + Default, const COLUMNS: usize>(
-    buffer: &[T],
-    first: usize,
-    stride: usize,
-) -> [T; LANES] {
-    let mut lanes = [T::default(); LANES];
-    for (row, part) in lanes.chunks_exact_mut(COLUMNS).enumerate() {
-        part.copy_from_slice(&buffer[first + row * stride..][..COLUMNS]);
-    }
-    lanes
-}
-
-/// [`load_block`]'s inverse: `lanes` back into the rows of `buffer`.
+/// [`load_rows_to_blend`]'s inverse: `lanes` back into the rows of `buffer`.
 #[inline(always)]
 fn store_block<T: Copy, const COLUMNS: usize>(
     buffer: &mut [T],
