@@ -248,7 +248,7 @@ impl PhongPlane<'_> {
 struct GouraudPlane {
     edges: TileEdges,
     colors: GouraudColors,
-    /// The lanes' steps along a row (for [`GouraudPlane::write_group_colors`]), formed once per
+    /// The lanes' steps along a row (for [`GouraudPlane::group_colors`]), formed once per
     /// triangle and tile: where the triangle is a group of lanes wide in the tile and its edge
     /// values over the tile are held exactly in `f64` lanes.
     lane_steps: Option<LaneSteps>,
@@ -276,18 +276,17 @@ impl GouraudPlane {
     }
 
     /// [`GouraudPlane::color_at`] of the [`LANES`] pixels of row `row` from column `column`
-    /// on (within the tile's row), lane-wise and bit for bit, written into `colors`; false
-    /// (and nothing written) where the edge values are not held exactly in `f64` lanes (a
-    /// triangle reaching far off the tile).
+    /// on (within the tile's row), lane-wise and bit for bit; `None` where the edge values are
+    /// not held exactly in `f64` lanes (a triangle reaching far off the tile, or one narrower
+    /// than a group, which has no lane steps). Lanes outside the triangle get the colours its
+    /// planes extend to there.
     #[inline(always)]
-    fn write_group_colors<B: Backend>(&self, column: i64, row: i64, colors: &mut [Vec3; LANES]) -> bool {
-        let Some(lane_steps) = self.lane_steps.as_ref() else {
-            return false;
-        };
-        self.colors
-            .at_lanes(lane_steps.edges::<B>(self.edges.at(column, row)))
-            .write_to(colors);
-        true
+    fn group_colors<B: Backend>(&self, column: i64, row: i64) -> Option<Vec3s<B>> {
+        let lane_steps = self.lane_steps.as_ref()?;
+        Some(
+            self.colors
+                .at_lanes(lane_steps.edges::<B>(self.edges.at(column, row))),
+        )
     }
 }
 
@@ -1260,7 +1259,8 @@ impl LaneWork for LastPassRows<'_> {
                 let first_column = group * LANES;
                 if let Ok(group_ids) = <&[u32; LANES]>::try_from(ids)
                     && let Ok(group) = <&mut [Vec3; LANES]>::try_from(&mut *colors)
-                    && pass.write_whole_group::<B>(group_ids, first_column, row, group)
+                    && (pass.write_whole_group::<B>(group_ids, first_column, row, group)
+                        || pass.write_two_triangle_group::<B>(group_ids, first_column, row, group))
                 {
                     continue;
                 }
@@ -1313,13 +1313,60 @@ impl LastPass<'_> {
                 fill_vec3s(colors, self.fills[self.entry(id)]);
                 true
             }
-            PixelSource::Gouraud(plane) => self.gouraud[usize::from(plane)].write_group_colors::<B>(
-                first_column as i64,
-                row as i64,
-                colors,
-            ),
+            PixelSource::Gouraud(plane) => {
+                let plane = &self.gouraud[usize::from(plane)];
+                let Some(group) = plane.group_colors::<B>(first_column as i64, row as i64) else {
+                    return false;
+                };
+                group.write_to(colors);
+                true
+            }
             PixelSource::Phong(_) => false,
             PixelSource::Shaded => true,
+        }
+    }
+
+    /// Writes the colours of a group of [`LANES`] pixels of row `row` from column
+    /// `first_column` on that show two triangles, its first lane's and its last lane's (along
+    /// an edge of a large triangle: with another, or with the background), where both sources
+    /// give their colours in lanes: each formed for the whole group, then blended by the lanes
+    /// that show the first. False (nothing written) for any other group. A group of three or
+    /// more triangles (most of a scan's) stays one pixel at a time: forming lane steps for
+    /// every narrow triangle cost more than their lanes saved.
+    #[inline(always)]
+    fn write_two_triangle_group<B: Backend>(
+        &self,
+        ids: &[u32; LANES],
+        first_column: usize,
+        row: usize,
+        colors: &mut [Vec3; LANES],
+    ) -> bool {
+        let (first, last) = (ids[0], ids[LANES - 1]);
+        if samples_showing(ids, first) | samples_showing(ids, last) != ALL_LANES {
+            return false;
+        }
+        let (Some(first_colors), Some(last_colors)) = (
+            self.source_lanes::<B>(first, first_column, row),
+            self.source_lanes::<B>(last, first_column, row),
+        ) else {
+            return false;
+        };
+        let shows_first = Ints::<B>::new(bytemuck::cast(*ids)).eq(Ints::splat(first as i32));
+        shows_first.select3(first_colors, last_colors).write_to(colors);
+        true
+    }
+
+    /// The colours the source of the tile's triangle `id` gives the group of row `row` from
+    /// column `first_column` on, in lanes: a fill's, or a Gouraud plane's where it has lane
+    /// steps; `None` for any other source.
+    #[inline(always)]
+    fn source_lanes<B: Backend>(&self, id: u32, first_column: usize, row: usize) -> Option<Vec3s<B>> {
+        match self.sources[self.entry(id)] {
+            PixelSource::Fill => Some(Vec3s::splat(self.fills[self.entry(id)])),
+            PixelSource::Gouraud(plane) => {
+                self.gouraud[usize::from(plane)].group_colors::<B>(first_column as i64, row as i64)
+            }
+            PixelSource::Phong(_) | PixelSource::Shaded => None,
         }
     }
 
@@ -2400,24 +2447,23 @@ mod tests {
                                     lane_steps: LaneSteps::over(raster, rect),
                                     ..GouraudPlane::new(raster, rect, colors)
                                 };
-                                let mut group = [Vec3::NAN; LANES];
-                                assert!(
-                                    plane.write_group_colors::<Native>(column - lane as i64, row, &mut group),
-                                    "the test's triangles are near their tiles"
-                                );
+                                let group = plane
+                                    .group_colors::<Native>(column - lane as i64, row)
+                                    .expect("the test's triangles are near their tiles")
+                                    .to_array();
                                 let bits = |v: Vec3| v.to_array().map(f32::to_bits);
                                 assert_eq!(bits(group[lane]), bits(color), "Gouraud lanes at {px}, {py}");
                                 // The same group on the widest lanes.
-                                struct Widest<'p>(&'p GouraudPlane, i64, i64, &'p mut [Vec3; LANES]);
+                                struct Widest<'p>(&'p GouraudPlane, i64, i64);
                                 impl LaneWork for Widest<'_> {
-                                    type Output = bool;
+                                    type Output = Option<[Vec3; LANES]>;
                                     #[inline(always)]
-                                    fn run<B: Backend>(self) -> bool {
-                                        self.0.write_group_colors::<B>(self.1, self.2, self.3)
+                                    fn run<B: Backend>(self) -> Self::Output {
+                                        Some(self.0.group_colors::<B>(self.1, self.2)?.to_array())
                                     }
                                 }
-                                let mut widest = [Vec3::NAN; LANES];
-                                assert!(run_widest(Widest(&plane, column - lane as i64, row, &mut widest)));
+                                let widest = run_widest(Widest(&plane, column - lane as i64, row))
+                                    .expect("the test's triangles are near their tiles");
                                 assert_eq!(
                                     widest.map(bits),
                                     group.map(bits),
@@ -2545,6 +2591,166 @@ mod tests {
             gouraud_in_lanes > 10_000,
             "{gouraud_in_lanes} Gouraud pixels in lanes"
         );
+    }
+
+    /// A group of the last pass that shows two triangles, its first lane's and its last
+    /// lane's, is written in lanes (`LastPass::write_two_triangle_group`) with the bits its
+    /// pixels get one by one (`LastPass::write_pixel`): two Gouraud planes along their shared
+    /// edge, a plane beside the background, on the native and the widest lanes. Groups of three
+    /// triangles, with a shaded pixel, or with a triangle narrower than a group are left to the
+    /// pixels.
+    #[test]
+    fn two_triangle_groups_equal_their_pixels_bit_for_bit() {
+        use crate::render::raster::{ScreenVertex, SourceTriangle, setup_triangle};
+        let rect = PixelRect {
+            x0: 64,
+            y0: 64,
+            x1: 128,
+            y1: 128,
+        };
+        let mut weights_table = Vec::new();
+        let mut triangle = |corners: [(f32, f32, f32); 3]| {
+            let vertex = |(x, y, inv_w): (f32, f32, f32)| ScreenVertex {
+                x,
+                y,
+                depth: 0.5,
+                inv_w,
+                weights: Vec3::ZERO,
+            };
+            let source = SourceTriangle {
+                index: 0,
+                triangle: FrameTriangle::default(),
+                back_facing: false,
+            };
+            setup_triangle(
+                corners.map(vertex),
+                256,
+                256,
+                SamplePattern::SINGLE,
+                source,
+                &mut weights_table,
+            )
+            .expect("a triangle on the image")
+        };
+        // Two large triangles sharing the diagonal edge from (30, 20) to (170, 150); a sliver,
+        // narrower than a group in the tile.
+        let triangles = [
+            triangle([(30.0, 20.0, 0.5), (170.0, 150.0, 0.25), (20.0, 170.0, 0.9)]),
+            triangle([(30.0, 20.0, 0.5), (190.0, 30.0, 0.7), (170.0, 150.0, 0.25)]),
+            triangle([(100.3, 60.0, 0.5), (103.9, 60.0, 0.6), (101.0, 140.0, 0.3)]),
+        ];
+        let corner_colors = [
+            [
+                Vec3::new(0.9, 0.1, 0.3),
+                Vec3::new(0.2, 0.8, 0.4),
+                Vec3::new(0.1, 0.3, 0.95),
+            ],
+            [
+                Vec3::new(0.5, 0.5, 0.1),
+                Vec3::new(0.05, 0.6, 0.7),
+                Vec3::new(0.8, 0.2, 0.6),
+            ],
+            [
+                Vec3::new(0.3, 0.3, 0.3),
+                Vec3::new(0.7, 0.1, 0.2),
+                Vec3::new(0.2, 0.9, 0.5),
+            ],
+        ];
+        let gouraud: Vec<GouraudPlane> = triangles
+            .iter()
+            .zip(corner_colors)
+            .map(|(raster, colors)| {
+                let corners = raster.corner_weights.resolve(&weights_table);
+                GouraudPlane::new(raster, rect, GouraudColors::new(raster, &corners, colors))
+            })
+            .collect();
+        assert!(gouraud[2].lane_steps.is_none(), "the sliver has no lane steps");
+        // Tile triangles 0–2 the planes, 3 a fill, 4 a shaded pixel; the background last.
+        let sources = [
+            PixelSource::Gouraud(0),
+            PixelSource::Gouraud(1),
+            PixelSource::Gouraud(2),
+            PixelSource::Fill,
+            PixelSource::Shaded,
+            PixelSource::Fill,
+        ];
+        let fills = [
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::new(0.25, 0.5, 0.75),
+            Vec3::ZERO,
+            Vec3::ONE,
+        ];
+        let pass = LastPass {
+            sources: &sources,
+            fills: &fills,
+            gouraud: &gouraud,
+            stride: 64,
+        };
+        struct Group<'p>(&'p LastPass<'p>, [u32; LANES], usize, usize);
+        impl LaneWork for Group<'_> {
+            type Output = Option<[Vec3; LANES]>;
+            #[inline(always)]
+            fn run<B: Backend>(self) -> Self::Output {
+                let Group(pass, ids, column, row) = self;
+                let mut colors = [Vec3::NAN; LANES];
+                pass.write_two_triangle_group::<B>(&ids, column, row, &mut colors)
+                    .then_some(colors)
+            }
+        }
+        let bits = |colors: [Vec3; LANES]| colors.map(|c| c.to_array().map(f32::to_bits));
+        let none = NO_TRIANGLE;
+        let mut in_lanes = 0;
+        for row in 0..64 {
+            for column in (0..64).step_by(LANES) {
+                // What the rasterizer left there of the two large triangles, then variations.
+                let shown: [u32; LANES] = std::array::from_fn(|lane| {
+                    let at = (
+                        pixel_centre(rect.x0 + (column + lane) as u32),
+                        pixel_centre(rect.y0 + row as u32),
+                    );
+                    let inside = |t: &RasterTriangle| edge_values(t, at.0, at.1).iter().all(|&e| e >= 0);
+                    if inside(&triangles[0]) {
+                        0
+                    } else if inside(&triangles[1]) {
+                        1
+                    } else {
+                        none
+                    }
+                });
+                let split = |first: u32, second: u32, at: usize| {
+                    std::array::from_fn(|lane| if lane < at { first } else { second })
+                };
+                let groups = [
+                    (
+                        shown,
+                        samples_showing(&shown, shown[0]) | samples_showing(&shown, shown[LANES - 1])
+                            == ALL_LANES,
+                    ),
+                    (split(0, none, 3), true),
+                    (split(3, 1, 5), true),
+                    (split(0, 4, 4), false),
+                    (split(2, 0, 2), false),
+                    ([0, 0, 1, 1, 3, 3, 3, 3], false),
+                ];
+                for (ids, expected_in_lanes) in groups {
+                    let mut expected = [Vec3::NAN; LANES];
+                    for (lane, color) in expected.iter_mut().enumerate() {
+                        pass.write_pixel(ids[lane], column + lane, row, color);
+                    }
+                    let native = Group(&pass, ids, column, row).run::<Native>();
+                    let widest = run_widest(Group(&pass, ids, column, row));
+                    assert_eq!(native.is_some(), expected_in_lanes, "{ids:?} at {column}, {row}");
+                    assert_eq!(native.map(bits), widest.map(bits), "{ids:?} at {column}, {row}");
+                    if let Some(colors) = native {
+                        assert_eq!(bits(colors), bits(expected), "{ids:?} at {column}, {row}");
+                        in_lanes += 1;
+                    }
+                }
+            }
+        }
+        assert!(in_lanes > 1000, "{in_lanes} groups in lanes");
     }
 
     /// Whole tiles as `shade_tile` writes them, against the general path pixel by pixel: every
