@@ -1313,9 +1313,8 @@ impl LastPass<'_> {
                 fill_vec3s(colors, self.fills[self.entry(id)]);
                 true
             }
-            PixelSource::Gouraud(plane) => {
-                let plane = &self.gouraud[usize::from(plane)];
-                let Some(group) = plane.group_colors::<B>(first_column as i64, row as i64) else {
+            PixelSource::Gouraud(_) => {
+                let Some(group) = self.source_lanes::<B>(id, first_column, row) else {
                     return false;
                 };
                 group.write_to(colors);
