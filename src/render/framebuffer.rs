@@ -9,6 +9,14 @@
 //! ([`FrameBuffer::row_spans`]): a blank span is one value for many pixels (the 8-bit
 //! quantiser writes the background's three bytes for the whole span).
 //!
+//! The pixels are stored tile by tile: band after band (a band is a row of tiles), and within
+//! a band each tile's pixels as one block, row-major with the tile's width as its stride. A
+//! tile's rows are then adjacent in memory and the renderer writes each tile as one run. Into an
+//! image-wide row-major array, a tile's 64-pixel row is 768 bytes followed by a jump of a whole
+//! image row, and those stores cost about a fifth of a flat frame of a model that fills the image
+//! (docs/performance.md: cow-close flat 0.82× its time with tile blocks). Readers never see
+//! the layout: every read goes through the methods below, by pixel or by row.
+//!
 //! Invariant: a tile is either **blank** — every pixel of it is the background, uncovered, and
 //! the stored colour and coverage there are whatever an earlier frame left, never read — or
 //! **drawn**, and then every one of its stored pixels was written by this frame. Every read goes
@@ -22,18 +30,18 @@ use glam::Vec3;
 
 use crate::render::TILE_SIZE;
 
-/// The rendered image in linear RGB, not clamped, row-major from the top-left pixel, and which
-/// pixels geometry covers (used by error metrics and the depth view). See the module
-/// documentation for the blank tiles and the invariant that keeps them.
+/// The rendered image in linear RGB, not clamped, and which pixels geometry covers (used by
+/// error metrics and the depth view), read row-major from the top-left pixel. See the module
+/// documentation for the storage by tiles, the blank tiles and the invariant that keeps them.
 #[derive(Clone, Default)]
 pub struct FrameBuffer {
     width: u32,
     height: u32,
     /// What a blank tile's pixels read as.
     background: Vec3,
-    /// Per pixel; meaningful in drawn tiles only.
+    /// Per pixel, by tiles ([`FrameBuffer::index`]); meaningful in drawn tiles only.
     color: Vec<Vec3>,
-    /// Per pixel; meaningful in drawn tiles only.
+    /// Per pixel, by tiles; meaningful in drawn tiles only.
     covered: Vec<bool>,
     /// Per tile of the `TILE_SIZE` grid (row-major, `width.div_ceil(TILE_SIZE)` a row): whether
     /// it is blank.
@@ -45,7 +53,7 @@ pub struct FrameBuffer {
 pub enum RowSpan<'a> {
     /// This many pixels of blank tiles: the background, uncovered.
     Blank(usize),
-    /// Pixels of drawn tiles, as stored.
+    /// The row's pixels in one drawn tile, as stored.
     Drawn { color: &'a [Vec3], covered: &'a [bool] },
 }
 
@@ -69,12 +77,42 @@ impl<'a> RowSpan<'a> {
     }
 }
 
-/// One band of tile rows of a frame under way, for one worker to render: its pixel rows and its
-/// tiles' blank flags (one per column).
+/// One band of tile rows of a frame under way, for one worker to render: its pixels (tile by
+/// tile, see the module documentation) and its tiles' blank flags (one per column).
 pub(crate) struct Band<'a> {
+    color: &'a mut [Vec3],
+    covered: &'a mut [bool],
+    pub blank: &'a mut [bool],
+    /// The image's width in pixels.
+    width: usize,
+}
+
+impl Band<'_> {
+    /// Where the pixels of the band's tile in column `column` go.
+    pub(crate) fn tile(&mut self, column: usize) -> TileTarget<'_> {
+        let rows = self.color.len() / self.width;
+        let (start, tile_width) = tile_block(self.width, rows, column);
+        let x0 = column * TILE_SIZE as usize;
+        // A target's pixel is at `row · stride + x` with `x` the image column, so its slices
+        // begin `x0` pixels before the tile's block: that lies in the band, as `start` is
+        // `x0 · rows`, and the pixels a tile writes (`x ≥ x0`) are its own block's.
+        let pixels = start - x0..start + tile_width * rows;
+        TileTarget {
+            color: &mut self.color[pixels.clone()],
+            covered: &mut self.covered[pixels],
+            stride: tile_width,
+        }
+    }
+}
+
+/// Where a tile's pixels go: pixel `(x, row)` of the tile, `x` the image column and `row`
+/// counted from the tile's first row, is element `row · stride + x` of both slices. A frame
+/// buffer's tile target ([`Band::tile`]) holds the tile's own block, `stride` its width; the
+/// tests and the pixel inspector shade a tile into rows as wide as the image.
+pub struct TileTarget<'a> {
     pub color: &'a mut [Vec3],
     pub covered: &'a mut [bool],
-    pub blank: &'a mut [bool],
+    pub stride: usize,
 }
 
 impl FrameBuffer {
@@ -93,8 +131,8 @@ impl FrameBuffer {
             width,
             height,
             background: Vec3::ZERO,
-            color,
-            covered,
+            color: by_tiles(width, height, &color),
+            covered: by_tiles(width, height, &covered),
             blank: vec![false; tile_count(width, height)],
         }
     }
@@ -133,33 +171,35 @@ impl FrameBuffer {
         self.blank.iter().filter(|&&blank| blank).count()
     }
 
-    /// Row `y` as runs of blank and drawn pixels, left to right, covering the row once; runs of
-    /// one kind are merged, so a row of blank tiles is one span. Panics below the image.
+    /// Row `y` as runs of blank and drawn pixels, left to right, covering the row once: a run of
+    /// blank tiles is one span (a row of blank tiles one for the whole row), a drawn tile's
+    /// part of the row is a span of its own. Panics below the image.
     pub fn row_spans(&self, y: u32) -> impl Iterator<Item = RowSpan<'_>> + '_ {
         assert!(y < self.height, "row {y} of a frame {} rows high", self.height);
         let width = self.width as usize;
         let columns = tile_columns(self.width);
         let tile_row = (y / TILE_SIZE) as usize;
         let flags = &self.blank[tile_row * columns..(tile_row + 1) * columns];
-        let row_start = y as usize * width;
+        let band_start = tile_row * TILE_SIZE as usize * width;
+        let band_rows = self.band_rows(tile_row);
+        let local_y = (y % TILE_SIZE) as usize;
         let tile = TILE_SIZE as usize;
         let mut column = 0;
         iter::from_fn(move || {
             let &blank = flags.get(column)?;
-            let run = flags[column..]
-                .iter()
-                .take_while(|&&other| other == blank)
-                .count();
-            let (x0, x1) = (column * tile, ((column + run) * tile).min(width));
-            column += run;
-            Some(if blank {
-                RowSpan::Blank(x1 - x0)
-            } else {
-                let pixels = row_start + x0..row_start + x1;
-                RowSpan::Drawn {
-                    color: &self.color[pixels.clone()],
-                    covered: &self.covered[pixels],
-                }
+            if blank {
+                let run = flags[column..].iter().take_while(|&&other| other).count();
+                let (x0, x1) = (column * tile, ((column + run) * tile).min(width));
+                column += run;
+                return Some(RowSpan::Blank(x1 - x0));
+            }
+            let (start, tile_width) = tile_block(width, band_rows, column);
+            column += 1;
+            let first = band_start + start + local_y * tile_width;
+            let pixels = first..first + tile_width;
+            Some(RowSpan::Drawn {
+                color: &self.color[pixels.clone()],
+                covered: &self.covered[pixels],
             })
         })
     }
@@ -207,18 +247,20 @@ impl FrameBuffer {
     }
 
     /// The frame's bands of one tile row each, top to bottom. A worker that draws a tile writes
-    /// all its pixels and clears its blank flag.
+    /// all its pixels ([`Band::tile`]) and clears its blank flag.
     pub(crate) fn bands_mut(&mut self) -> impl Iterator<Item = Band<'_>> {
-        let band_pixels = TILE_SIZE as usize * (self.width as usize).max(1);
+        let width = (self.width as usize).max(1);
+        let band_pixels = TILE_SIZE as usize * width;
         let columns = tile_columns(self.width).max(1);
         self.color
             .chunks_mut(band_pixels)
             .zip(self.covered.chunks_mut(band_pixels))
             .zip(self.blank.chunks_mut(columns))
-            .map(|((color, covered), blank)| Band {
+            .map(move |((color, covered), blank)| Band {
                 color,
                 covered,
                 blank,
+                width,
             })
     }
 
@@ -227,7 +269,7 @@ impl FrameBuffer {
     /// Covered pixels lie in drawn tiles only.
     pub(crate) fn normalize_depth(&mut self) {
         let (mut nearest, mut farthest) = (f32::INFINITY, f32::NEG_INFINITY);
-        for pixels in drawn_rows(self.width, self.height, &self.blank) {
+        for pixels in self.drawn_blocks() {
             for (color, &covered) in self.color[pixels.clone()].iter().zip(&self.covered[pixels]) {
                 if covered {
                     (nearest, farthest) = (nearest.min(color.x), farthest.max(color.x));
@@ -235,7 +277,8 @@ impl FrameBuffer {
             }
         }
         let range = farthest - nearest;
-        for pixels in drawn_rows(self.width, self.height, &self.blank) {
+        let drawn: Vec<_> = self.drawn_blocks().collect();
+        for pixels in drawn {
             for (color, &covered) in self.color[pixels.clone()].iter_mut().zip(&self.covered[pixels]) {
                 if covered {
                     let shade = if range > 0.0 {
@@ -249,6 +292,7 @@ impl FrameBuffer {
         }
     }
 
+    /// Where pixel (`x`, `y`) is stored: in its band, in its tile's block, in its row there.
     fn index(&self, x: u32, y: u32) -> usize {
         assert!(
             x < self.width && y < self.height,
@@ -256,7 +300,32 @@ impl FrameBuffer {
             self.width,
             self.height
         );
-        y as usize * self.width as usize + x as usize
+        let (tile, width) = (TILE_SIZE as usize, self.width as usize);
+        let (column, tile_row) = ((x / TILE_SIZE) as usize, (y / TILE_SIZE) as usize);
+        let (start, tile_width) = tile_block(width, self.band_rows(tile_row), column);
+        tile_row * tile * width + start + (y as usize % tile) * tile_width + (x as usize % tile)
+    }
+
+    /// The pixel rows of tile row `tile_row` (the last one may be lower than a tile).
+    fn band_rows(&self, tile_row: usize) -> usize {
+        let first = tile_row * TILE_SIZE as usize;
+        (self.height as usize - first).min(TILE_SIZE as usize)
+    }
+
+    /// The index range of each drawn tile's pixels.
+    fn drawn_blocks(&self) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let (width, columns) = (self.width as usize, tile_columns(self.width));
+        self.blank
+            .iter()
+            .enumerate()
+            .filter(|&(_, &blank)| !blank)
+            .map(move |(tile, _)| {
+                let (tile_row, column) = (tile / columns, tile % columns);
+                let rows = self.band_rows(tile_row);
+                let (start, tile_width) = tile_block(width, rows, column);
+                let first = tile_row * TILE_SIZE as usize * width + start;
+                first..first + tile_width * rows
+            })
     }
 
     fn is_in_blank_tile(&self, x: u32, y: u32) -> bool {
@@ -287,23 +356,35 @@ impl fmt::Debug for FrameBuffer {
     }
 }
 
-/// The index ranges of the stored pixels of the drawn tiles of a `width × height` frame with
-/// the blank flags `blank`, a tile's row of pixels at a time.
-fn drawn_rows(width: u32, height: u32, blank: &[bool]) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
-    let columns = tile_columns(width);
-    let tile = TILE_SIZE as usize;
-    (0..height as usize).flat_map(move |y| {
-        let row_start = y * width as usize;
-        let flags = &blank[y / tile * columns..(y / tile + 1) * columns];
-        flags
-            .iter()
-            .enumerate()
-            .filter(|&(_, &blank)| !blank)
-            .map(move |(column, _)| {
-                let (x0, x1) = (column * tile, ((column + 1) * tile).min(width as usize));
-                row_start + x0..row_start + x1
-            })
-    })
+/// Where the block of the tile in column `column` of a band `rows` pixels high of a
+/// `width`-pixel image begins in the band, and the tile's width: the tiles before it are each
+/// `TILE_SIZE` wide.
+fn tile_block(width: usize, rows: usize, column: usize) -> (usize, usize) {
+    let x0 = column * TILE_SIZE as usize;
+    (x0 * rows, (width - x0).min(TILE_SIZE as usize))
+}
+
+/// The row-major pixels `row_major` of a `width × height` image, stored by tiles.
+fn by_tiles<T: Copy + Default>(width: u32, height: u32, row_major: &[T]) -> Vec<T> {
+    let (width, tile) = (width as usize, TILE_SIZE as usize);
+    let mut tiled = vec![T::default(); row_major.len()];
+    for (tile_row, (band, rows_of_band)) in tiled
+        .chunks_mut(tile * width.max(1))
+        .zip(row_major.chunks(tile * width.max(1)))
+        .enumerate()
+    {
+        let rows = band.len() / width;
+        debug_assert!(tile_row * tile + rows <= height as usize);
+        for column in 0..tile_columns(width as u32) {
+            let (start, tile_width) = tile_block(width, rows, column);
+            let x0 = column * tile;
+            for (local_y, row) in rows_of_band.chunks(width).enumerate() {
+                let first = start + local_y * tile_width;
+                band[first..first + tile_width].copy_from_slice(&row[x0..x0 + tile_width]);
+            }
+        }
+    }
+    tiled
 }
 
 fn tile_columns(width: u32) -> usize {
@@ -350,20 +431,22 @@ pub(crate) mod tests {
         drawn: impl Fn(usize, usize) -> bool,
         pixel: impl Fn(u32, u32) -> (Vec3, bool),
     ) {
-        let width = frame.width;
+        let width = frame.width as usize;
         let tile = TILE_SIZE as usize;
-        for (row, band) in frame.bands_mut().enumerate() {
-            for (column, blank) in band.blank.iter_mut().enumerate() {
+        for (row, mut band) in frame.bands_mut().enumerate() {
+            let rows = band.color.len() / width;
+            for column in 0..band.blank.len() {
                 if !drawn(column, row) {
                     continue;
                 }
-                *blank = false;
-                let x_range = column * tile..((column + 1) * tile).min(width as usize);
-                for local_y in 0..band.color.len() / width as usize {
+                band.blank[column] = false;
+                let target = band.tile(column);
+                let x_range = column * tile..((column + 1) * tile).min(width);
+                for local_y in 0..rows {
                     for x in x_range.clone() {
-                        let index = local_y * width as usize + x;
+                        let index = local_y * target.stride + x;
                         let (color, covered) = pixel(x as u32, (row * tile + local_y) as u32);
-                        (band.color[index], band.covered[index]) = (color, covered);
+                        (target.color[index], target.covered[index]) = (color, covered);
                     }
                 }
             }
@@ -420,6 +503,32 @@ pub(crate) mod tests {
             .map(|span| matches!(span, RowSpan::Blank(_)))
             .collect();
         assert_eq!(kinds, [true, false, true, false]);
+    }
+
+    #[test]
+    fn tile_targets_partition_the_frame_and_read_back_row_major() {
+        // 4 × 3 tiles, the last column 8 pixels wide and the last row 2 pixels high: every
+        // tile drawn, each pixel a colour of its own, written through the tiles' targets.
+        let (width, height) = (200, 130);
+        let mut frame = FrameBuffer::default();
+        frame.start_frame(width, height, Vec3::ZERO);
+        let tag = |x: u32, y: u32| Vec3::new(x as f32, y as f32, 0.0);
+        draw_tiles(&mut frame, |_, _| true, |x, y| (tag(x, y), x < y));
+        let row_major: Vec<Vec3> = (0..height)
+            .flat_map(|y| (0..width).map(move |x| tag(x, y)))
+            .collect();
+        assert_eq!(frame.to_colors(), row_major);
+        // Every stored pixel was written once: the targets neither overlap nor leave a gap.
+        let mut tags: Vec<[u32; 2]> = frame.color.iter().map(|c| [c.x as u32, c.y as u32]).collect();
+        tags.sort_unstable();
+        tags.dedup();
+        assert_eq!(tags.len(), (width * height) as usize);
+        let dense = FrameBuffer::from_pixels(width, height, row_major, frame.to_coverage());
+        assert_eq!(
+            dense.color, frame.color,
+            "from_pixels stores by tiles as the renderer does"
+        );
+        assert_eq!(dense.covered, frame.covered);
     }
 
     #[test]

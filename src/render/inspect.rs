@@ -27,8 +27,9 @@ use glam::{DVec3, Vec3};
 
 use crate::lighting::{LightContribution, LightingTerms};
 use crate::render::frame::{Frame, has_color_texture, select_component_split, tinted};
+use crate::render::framebuffer::TileTarget;
 use crate::render::raster::{SUBPIXEL_ONE, SamplePattern, rasterize_tile};
-use crate::render::shade::{self, PhongSurface, TexelRead, TileScratch, TileTarget, source_weights};
+use crate::render::shade::{self, PhongSurface, TexelRead, TileScratch, source_weights};
 use crate::render::{DebugView, RenderOptions, TILE_SIZE, geometry, shadow};
 use crate::scene::{LightingComponent, Material, Scene, Shading};
 

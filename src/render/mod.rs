@@ -244,13 +244,8 @@ fn render_frame(
             if simulate_panic {
                 panic!("simulated bug in band {tile_row} (LAMPSHADE_SIMULATE_PANIC)");
             }
-            let Some(band) = lock(&bands[tile_row]).take() else {
+            let Some(mut band) = lock(&bands[tile_row]).take() else {
                 continue; // the queue hands out each band once
-            };
-            let mut target = shade::TileTarget {
-                color: band.color,
-                covered: band.covered,
-                stride: tiles.width as usize,
             };
             let mut times = BandTimes::default();
             for column in 0..tiles.columns as usize {
@@ -274,7 +269,7 @@ fn render_frame(
                         &frame,
                         &visibility,
                         scene.image.background,
-                        &mut target,
+                        &mut band.tile(column),
                         &mut scratch,
                     );
                 }

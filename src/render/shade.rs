@@ -19,6 +19,7 @@ use glam::{Vec2, Vec3, Vec3A, Vec4};
 use crate::render::DebugView;
 use crate::render::TILE_SIZE;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, VertexAttributes, has_color_texture, tinted};
+use crate::render::framebuffer::TileTarget;
 use crate::render::lanes::{
     Backend, Floats, Ints, LANES, LaneWork, Mask, Native, Vec3s, Wides, fill_vec3s, mark_shown, prefetch,
     run_widest, samples_showing,
@@ -33,14 +34,6 @@ use crate::render::surface_lanes::{
     EdgeQueue, QueuedPixels, RasterPlane, SurfaceLanes, SurfacePoints, WeightLanes, texture_colors,
 };
 use crate::scene::{Material, NormalInterpolation, Shading, TextureBinding};
-
-/// Where a tile's pixels go: the band of the frame holding its rows (the band's first row is the
-/// tile's first row), `stride` pixels per row.
-pub struct TileTarget<'a> {
-    pub color: &'a mut [Vec3],
-    pub covered: &'a mut [bool],
-    pub stride: usize,
-}
 
 /// Colours lit per triangle while shading a tile, so that each is lit once however many pixels
 /// show it: a small direct-mapped table keyed by the triangle's id. The neighbours of a pixel

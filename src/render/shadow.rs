@@ -1049,8 +1049,9 @@ pub(crate) mod tests {
     /// are skipped, the others not, in every shading mode.
     #[test]
     fn maps_no_visible_point_reads_are_skipped_and_change_nothing() {
+        use crate::render::framebuffer::TileTarget;
         use crate::render::raster::{SamplePattern, rasterize_tile};
-        use crate::render::shade::{TileScratch, TileTarget, shade_tile};
+        use crate::render::shade::{TileScratch, shade_tile};
         use crate::render::shade_fast::tests::{LIGHTS, scene};
         use crate::scene::{Attenuation, BackFaces, LightingModel, Shading};
         let mut scene = scene(LightingModel::Phong, Vec3::ONE, BackFaces::Lit, LIGHTS[2]);
