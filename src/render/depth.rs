@@ -48,7 +48,8 @@ use crate::render::geometry::{
 };
 use crate::render::lanes::{Backend, LaneWork, run_widest};
 use crate::render::raster::{
-    PixelRect, RasterTriangle, SamplePattern, SourceTriangle, depth_bound, rasterize_depth_only,
+    PixelRect, RasterTriangle, SamplePattern, SourceTriangle, TRIANGLE_PREFETCH, depth_bound,
+    prefetch_triangle, rasterize_depth_only,
 };
 use crate::scene::{Camera, Scene};
 
@@ -269,7 +270,9 @@ impl LaneWork for DepthTile<'_> {
         } = self;
         let mut back_faces = false;
         for chunk in chunks {
-            for &index in chunk.tile_triangles(tile) {
+            let indices = chunk.tile_triangles(tile);
+            for (position, &index) in indices.iter().enumerate() {
+                prefetch_triangle(chunk, indices, position + TRIANGLE_PREFETCH);
                 let triangle = &chunk.triangles[index as usize];
                 if triangle.back_facing {
                     back_faces = true;
