@@ -131,8 +131,8 @@ impl FrameBuffer {
             width,
             height,
             background: Vec3::ZERO,
-            color: by_tiles(width, height, &color),
-            covered: by_tiles(width, height, &covered),
+            color: by_tiles(width, &color),
+            covered: by_tiles(width, &covered),
             blank: vec![false; tile_count(width, height)],
         }
     }
@@ -181,7 +181,7 @@ impl FrameBuffer {
         let tile_row = (y / TILE_SIZE) as usize;
         let flags = &self.blank[tile_row * columns..(tile_row + 1) * columns];
         let band_start = tile_row * TILE_SIZE as usize * width;
-        let band_rows = self.band_rows(tile_row);
+        let band_rows = band_rows(self.height, tile_row);
         let local_y = (y % TILE_SIZE) as usize;
         let tile = TILE_SIZE as usize;
         let mut column = 0;
@@ -269,7 +269,7 @@ impl FrameBuffer {
     /// Covered pixels lie in drawn tiles only.
     pub(crate) fn normalize_depth(&mut self) {
         let (mut nearest, mut farthest) = (f32::INFINITY, f32::NEG_INFINITY);
-        for pixels in self.drawn_blocks() {
+        for pixels in drawn_blocks(self.width, self.height, &self.blank) {
             for (color, &covered) in self.color[pixels.clone()].iter().zip(&self.covered[pixels]) {
                 if covered {
                     (nearest, farthest) = (nearest.min(color.x), farthest.max(color.x));
@@ -277,8 +277,7 @@ impl FrameBuffer {
             }
         }
         let range = farthest - nearest;
-        let drawn: Vec<_> = self.drawn_blocks().collect();
-        for pixels in drawn {
+        for pixels in drawn_blocks(self.width, self.height, &self.blank) {
             for (color, &covered) in self.color[pixels.clone()].iter_mut().zip(&self.covered[pixels]) {
                 if covered {
                     let shade = if range > 0.0 {
@@ -302,30 +301,8 @@ impl FrameBuffer {
         );
         let (tile, width) = (TILE_SIZE as usize, self.width as usize);
         let (column, tile_row) = ((x / TILE_SIZE) as usize, (y / TILE_SIZE) as usize);
-        let (start, tile_width) = tile_block(width, self.band_rows(tile_row), column);
+        let (start, tile_width) = tile_block(width, band_rows(self.height, tile_row), column);
         tile_row * tile * width + start + (y as usize % tile) * tile_width + (x as usize % tile)
-    }
-
-    /// The pixel rows of tile row `tile_row` (the last one may be lower than a tile).
-    fn band_rows(&self, tile_row: usize) -> usize {
-        let first = tile_row * TILE_SIZE as usize;
-        (self.height as usize - first).min(TILE_SIZE as usize)
-    }
-
-    /// The index range of each drawn tile's pixels.
-    fn drawn_blocks(&self) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
-        let (width, columns) = (self.width as usize, tile_columns(self.width));
-        self.blank
-            .iter()
-            .enumerate()
-            .filter(|&(_, &blank)| !blank)
-            .map(move |(tile, _)| {
-                let (tile_row, column) = (tile / columns, tile % columns);
-                let rows = self.band_rows(tile_row);
-                let (start, tile_width) = tile_block(width, rows, column);
-                let first = tile_row * TILE_SIZE as usize * width + start;
-                first..first + tile_width * rows
-            })
     }
 
     fn is_in_blank_tile(&self, x: u32, y: u32) -> bool {
@@ -356,6 +333,34 @@ impl fmt::Debug for FrameBuffer {
     }
 }
 
+/// The pixel rows of tile row `tile_row` of an image `height` pixels high (the last one may be
+/// lower than a tile).
+fn band_rows(height: u32, tile_row: usize) -> usize {
+    let first = tile_row * TILE_SIZE as usize;
+    (height as usize - first).min(TILE_SIZE as usize)
+}
+
+/// The index range of each drawn tile's pixels in a `width × height` frame with the blank flags
+/// `blank`: its whole block.
+fn drawn_blocks(
+    width: u32,
+    height: u32,
+    blank: &[bool],
+) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+    let columns = tile_columns(width);
+    blank
+        .iter()
+        .enumerate()
+        .filter(|&(_, &blank)| !blank)
+        .map(move |(tile, _)| {
+            let (tile_row, column) = (tile / columns, tile % columns);
+            let rows = band_rows(height, tile_row);
+            let (start, tile_width) = tile_block(width as usize, rows, column);
+            let first = tile_row * TILE_SIZE as usize * width as usize + start;
+            first..first + tile_width * rows
+        })
+}
+
 /// Where the block of the tile in column `column` of a band `rows` pixels high of a
 /// `width`-pixel image begins in the band, and the tile's width: the tiles before it are each
 /// `TILE_SIZE` wide.
@@ -364,17 +369,13 @@ fn tile_block(width: usize, rows: usize, column: usize) -> (usize, usize) {
     (x0 * rows, (width - x0).min(TILE_SIZE as usize))
 }
 
-/// The row-major pixels `row_major` of a `width × height` image, stored by tiles.
-fn by_tiles<T: Copy + Default>(width: u32, height: u32, row_major: &[T]) -> Vec<T> {
+/// The row-major pixels `row_major` of an image `width` pixels wide, stored by tiles.
+fn by_tiles<T: Copy + Default>(width: u32, row_major: &[T]) -> Vec<T> {
     let (width, tile) = (width as usize, TILE_SIZE as usize);
     let mut tiled = vec![T::default(); row_major.len()];
-    for (tile_row, (band, rows_of_band)) in tiled
-        .chunks_mut(tile * width.max(1))
-        .zip(row_major.chunks(tile * width.max(1)))
-        .enumerate()
-    {
+    let band_pixels = tile * width.max(1);
+    for (band, rows_of_band) in tiled.chunks_mut(band_pixels).zip(row_major.chunks(band_pixels)) {
         let rows = band.len() / width;
-        debug_assert!(tile_row * tile + rows <= height as usize);
         for column in 0..tile_columns(width as u32) {
             let (start, tile_width) = tile_block(width, rows, column);
             let x0 = column * tile;
