@@ -48,8 +48,8 @@ use crate::render::geometry::{
 };
 use crate::render::lanes::{Backend, LaneWork, run_widest};
 use crate::render::raster::{
-    PixelRect, RasterTriangle, SamplePattern, SourceTriangle, TRIANGLE_PREFETCH, depth_bound,
-    prefetch_triangle, rasterize_depth_only,
+    PixelRect, RasterTriangle, SamplePattern, SourceTriangle, depth_bound, prefetch_triangle_ahead,
+    rasterize_depth_only,
 };
 use crate::scene::{Camera, Scene};
 
@@ -272,7 +272,7 @@ impl LaneWork for DepthTile<'_> {
         for chunk in chunks {
             let indices = chunk.tile_triangles(tile);
             for (position, &index) in indices.iter().enumerate() {
-                prefetch_triangle(chunk, indices, position + TRIANGLE_PREFETCH);
+                prefetch_triangle_ahead(chunk, indices, position);
                 let triangle = &chunk.triangles[index as usize];
                 if triangle.back_facing {
                     back_faces = true;

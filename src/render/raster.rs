@@ -803,14 +803,15 @@ impl Visibility {
 }
 
 /// How many of a tile's triangles ahead of the one being rasterized are prefetched.
-pub(crate) const TRIANGLE_PREFETCH: usize = 4;
+const TRIANGLE_PREFETCH: usize = 4;
 
-/// Asks for the raster triangle `indices[position]` of `chunk`, if there is one, before the
-/// raster reads it: a tile's triangles were set up long before, so on a mesh of many triangles
-/// their records have left the cache, and each one's first read would stall the raster.
+/// Asks for the raster triangle [`TRIANGLE_PREFETCH`] places after `indices[position]` (the
+/// one being rasterized) in a tile's list of `chunk`, if there is one, before the raster reads
+/// it: a tile's triangles were set up long before, so on a mesh of many triangles their records
+/// have left the cache, and each one's first read would stall the raster.
 #[inline(always)]
-pub(crate) fn prefetch_triangle(chunk: &RasterChunk, indices: &[u32], position: usize) {
-    if let Some(&ahead) = indices.get(position) {
+pub(crate) fn prefetch_triangle_ahead(chunk: &RasterChunk, indices: &[u32], position: usize) {
+    if let Some(&ahead) = indices.get(position + TRIANGLE_PREFETCH) {
         prefetch_item(&chunk.triangles, ahead as usize);
     }
 }
@@ -836,7 +837,7 @@ impl LaneWork for TileTriangles<'_> {
         for (chunk_index, chunk) in chunks.iter().enumerate() {
             let indices = chunk.tile_triangles(tile);
             for (position, &index) in indices.iter().enumerate() {
-                prefetch_triangle(chunk, indices, position + TRIANGLE_PREFETCH);
+                prefetch_triangle_ahead(chunk, indices, position);
                 let triangle = &chunk.triangles[index as usize];
                 let local = visibility.raster_ids.len() as u32;
                 visibility.raster_ids.push(raster_id(chunk_index, index as usize));
