@@ -1099,8 +1099,11 @@ fn shade_single_sample<'f>(
                         let mut gathered = GatheredPixels::default();
                         pixels.for_each_group(|group| {
                             if group.shown.all() {
-                                let colors = rows.shade(|| group.edges());
-                                target.color[group.first..group.first + LANES].copy_from_slice(&colors);
+                                let colors: &mut [Vec3; LANES] = (&mut target.color
+                                    [group.first..group.first + LANES])
+                                    .try_into()
+                                    .expect("a group of lanes");
+                                rows.shade_into(|| group.edges(), colors);
                                 return;
                             }
                             // A group showing the triangle in some lanes only (its edges) would
@@ -2488,6 +2491,14 @@ mod tests {
                                         bits(rows.shade(|| group)[lane]),
                                         bits(color[0]),
                                         "rows at {px}, {py}"
+                                    );
+                                    // And written straight into a group of the frame.
+                                    let mut written = [Vec3::NAN; LANES];
+                                    rows.shade_into(|| group, &mut written);
+                                    assert_eq!(
+                                        written.map(bits),
+                                        rows.shade(|| group).map(bits),
+                                        "rows written at {px}, {py}"
                                     );
                                     in_rows += 1;
                                 }

@@ -249,8 +249,14 @@ impl<'f> FastLighting<'f> {
     /// already running there.
     #[inline(always)]
     fn light_lanes_on<B: Backend>(&self, position: Vec3s<B>, normal: Vec3s<B>) -> [Vec3; LANES] {
+        self.lit_lanes_on(position, normal).to_array()
+    }
+
+    /// [`FastLighting::light_lanes_on`], the colours left in lanes.
+    #[inline(always)]
+    fn lit_lanes_on<B: Backend>(&self, position: Vec3s<B>, normal: Vec3s<B>) -> Vec3s<B> {
         let lit = self.light_surface_lanes_on(position, normal, &SurfaceLanes::of(self.material));
-        (lit.textured + lit.rest).to_array()
+        lit.textured + lit.rest
     }
 
     /// The lighting of points whose `k_a` and `k_d` may vary from lane to lane (vertex colours,
@@ -1345,9 +1351,27 @@ impl<'f> PhongRows<'f> {
         run_widest(PhongRowsWork { rows: self, edges })
     }
 
+    /// [`PhongRows::shade`] written straight into `out`, a group of the frame's pixels: the
+    /// colours go from the lanes to the frame (`Vec3s::write_to`), not through an array whose
+    /// copy would load them whole from stores too recent to forward.
+    #[inline]
+    pub fn shade_into(&self, edges: impl Fn() -> [Floats; 3], out: &mut [Vec3; LANES]) {
+        run_widest(PhongRowsInto {
+            rows: self,
+            edges,
+            out,
+        })
+    }
+
     /// [`PhongRows::shade`] on backend `B`.
     #[inline(always)]
     fn shade_on<B: Backend>(&self, edges: [Floats<B>; 3]) -> [Vec3; LANES] {
+        self.lit_on(edges).to_array()
+    }
+
+    /// [`PhongRows::shade_on`], the colours left in lanes.
+    #[inline(always)]
+    fn lit_on<B: Backend>(&self, edges: [Floats<B>; 3]) -> Vec3s<B> {
         // `shade::perspective_weights`, then `Corners::apply`.
         let screen = edges.map(|edge| edge * self.inv_area.on());
         let over_w: [Floats<B>; 3] = std::array::from_fn(|k| screen[k] * self.inv_w[k].on());
@@ -1371,7 +1395,7 @@ impl<'f> PhongRows<'f> {
             &[Some(self.triangle); LANES],
         );
         let normals = if self.reversed { -normals } else { normals };
-        self.lighting.light_lanes_on(position, normals)
+        self.lighting.lit_lanes_on(position, normals)
     }
 }
 
@@ -1394,6 +1418,24 @@ impl<E: Fn() -> [Floats; 3]> LaneWork for PhongRowsWork<'_, '_, E> {
     #[inline(always)]
     fn run<B: Backend>(self) -> [Vec3; LANES] {
         self.rows.shade_on((self.edges)().map(Floats::on::<B>))
+    }
+}
+
+/// [`PhongRows::shade_into`]'s arguments, for `lanes::run_widest`.
+struct PhongRowsInto<'r, 'f, 'o, E> {
+    rows: &'r PhongRows<'f>,
+    edges: E,
+    out: &'o mut [Vec3; LANES],
+}
+
+impl<E: Fn() -> [Floats; 3]> LaneWork for PhongRowsInto<'_, '_, '_, E> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<B: Backend>(self) {
+        self.rows
+            .lit_on((self.edges)().map(Floats::on::<B>))
+            .write_to(self.out);
     }
 }
 
