@@ -12,8 +12,8 @@ the image difference of our frame against llvmpipe's. With `--scaling` it also m
 against triangle count (10^3 ... 10^7) and resolution (480p ... 4K), and peak memory per triangle.
 
 The feature scenes (S1 with one feature: a spot light, 4x MSAA, a shadow map, a texture, a ground
-plane; the anchor's FEATURES.md; a point light, whose scene for llvmpipe is ours, in
-benches/anchors/; and, for lampshade alone, Slerp and Cook-Torrance, which llvmpipe's harness cannot
+plane; the anchor's FEATURES.md; a point light and two OpenGL-table materials whose shininess is
+not a whole number, whose scenes for llvmpipe are ours, in benches/anchors/; and, for lampshade alone, Slerp and Cook-Torrance, which llvmpipe's harness cannot
 express) get a table of their own with each one's cost over plain S1 in the same run
 ("x plain S1"), for both renderers: for every mode, thread count and repeat, plain S1 runs
 (both renderers) before and after the feature scenes of that mode, and each feature's ratio is its
@@ -67,6 +67,7 @@ FEATURE_SCENES = [
     Feature("s1_spot", "scenes/bench/spot.ron", MODES, None, "anchor", None),
     Feature("s1_spot_ground", "scenes/bench/spot-ground.ron", MODES, "s1_ground", "anchor", None),
     Feature("s1_point", "scenes/bench/point.ron", MODES, None, "benches/anchors/s1_point.json", None),
+    Feature("s1_materials", "scenes/bench/materials.ron", MODES, None, "benches/anchors/s1_materials.json", None),
     Feature("s1_msaa4", "scenes/bench/msaa4.ron", MODES, None, "anchor", None),
     Feature("s1_ground", "scenes/bench/ground.ron", MODES, None, "anchor", None),
     Feature("s1_shadow", "scenes/bench/shadow.ron", SHADED, "s1_ground", "anchor", None),
