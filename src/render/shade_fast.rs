@@ -991,24 +991,12 @@ fn slerp_triangle_lanes<B: Backend>(
     thirds: &[Vec3; LANES],
     weights: &[Vec3; LANES],
 ) -> Vec3s<B> {
-    slerp_triangle_along_lanes(
-        ArcLanes::of(arcs),
-        Vec3s::from_array(thirds),
-        Vec3s::from_array(weights),
-    )
-}
-
-/// [`slerp_triangle_lanes`] with the first arcs and the third normals in lanes.
-#[inline(always)]
-fn slerp_triangle_along_lanes<B: Backend>(
-    first: ArcLanes<B>,
-    thirds: Vec3s<B>,
-    weights: Vec3s<B>,
-) -> Vec3s<B> {
+    let weights = Vec3s::from_array(weights);
+    let first = ArcLanes::of(arcs);
     let first_two_weight = weights.x + weights.y;
     let on_edge = first_two_weight.gt(Floats::splat(0.0));
     let edge = on_edge.select3(first.at(weights.y / first_two_weight), first.start);
-    ArcLanes::new(edge, thirds).at(weights.z)
+    ArcLanes::new(edge, Vec3s::from_array(thirds)).at(weights.z)
 }
 
 /// [`NormalArc`]s in lanes: where each starts, where it goes (a chord's end, a turn's
@@ -1040,21 +1028,6 @@ impl<B: Backend> ArcLanes<B> {
             other: Vec3s::from_array(&other),
             angle: Floats::new(angle),
             chord: Mask::from_bools(chord),
-        }
-    }
-
-    /// `arc` in every lane.
-    #[inline(always)]
-    fn splat(arc: &NormalArc) -> Self {
-        let (other, angle, chord) = match *arc {
-            NormalArc::Chord { end, .. } => (end, 0.0, true),
-            NormalArc::Turn { towards, angle, .. } => (towards, angle, false),
-        };
-        ArcLanes {
-            start: Vec3s::splat(arc.start()),
-            other: Vec3s::splat(other),
-            angle: Floats::splat(angle),
-            chord: Mask::from_bools([chord; LANES]),
         }
     }
 
@@ -1325,9 +1298,9 @@ fn nlerped_normals<B: Backend>(triangles: &[&SurfaceTriangle; LANES], weights: &
     interpolate_corners(triangles, weights, |triangle, k| triangle.normals[k])
 }
 
-/// The lit pixels of one [`FastPhong`] triangle, shaded a group of [`LANES`] neighbouring
-/// pixels of a row at a time: the triangle's corners, `1/w` and `1/A` (and with Slerp its
-/// first arc) splatted once, so that a group's weights, position and normal are interpolated lane-wise
+/// The lit pixels of one [`FastPhong`] triangle with Nlerp normals, shaded a group of
+/// [`LANES`] neighbouring pixels of a row at a time: the triangle's corners, `1/w` and `1/A`
+/// splatted once, so that a group's weights, position and normal are interpolated lane-wise
 /// with no per-pixel gathering or queueing. Each pixel gets the bits [`FastPhong::shade`]
 /// gives it: `shade::weights_from_edges` and the interpolation are the same operations in the
 /// same order, lane by lane. For triangles whose rows span groups of pixels; the small ones
@@ -1336,10 +1309,7 @@ pub struct PhongRows<'f> {
     lighting: FastLighting<'f>,
     triangle: &'f FrameTriangle,
     positions: [Vec3s; 3],
-    /// With Nlerp, the vertex normals (zero with Slerp).
     normals: [Vec3s; 3],
-    /// With Slerp, the first arc and the third normal (as [`NormalStage::Slerp`]).
-    slerp: Option<(NormalArc, Vec3)>,
     reversed: bool,
     inv_area: Floats,
     inv_w: [Floats; 3],
@@ -1349,22 +1319,20 @@ pub struct PhongRows<'f> {
 impl<'f> PhongRows<'f> {
     /// The rows of `phong`'s triangle, whose raster triangle (or a piece of it) has `1/A`
     /// `inv_area`, corners' `1/w` `inv_w` and corner weights `corners`; `None` unless its
-    /// pixels are lit (not a debug view) on a surface that does not vary.
+    /// pixels are lit (not a debug view) with normals interpolated component by component
+    /// on a surface that does not vary.
     #[inline]
     pub fn of(phong: &FastPhong<'f>, inv_area: f32, inv_w: [f32; 3], corners: Corners) -> Option<Self> {
-        let (PixelOutput::Lit(lighting), false) = (phong.output, phong.varies) else {
+        let (PixelOutput::Lit(lighting), NormalStage::Nlerp(normals), false) =
+            (phong.output, phong.normals, phong.varies)
+        else {
             return None;
-        };
-        let (normals, slerp) = match phong.normals {
-            NormalStage::Nlerp(normals) => (normals, None),
-            NormalStage::Slerp { first_two, third } => ([Vec3::ZERO; 3], Some((first_two, third))),
         };
         Some(PhongRows {
             lighting,
             triangle: phong.triangle,
             positions: phong.positions.map(Vec3s::splat),
             normals: normals.map(Vec3s::splat),
-            slerp,
             reversed: phong.reversed,
             inv_area: Floats::splat(inv_area),
             inv_w: inv_w.map(Floats::splat),
@@ -1421,15 +1389,11 @@ impl<'f> PhongRows<'f> {
         };
         let weights = [x, y, z];
         let position = interpolate_lanes(self.positions, weights);
-        let interpolated = match &self.slerp {
-            Some((first_two, third)) => slerp_triangle_along_lanes(
-                ArcLanes::splat(first_two),
-                Vec3s::splat(*third),
-                Vec3s { x, y, z },
-            ),
-            None => interpolate_lanes(self.normals, weights),
-        };
-        let normals = renormalize_lanes(self.lighting.frame, interpolated, &[Some(self.triangle); LANES]);
+        let normals = renormalize_lanes(
+            self.lighting.frame,
+            interpolate_lanes(self.normals, weights),
+            &[Some(self.triangle); LANES],
+        );
         let normals = if self.reversed { -normals } else { normals };
         self.lighting.lit_lanes_on(position, normals)
     }
