@@ -13,8 +13,8 @@ against triangle count (10^3 ... 10^7) and resolution (480p ... 4K), and peak me
 
 The feature scenes (S1 with one feature: a spot light, 4x MSAA, a shadow map, a texture, a ground
 plane; the anchor's FEATURES.md; a point light and two OpenGL-table materials whose shininess is
-not a whole number, whose scenes for llvmpipe are ours, in benches/anchors/; and, for lampshade alone, Slerp and Cook-Torrance, which llvmpipe's harness cannot
-express) get a table of their own with each one's cost over plain S1 in the same run
+not a whole number, whose scenes for llvmpipe are ours, in benches/anchors/; and, for lampshade
+alone, Slerp and Cook-Torrance, which llvmpipe's harness cannot express) get a table of their own with each one's cost over plain S1 in the same run
 ("x plain S1"), for both renderers: for every mode, thread count and repeat, plain S1 runs
 (both renderers) before and after the feature scenes of that mode, and each feature's ratio is its
 frame over the mean of those two S1 frames; the table gives the medians over the repeats. The
