@@ -547,6 +547,12 @@ impl<B: Backend> Floats<B> {
 }
 
 impl<B: Backend> Floats<B> {
+    /// The floats whose bits the lanes of `bits` are (`f32::from_bits`).
+    #[inline(always)]
+    pub fn from_bits(bits: Ints<B>) -> Self {
+        Floats::new(bytemuck::cast(bits.0))
+    }
+
     /// Each lane's bits, as an integer (`f32::to_bits`).
     #[inline(always)]
     pub fn to_bits(self) -> Ints<B> {
@@ -1664,7 +1670,20 @@ pub trait Real:
     fn and(a: Self::Mask, b: Self::Mask) -> Self::Mask;
     /// `if_true` where `mask` holds, `if_false` elsewhere.
     fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
+    /// `(e, m)` with `self = 2^e·m`, `m ∈ [1, 2)` and `e` whole, for a positive normal float
+    /// (read from its bits: exact).
+    fn exponent_and_significand(self) -> (Self, Self);
+    /// `2^n` for a whole `n` in [−126, 127], exactly (written into the bits).
+    fn exp2_whole(n: Self) -> Self;
 }
+
+/// The bits of a float's biased exponent, and of its significand.
+const EXPONENT_BITS: i32 = 0x7F80_0000;
+const SIGNIFICAND_BITS: i32 = 0x007F_FFFF;
+/// The bits of 1.0: the biased exponent 127 alone.
+const ONE_BITS: i32 = 0x3F80_0000;
+/// 2²³, one unit of the biased exponent in a float's bits.
+const EXPONENT_UNIT: f32 = 8_388_608.0;
 
 impl Real for f32 {
     type Mask = bool;
@@ -1697,6 +1716,21 @@ impl Real for f32 {
     #[inline(always)]
     fn select(mask: bool, if_true: Self, if_false: Self) -> Self {
         if mask { if_true } else { if_false }
+    }
+
+    #[inline(always)]
+    fn exponent_and_significand(self) -> (Self, Self) {
+        let bits = self.to_bits() as i32;
+        let exponent = (bits & EXPONENT_BITS) as f32 * (1.0 / EXPONENT_UNIT) - 127.0;
+        (
+            exponent,
+            f32::from_bits(((bits & SIGNIFICAND_BITS) + ONE_BITS) as u32),
+        )
+    }
+
+    #[inline(always)]
+    fn exp2_whole(n: Self) -> Self {
+        f32::from_bits(((n + 127.0) * EXPONENT_UNIT) as i32 as u32)
     }
 }
 
@@ -1731,6 +1765,20 @@ impl<B: Backend> Real for Floats<B> {
     #[inline(always)]
     fn select(mask: Mask<B>, if_true: Self, if_false: Self) -> Self {
         mask.select(if_true, if_false)
+    }
+
+    #[inline(always)]
+    fn exponent_and_significand(self) -> (Self, Self) {
+        let bits = self.to_bits();
+        let exponent = bits.and(Ints::splat(EXPONENT_BITS)).to_floats() * Floats::splat(1.0 / EXPONENT_UNIT)
+            - Floats::splat(127.0);
+        let significand = bits.and(Ints::splat(SIGNIFICAND_BITS)) + Ints::splat(ONE_BITS);
+        (exponent, Floats::from_bits(significand))
+    }
+
+    #[inline(always)]
+    fn exp2_whole(n: Self) -> Self {
+        Floats::from_bits(((n + Floats::splat(127.0)) * Floats::splat(EXPONENT_UNIT)).truncate_to_ints())
     }
 }
 

@@ -28,6 +28,7 @@ pub mod geometry;
 pub mod inspect;
 pub mod lanes;
 pub mod normals;
+pub mod power;
 pub mod raster;
 pub mod shade;
 pub mod shade_fast;

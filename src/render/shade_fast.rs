@@ -32,7 +32,8 @@
 //! att(d)  = 1 / max(k_c + d·(k_l + d·k_q), 1e−6)   the max as a select: NaN gives 1e−6, as f32::max
 //! spot(c) = max(c, 0)^e, spec = max(cos, 0)^n      by squaring where the exponent is whole
 //!                                                  (`power_by_squaring`: the scalar multiplications
-//!                                                  in the scalar order), else `powf` lane by lane
+//!                                                  in the scalar order), else `power::pow`, the
+//!                                                  shininess's kind sorted once per material
 //! lit     = reaches ∧ ¬(N·L ≤ 0 ∨ strength ≤ 0)    outside the cone `incidence` gives strength 0,
 //!                                                  so "does not reach" turns the same lanes away
 //! shadow  strength ·= S(p, N, L), lit ∧= ¬(strength ≤ 0)   S the map's PCF visibility in
@@ -50,26 +51,26 @@
 //! Blinn-Phong      + k_s·I·max(N·H, 0)^n
 //! Cook-Torrance    k_d·(1 − F)·I·(N·L) + π·F·D·G/(4(N·V)(N·L))·I·(N·L)   F by squaring ((1 − V·H)^5
 //!                  is `powi(5)`'s multiplications), G as one minimum of three ratios
-//!                  (`f32::min` lane by lane), D lane-wise for GGX; Beckmann's `exp` lane by lane
+//!                  (`f32::min` lane by lane), D lane-wise (Beckmann's `exp` is `power::exp`)
 //! unlit, or an unlit back side, or the ambient term alone: one colour, lit once (on a
 //!                  varying surface: k_d, or k_a·I_a, per lane, with the emission)
 //! ```
 //!
-//! `powf` and `exp` have no lane-wise form with the scalar bits, so an exponent that is not a
-//! whole number up to `MAX_SQUARED_EXPONENT` (the OpenGL table's shininess 76.8, a spot exponent
-//! of 2.5) costs one call per lane that needs it, and so does Beckmann's distribution.
+//! libm's `powf` and `expf` have no lane-wise form, so the specification raises an exponent that
+//! is not a whole number up to `MAX_SQUARED_EXPONENT` (the OpenGL table's shininess 76.8, a
+//! spot exponent of 2.5), and Beckmann's `exp`, with `power`'s fixed sequences of float
+//! operations, which every lane repeats with the same bits.
 
 use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use crate::lighting::{
-    MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, power_by_squaring, specular_power, whole_exponent,
-};
+use crate::lighting::{MIN_ATTENUATION_DENOMINATOR, ShadingLightKind, power_by_squaring, whole_exponent};
 use crate::render::DebugView;
 use crate::render::frame::{Frame, FrameTriangle, ObjectStyle, Viewer, shown_component};
 use crate::render::lanes::{Backend, Floats, LANES, LaneWork, Mask, Native, Vec3s, run_widest};
 use crate::render::normals::{NormalArc, SMALL_SINE, renormalize_or_else, slerp_triangle_along};
+use crate::render::power;
 use crate::render::raster::Corners;
 use crate::render::shadow::shadow_visibility_lanes;
 use crate::render::surface_lanes::{
@@ -289,11 +290,17 @@ impl<'f> FastLighting<'f> {
             },
             LaneModel::SurfaceConstant => self.one_colour_lanes(surface),
             LaneModel::Lambert => self.light_model_lanes(Lambert, position, normal, surface),
-            LaneModel::Phong(shininess) => {
-                self.light_model_lanes(Phong(shininess), position, normal, surface)
+            LaneModel::Phong(Exponent::Whole(n)) => {
+                self.light_model_lanes(Phong(Squared(n)), position, normal, surface)
             }
-            LaneModel::BlinnPhong(shininess) => {
-                self.light_model_lanes(BlinnPhong(shininess), position, normal, surface)
+            LaneModel::Phong(Exponent::Other(n)) => {
+                self.light_model_lanes(Phong(Fractional(n)), position, normal, surface)
+            }
+            LaneModel::BlinnPhong(Exponent::Whole(n)) => {
+                self.light_model_lanes(BlinnPhong(Squared(n)), position, normal, surface)
+            }
+            LaneModel::BlinnPhong(Exponent::Other(n)) => {
+                self.light_model_lanes(BlinnPhong(Fractional(n)), position, normal, surface)
             }
             LaneModel::Beckmann => {
                 let model = CookTorrance::<false>(self.microfacet());
@@ -390,7 +397,7 @@ impl<'f> FastLighting<'f> {
                     // test below turns away: the lane does not reach. `cos_cutoff > cos_angle` is
                     // `cos_angle < cos_cutoff`, false for NaN as there.
                     let reaches = reaches.and(!Floats::splat(cos_cutoff).gt(cos_angle));
-                    let spot = specular_power_lanes(cos_angle, Exponent::of(exponent), reaches);
+                    let spot = specular_power_lanes(cos_angle, Exponent::of(exponent));
                     (to_light, spot * attenuate_lanes(attenuation, distance), reaches)
                 }
             };
@@ -548,9 +555,9 @@ impl Reflectance for Lambert {
 /// Lambert's term and `k_s·I·max(R·V, 0)^n`, `R = 2(N·L)N − L`, with the material's
 /// shininess `n`.
 #[derive(Clone, Copy)]
-struct Phong(Exponent);
+struct Phong<P: Power>(P);
 
-impl Reflectance for Phong {
+impl<P: Power> Reflectance for Phong<P> {
     const SPECULAR: bool = true;
 
     #[inline(always)]
@@ -572,9 +579,9 @@ impl Reflectance for Phong {
 /// Lambert's term and `k_s·I·max(N·H, 0)^n`, `H = (L + V)/|L + V|`, with the material's
 /// shininess `n`.
 #[derive(Clone, Copy)]
-struct BlinnPhong(Exponent);
+struct BlinnPhong<P: Power>(P);
 
-impl Reflectance for BlinnPhong {
+impl<P: Power> Reflectance for BlinnPhong<P> {
     const SPECULAR: bool = true;
 
     #[inline(always)]
@@ -598,11 +605,11 @@ impl Reflectance for BlinnPhong {
 #[inline(always)]
 fn phong_specular_lanes<B: Backend>(
     material: &Material,
-    shininess: Exponent,
+    shininess: impl Power,
     light: &LightAtLanes<B>,
     cosine: Floats<B>,
 ) -> Vec3s<B> {
-    let power = specular_power_lanes(cosine, shininess, light.lit);
+    let power = shininess.raise(cosine.max(Floats::splat(0.0)));
     (Vec3s::splat(material.specular) * light.intensity).scale(power)
 }
 
@@ -659,7 +666,7 @@ impl<const GGX: bool> CookTorrance<GGX> {
         let distribution = if GGX {
             ggx_lanes(&surface, n_dot_h)
         } else {
-            beckmann_lanes(&surface, n_dot_h, reflects)
+            beckmann_lanes(&surface, n_dot_h)
         };
         let two = Floats::splat(2.0);
         let g_over_nv_nl = (one / (n_dot_v * n_dot_l))
@@ -672,19 +679,12 @@ impl<const GGX: bool> CookTorrance<GGX> {
 }
 
 /// `lighting::microfacet_distribution` for Beckmann's `exp((cos²α − 1)/(m² cos²α)) / (π m² cos⁴α)`
-/// lane-wise but for `exp`, which is called for the lanes in `wanted` only (the others get 0).
+/// lane-wise, `exp` as `power::exp`.
 #[inline(always)]
-fn beckmann_lanes<B: Backend>(surface: &Microfacet, n_dot_h: Floats<B>, wanted: Mask<B>) -> Floats<B> {
+fn beckmann_lanes<B: Backend>(surface: &Microfacet, n_dot_h: Floats<B>) -> Floats<B> {
     let m2 = surface.roughness * surface.roughness;
     let cos2 = n_dot_h * n_dot_h;
-    let exponent = (cos2 - Floats::splat(1.0)) / (Floats::splat(m2) * cos2);
-    let exponential = Floats::new(std::array::from_fn(|lane| {
-        if wanted.lane(lane) {
-            exponent.0[lane].exp()
-        } else {
-            0.0
-        }
-    }));
+    let exponential = power::exp((cos2 - Floats::splat(1.0)) / (Floats::splat(m2) * cos2));
     let zero = Floats::splat(0.0);
     let distribution = exponential / (Floats::splat(PI * m2) * cos2 * cos2);
     cos2.le(zero).select(zero, distribution)
@@ -728,7 +728,7 @@ fn attenuate_lanes<B: Backend>(attenuation: Attenuation, distance: Floats<B>) ->
 }
 
 /// An exponent of `lighting::specular_power`, sorted once (per material for the shininess):
-/// whole ones up to `MAX_SQUARED_EXPONENT` are raised by squaring, the others by `powf`.
+/// whole ones up to `MAX_SQUARED_EXPONENT` are raised by squaring, the others by `power::pow`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Exponent {
     Whole(u32),
@@ -745,21 +745,43 @@ impl Exponent {
     }
 }
 
-/// `lighting::specular_power(base, exponent)` lane-wise, for the shininess and the spot
-/// exponent: a whole exponent by the same squaring on every lane; another through `powf`, which
-/// has no lane-wise form with the same bits, called only for the lanes in `wanted` (the others
-/// are masked off by the caller and get 0).
+/// `lighting::specular_power(base, exponent)` lane-wise, for the spot exponent (which may
+/// differ from light to light): a whole exponent by the same squaring on every lane, another by
+/// the same `power::pow`.
 #[inline(always)]
-fn specular_power_lanes<B: Backend>(base: Floats<B>, exponent: Exponent, wanted: Mask<B>) -> Floats<B> {
+fn specular_power_lanes<B: Backend>(base: Floats<B>, exponent: Exponent) -> Floats<B> {
+    let base = base.max(Floats::splat(0.0));
     match exponent {
-        Exponent::Whole(whole) => power_by_squaring(base.max(Floats::splat(0.0)), Floats::splat(1.0), whole),
-        Exponent::Other(exponent) => Floats::new(std::array::from_fn(|i| {
-            if wanted.lane(i) {
-                specular_power(base.0[i], exponent)
-            } else {
-                0.0
-            }
-        })),
+        Exponent::Whole(whole) => Squared(whole).raise(base),
+        Exponent::Other(exponent) => Fractional(exponent).raise(base),
+    }
+}
+
+/// `lighting::specular_power` of bases already `max(·, 0)`, for a shininess sorted once per
+/// material into a type, so that a light loop holds only its own kind of power.
+trait Power: Copy {
+    fn raise<B: Backend>(self, base: Floats<B>) -> Floats<B>;
+}
+
+/// A whole exponent up to `MAX_SQUARED_EXPONENT`: raised by squaring.
+#[derive(Clone, Copy)]
+struct Squared(u32);
+
+impl Power for Squared {
+    #[inline(always)]
+    fn raise<B: Backend>(self, base: Floats<B>) -> Floats<B> {
+        power_by_squaring(base, Floats::splat(1.0), self.0)
+    }
+}
+
+/// Another exponent: raised by `power::pow`.
+#[derive(Clone, Copy)]
+struct Fractional(f32);
+
+impl Power for Fractional {
+    #[inline(always)]
+    fn raise<B: Backend>(self, base: Floats<B>) -> Floats<B> {
+        power::pow(base, Floats::splat(self.0))
     }
 }
 
@@ -1621,7 +1643,7 @@ pub(crate) mod tests {
         DirectionalAndPoint,
         /// A directional light and two attenuated spot lights, each with its cone's edge across
         /// one sphere: one with a whole exponent (squared lane-wise), one with a fractional
-        /// exponent (`powf`).
+        /// exponent (`power::pow`).
         DirectionalAndSpots,
         /// A directional light and a spot light that both cast shadows (3×3 PCF), the right
         /// sphere shadowing the left one's side for each: points in full shadow, on the
@@ -2056,7 +2078,7 @@ pub(crate) mod tests {
     /// them.
     #[test]
     fn lighting_eight_points_at_once_equals_lighting_each_bit_for_bit() {
-        // A whole shininess is raised by squaring, lane-wise; another goes through `powf`.
+        // A whole shininess is raised by squaring, lane-wise; another goes through `power::pow`.
         let shininesses = MODELS.into_iter().flat_map(|m| [(m, 17.0), (m, 17.5)]);
         // (the object's component, the debug view, the side, the back-face mode)
         let sides = [
