@@ -319,7 +319,7 @@ pub fn reflect(to_light: Vec3, normal: Vec3) -> Vec3 {
 /// (the OpenGL table's 76.8, glTF's `2/α⁴ − 2`) by [`power::pow`], `2^(n·log₂ x)` as a fixed
 /// sequence of float operations. The eight-lane lighting repeats both lane-wise with the same
 /// bits. Squaring rounds once per multiplication, so its relative error stays below `n·2⁻²⁴`
-/// (6·10⁻⁵ at 1024); `pow`'s absolute error stays below 10⁻⁷: both far below one level of an
+/// (6·10⁻⁵ at 1024); `pow`'s absolute error stays below 2·10⁻⁷: both far below one level of an
 /// 8-bit image.
 pub fn specular_power(cosine: f32, shininess: f32) -> f32 {
     let base = cosine.max(0.0);
